@@ -1,0 +1,274 @@
+//! `refrakt` command line: `info` and `render`.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::{bail, Context as _, Result};
+use clap::{Args, Parser, Subcommand, ValueEnum};
+
+use refrakt::render::{Camera, Model, RenderOptions, Renderer};
+use refrakt::transfer::TransferFunctions;
+use refrakt::vk::{self, Context, ContextDesc};
+use refrakt::volume::{procedural, Volume};
+use refrakt::output;
+
+#[derive(Parser)]
+#[command(
+    name = "refrakt",
+    version,
+    about = "Vulkan volume renderer with refraction, caustics, soft shadows and tinted media",
+    long_about = "refrakt renders volumes after Magnus & Bruckner, 'Interactive Dynamic Volume \
+Illumination with Refraction and Caustics'. It runs headless on any Vulkan 1.3 device, \
+including Mesa's lavapipe (CPU) when there is no GPU.\n\nSet RUST_LOG=debug for detail; \
+REFRAKT_VALIDATE=1 is the same as --validate."
+)]
+struct Cli {
+    #[command(flatten)]
+    gpu: GpuArgs,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Args)]
+struct GpuArgs {
+    /// Vulkan device to use: an index from `refrakt info` or part of its name
+    /// (e.g. "llvmpipe"). Default: discrete > integrated > virtual > CPU.
+    #[arg(long, global = true, value_name = "NAME|INDEX")]
+    device: Option<String>,
+    /// Enable the Khronos validation layer with synchronization validation; the command
+    /// fails if the layer reports any warning or error.
+    #[arg(long, global = true)]
+    validate: bool,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Show the Vulkan loader, the devices and the limits that matter to refrakt.
+    Info,
+    /// Render a scene to an image (.png = 8-bit sRGB, .exr = linear float) and print the
+    /// GPU time of each pass.
+    Render(RenderArgs),
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum SceneArg {
+    /// Noisy spherical shell with a dense core, after the thesis' supernova (Fig. 6.1).
+    Shell,
+    /// Solid sphere of value 1, radius 0.35.
+    Sphere,
+    /// Solid box of value 1.
+    Box,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum ModelArg {
+    /// Emission-absorption ray marcher (the baseline).
+    Ea,
+}
+
+#[derive(Args)]
+struct RenderArgs {
+    /// Output image; the extension picks the format: .png (8-bit sRGB) or .exr (linear).
+    #[arg(short, long, default_value = "refrakt.png")]
+    output: PathBuf,
+    /// Procedural scene to render.
+    #[arg(long, value_enum, default_value = "shell")]
+    scene: SceneArg,
+    /// Volume resolution (voxels per side) of the procedural scene.
+    #[arg(long, default_value_t = 128)]
+    volume_size: u32,
+    /// Transfer functions: a preset (ct-bone, glass, wine-glass, supernova, sphere-white) or
+    /// a TOML file. Default: supernova for the shell, sphere-white otherwise.
+    #[arg(long, value_name = "PRESET|FILE")]
+    tf: Option<String>,
+    /// Rendering model.
+    #[arg(long, value_enum, default_value = "ea")]
+    model: ModelArg,
+    /// Sample the transfer function at each step instead of using the preintegration table.
+    #[arg(long)]
+    no_preintegration: bool,
+    /// Image width in pixels.
+    #[arg(long, default_value_t = 512)]
+    width: u32,
+    /// Image height in pixels.
+    #[arg(long, default_value_t = 512)]
+    height: u32,
+    /// Distance between samples in units of the smallest voxel side (1 = one sample per
+    /// voxel, as in the thesis' chapter 6).
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
+    sample_distance: f32,
+    /// Camera azimuth in degrees around the vertical axis.
+    #[arg(long, default_value_t = 30.0, allow_negative_numbers = true)]
+    azimuth: f32,
+    /// Camera elevation in degrees.
+    #[arg(long, default_value_t = 20.0, allow_negative_numbers = true)]
+    elevation: f32,
+    /// Camera distance from the volume centre (the volume's longest side is 1).
+    #[arg(long, default_value_t = 2.2, allow_negative_numbers = true)]
+    distance: f32,
+    /// Vertical field of view in degrees.
+    #[arg(long, default_value_t = 35.0, allow_negative_numbers = true)]
+    fov: f32,
+    /// Background colour behind the volume, linear "r,g,b" or "r,g,b,a".
+    #[arg(long, default_value = "0.08,0.08,0.1,1")]
+    background: String,
+}
+
+fn main() -> ExitCode {
+    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn"))
+        .format_timestamp(None)
+        .init();
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(cli: Cli) -> Result<ExitCode> {
+    let desc = ContextDesc::from_env(cli.gpu.validate, cli.gpu.device.clone());
+    match cli.command {
+        Command::Info => info(&desc),
+        Command::Render(args) => render(&desc, &args),
+    }
+}
+
+fn finish(ctx: Context) -> Result<ExitCode> {
+    let log = ctx.validation_log();
+    drop(ctx);
+    let n = log.count();
+    if n > 0 {
+        eprintln!("validation: {n} message(s) reported (see above)");
+        return Ok(ExitCode::from(2));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn info(desc: &ContextDesc) -> Result<ExitCode> {
+    let devices = Context::list_devices()?;
+    let ctx = Context::new(desc)?;
+    println!("Vulkan loader: {}", vk::version_string(ctx.loader_version()));
+    println!("Devices:");
+    for d in &devices {
+        let mark = if d.index == ctx.info().index { "*" } else { " " };
+        println!(
+            " {mark}[{}] {} ({}), Vulkan {}",
+            d.index,
+            d.name,
+            vk::device_type_name(d.device_type),
+            vk::version_string(d.api_version)
+        );
+    }
+    let i = ctx.info();
+    let l = &i.limits;
+    println!("\nSelected: [{}] {}", i.index, i.name);
+    println!("  type:                 {}", vk::device_type_name(i.device_type));
+    println!("  Vulkan version:       {}", vk::version_string(i.api_version));
+    println!("  driver:               {} ({})", i.driver_name, i.driver_info);
+    println!("  max 3D image size:    {}", l.max_image_dimension3_d);
+    println!("  max 2D image size:    {}", l.max_image_dimension2_d);
+    println!("  max array layers:     {}", l.max_image_array_layers);
+    println!("  max push constants:   {} bytes", l.max_push_constants_size);
+    println!("  max colour attachments: {}", l.max_color_attachments);
+    println!(
+        "  timestamps:           {} (period {} ns)",
+        if i.timestamps { "yes" } else { "no" },
+        l.timestamp_period
+    );
+    println!("  memory heaps:");
+    for (n, (size, device_local)) in i.memory_heaps.iter().enumerate() {
+        let local = if *device_local {
+            "device-local"
+        } else {
+            "host"
+        };
+        println!("    [{n}] {:.1} GiB {local}", *size as f64 / (1u64 << 30) as f64);
+    }
+    finish(ctx)
+}
+
+fn parse_background(s: &str) -> Result<[f32; 4]> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    if parts.len() != 3 && parts.len() != 4 {
+        bail!("--background '{s}': expected 3 or 4 comma-separated numbers");
+    }
+    let mut out = [0.0, 0.0, 0.0, 1.0];
+    for (i, p) in parts.iter().enumerate() {
+        out[i] = p
+            .parse::<f32>()
+            .with_context(|| format!("--background '{s}': '{p}' is not a number"))?;
+    }
+    Ok(out)
+}
+
+fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
+    // Everything that can be checked without the GPU is checked first, so bad input fails
+    // at once with a clear message.
+    let opts = RenderOptions {
+        width: args.width,
+        height: args.height,
+        sample_distance: args.sample_distance,
+        preintegrated: !args.no_preintegration,
+        background: parse_background(&args.background)?,
+        ..Default::default()
+    };
+    opts.validate()?;
+    let camera = Camera {
+        azimuth: args.azimuth,
+        elevation: args.elevation,
+        distance: args.distance,
+        fov_y: args.fov,
+    };
+    camera.validate()?;
+    output::format_for(&args.output)?;
+    let tf_name = args.tf.clone().unwrap_or_else(|| {
+        match args.scene {
+            SceneArg::Shell => "supernova",
+            _ => "sphere-white",
+        }
+        .to_string()
+    });
+    let tf = TransferFunctions::load(&tf_name)?;
+    let n = args.volume_size;
+    let volume: Volume = match args.scene {
+        SceneArg::Shell => procedural::shell(n, 7)?,
+        SceneArg::Sphere => procedural::sphere(n, 0.35, 1.0)?,
+        SceneArg::Box => procedural::boxed(n, [0.3, 0.25, 0.2], 1.0)?,
+    };
+    let model = match args.model {
+        ModelArg::Ea => Model::Ea,
+    };
+
+    let ctx = Context::new(desc)?;
+    println!("device: {} ({})", ctx.info().name, vk::device_type_name(ctx.info().device_type));
+    let mut renderer = Renderer::new(&ctx, &volume, &tf)?;
+    let frame = renderer.render(model, &camera, &opts)?;
+    output::write(&frame, &args.output)?;
+    println!(
+        "rendered {}x{} of a {}x{}x{} volume ({}), model {:?}{}, sample distance {}, up to {} steps per ray",
+        opts.width,
+        opts.height,
+        volume.dims[0],
+        volume.dims[1],
+        volume.dims[2],
+        tf.name,
+        model,
+        if opts.preintegrated { " (preintegrated)" } else { "" },
+        opts.sample_distance,
+        frame.max_steps
+    );
+    if frame.timings.scopes.is_empty() {
+        println!("GPU timings: this device has no timestamp queries");
+    } else {
+        println!("GPU time per pass:");
+        for (name, ms) in &frame.timings.scopes {
+            println!("  {name:<16} {ms:9.3} ms");
+        }
+    }
+    println!("wrote {}", args.output.display());
+    drop(renderer);
+    finish(ctx)
+}

@@ -1,0 +1,271 @@
+//! The renderer: GPU resources for a volume and its transfer functions, and the passes that
+//! turn them into an image. Passes are built from `crate::vk` pieces; nothing here calls
+//! raw Vulkan.
+
+mod ea;
+pub mod preintegration;
+
+use anyhow::{bail, ensure, Result};
+use glam::Vec3;
+
+use crate::transfer::TransferFunctions;
+use crate::vk::{Context, Filter, Image, Sampler, Timings};
+use crate::volume::Volume;
+
+pub use preintegration::{PreintegrationTable, TABLE_SIZE};
+
+/// Orbit camera around the volume centre (the world origin). The volume box's largest side
+/// is 1 world unit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    /// Degrees around the vertical (y) axis; 0 looks along -z from +z.
+    pub azimuth: f32,
+    /// Degrees above the horizontal plane.
+    pub elevation: f32,
+    /// Distance from the centre in world units.
+    pub distance: f32,
+    /// Vertical field of view in degrees.
+    pub fov_y: f32,
+}
+
+impl Default for Camera {
+    fn default() -> Self {
+        Self {
+            azimuth: 30.0,
+            elevation: 20.0,
+            distance: 2.2,
+            fov_y: 35.0,
+        }
+    }
+}
+
+impl Camera {
+    pub fn validate(&self) -> Result<()> {
+        ensure!(
+            self.azimuth.is_finite() && self.elevation.is_finite(),
+            "camera angles must be finite numbers"
+        );
+        ensure!(
+            self.elevation.abs() < 90.0,
+            "camera elevation {} must be strictly between -90 and 90 degrees",
+            self.elevation
+        );
+        ensure!(
+            self.distance.is_finite() && self.distance > 0.0,
+            "camera distance {} must be a positive number",
+            self.distance
+        );
+        ensure!(
+            self.fov_y.is_finite() && self.fov_y > 0.0 && self.fov_y < 180.0,
+            "field of view {} must be between 0 and 180 degrees",
+            self.fov_y
+        );
+        Ok(())
+    }
+
+    pub fn eye(&self) -> Vec3 {
+        let (az, el) = (self.azimuth.to_radians(), self.elevation.to_radians());
+        self.distance * Vec3::new(az.sin() * el.cos(), el.sin(), az.cos() * el.cos())
+    }
+
+    /// (eye, forward, right, up), an orthonormal frame looking at the origin.
+    pub fn frame(&self) -> (Vec3, Vec3, Vec3, Vec3) {
+        let eye = self.eye();
+        let forward = (-eye).normalize();
+        let right = forward.cross(Vec3::Y).normalize();
+        let up = right.cross(forward);
+        (eye, forward, right, up)
+    }
+}
+
+/// Rendering models `refrakt render --model` offers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Model {
+    /// Emission–absorption ray marcher, the baseline.
+    Ea,
+}
+
+#[derive(Clone, Debug)]
+pub struct RenderOptions {
+    pub width: u32,
+    pub height: u32,
+    /// Step between samples, in units of the smallest voxel side (thesis chapter 6).
+    pub sample_distance: f32,
+    /// Look segments up in the preintegration table instead of sampling the TF.
+    pub preintegrated: bool,
+    /// Linear RGBA behind the volume.
+    pub background: [f32; 4],
+    /// Stop marching once accumulated opacity reaches this.
+    pub termination_alpha: f32,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        Self {
+            width: 512,
+            height: 512,
+            sample_distance: 1.0,
+            preintegrated: true,
+            background: [0.08, 0.08, 0.1, 1.0],
+            termination_alpha: 0.99,
+        }
+    }
+}
+
+impl RenderOptions {
+    pub fn validate(&self) -> Result<()> {
+        if !(self.sample_distance.is_finite() && self.sample_distance > 0.0) {
+            bail!(
+                "sample distance must be a positive number, got {}",
+                self.sample_distance
+            );
+        }
+        ensure!(
+            self.width > 0 && self.height > 0 && self.width <= 16384 && self.height <= 16384,
+            "image size {}x{} must be between 1 and 16384 per side",
+            self.width,
+            self.height
+        );
+        ensure!(
+            self.background.iter().all(|c| c.is_finite() && *c >= 0.0),
+            "background colour {:?} must be finite and non-negative",
+            self.background
+        );
+        ensure!(
+            (0.0..=1.0).contains(&self.termination_alpha),
+            "termination alpha {} must be in [0, 1]",
+            self.termination_alpha
+        );
+        Ok(())
+    }
+}
+
+/// A rendered image: linear RGBA f32, row-major, top row first.
+#[derive(Clone, Debug)]
+pub struct Frame {
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<[f32; 4]>,
+    pub timings: Timings,
+    /// Samples along the longest ray, for reporting.
+    pub max_steps: u32,
+}
+
+impl Frame {
+    pub fn pixel(&self, x: u32, y: u32) -> [f32; 4] {
+        self.pixels[(y * self.width + x) as usize]
+    }
+}
+
+/// GPU state for one volume and its transfer functions.
+pub struct Renderer {
+    ctx: Context,
+    volume_info: VolumeInfo,
+    volume_tex: Image,
+    tf: TransferFunctions,
+    tf_image: Image,
+    tf_dirty: bool,
+    linear: Sampler,
+    preint: PreintegrationTable,
+    ea: Option<ea::EaPass>,
+}
+
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct VolumeInfo {
+    pub half_extent: Vec3,
+    pub ref_step: f32,
+}
+
+impl Renderer {
+    pub fn new(ctx: &Context, volume: &Volume, tf: &TransferFunctions) -> Result<Self> {
+        let volume_tex = volume.upload(ctx)?;
+        let tf_image = tf.upload(ctx)?;
+        let linear = Sampler::new(ctx, Filter::Linear, "linear clamp")?;
+        let preint = PreintegrationTable::new(ctx, &tf_image, &linear)?;
+        let e = volume.normalised_extent();
+        Ok(Self {
+            ctx: ctx.clone(),
+            volume_info: VolumeInfo {
+                half_extent: Vec3::from(e) * 0.5,
+                ref_step: volume.min_voxel_size(),
+            },
+            volume_tex,
+            tf: tf.clone(),
+            tf_image,
+            tf_dirty: true,
+            linear,
+            preint,
+            ea: None,
+        })
+    }
+
+    pub fn context(&self) -> &Context {
+        &self.ctx
+    }
+
+    /// Replace the transfer functions. The preintegration table is rebuilt on the next
+    /// render only if they actually differ.
+    pub fn set_transfer_functions(&mut self, tf: &TransferFunctions) -> Result<()> {
+        if *tf != self.tf {
+            tf.write_to(&self.ctx, &self.tf_image)?;
+            self.tf = tf.clone();
+            self.tf_dirty = true;
+        }
+        Ok(())
+    }
+
+    pub fn transfer_functions(&self) -> &TransferFunctions {
+        &self.tf
+    }
+
+    pub fn preintegration(&self) -> &PreintegrationTable {
+        &self.preint
+    }
+
+    /// Rebuild the preintegration table now if the transfer functions changed; returns the
+    /// GPU timings of the build (empty if nothing was rebuilt).
+    pub fn update_preintegration(&mut self) -> Result<Timings> {
+        if !self.tf_dirty {
+            return Ok(Timings::default());
+        }
+        let (preint, tf_image) = (&mut self.preint, &self.tf_image);
+        let t = self.ctx.execute(|rec| preint.record_build(rec, tf_image))?;
+        self.tf_dirty = false;
+        Ok(t)
+    }
+
+    /// Render one frame with `model`.
+    pub fn render(&mut self, model: Model, camera: &Camera, opts: &RenderOptions) -> Result<Frame> {
+        camera.validate()?;
+        opts.validate()?;
+        match model {
+            Model::Ea => {
+                let mut timings = self.update_preintegration()?;
+                let pass = match &mut self.ea {
+                    Some(p) if p.size() == (opts.width, opts.height) => p,
+                    slot => slot.insert(ea::EaPass::new(
+                        &self.ctx,
+                        &self.volume_tex,
+                        &self.tf_image,
+                        self.preint.image(),
+                        &self.linear,
+                        opts.width,
+                        opts.height,
+                    )?),
+                };
+                let mut frame = pass.render(
+                    &self.ctx,
+                    self.volume_info,
+                    camera,
+                    opts,
+                    &self.volume_tex,
+                    &self.tf_image,
+                    self.preint.image(),
+                )?;
+                timings.extend(std::mem::take(&mut frame.timings));
+                frame.timings = timings;
+                Ok(frame)
+            }
+        }
+    }
+}

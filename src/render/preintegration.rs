@@ -1,0 +1,92 @@
+//! The preintegration table (thesis sect. 3.9, 4.3 "Compositing", 5.1).
+//!
+//! A 256 × 256 2D image with 2 array layers of RGBA32F, indexed by (front value, back value):
+//! layer 0 = premultiplied particle colour and opacity of a segment one reference sample
+//! distance long (eqs. 3.17, 4.16), layer 1 = its medium colour, the multiplicative
+//! integral of m_tf (eqs. 4.14–4.15). Renderers correct both for their actual step length
+//! (eq. 3.19 and the power rule). Built by `glsl/preintegrate.comp`, only when the transfer
+//! functions change.
+
+use anyhow::Result;
+
+use crate::shaders;
+use crate::vk::{
+    self, Access, Binding, ComputePipeline, Context, DescriptorSet, Image, ImageDesc, ImageKind,
+    Recorder, Sampler,
+};
+
+/// Entries per axis; must match PREINT_SIZE in glsl/common.glsl.
+pub const TABLE_SIZE: u32 = 256;
+
+pub struct PreintegrationTable {
+    pub(crate) image: Image,
+    pipeline: ComputePipeline,
+    set: DescriptorSet,
+    builds: u64,
+}
+
+impl PreintegrationTable {
+    /// `tf_image` is the 1D-array transfer-function image the table is built from; the set
+    /// keeps referring to it, so later uploads into it are picked up by [`Self::record_build`].
+    pub fn new(ctx: &Context, tf_image: &Image, tf_sampler: &Sampler) -> Result<Self> {
+        let image = Image::new(
+            ctx,
+            ImageDesc {
+                kind: ImageKind::D2Array,
+                format: vk::Format::R32G32B32A32_SFLOAT,
+                extent: [TABLE_SIZE, TABLE_SIZE, 1],
+                layers: 2,
+                usage: vk::usage::STORAGE | vk::usage::SAMPLED | vk::usage::TRANSFER_SRC,
+            },
+            "preintegration table",
+        )?;
+        let set = DescriptorSet::new(
+            ctx,
+            &[
+                Binding::Texture(tf_image, tf_sampler),
+                Binding::StorageImage(&image),
+            ],
+            "preintegration",
+        )?;
+        let pipeline = ComputePipeline::new(ctx, shaders::PREINTEGRATE_COMP, &set, 0, "preintegrate")?;
+        Ok(Self {
+            image,
+            pipeline,
+            set,
+            builds: 0,
+        })
+    }
+
+    /// Record a rebuild of the table; leaves it ready for sampling.
+    pub fn record_build(&mut self, rec: &mut Recorder, tf_image: &Image) -> Result<()> {
+        rec.begin_scope("preintegration");
+        rec.transition_all(tf_image, Access::Sampled);
+        rec.transition_all(&self.image, Access::ComputeStorage);
+        let groups = TABLE_SIZE.div_ceil(16);
+        rec.dispatch(&self.pipeline, &self.set, &[], [groups, groups, 1])?;
+        rec.transition_all(&self.image, Access::Sampled);
+        rec.end_scope();
+        self.builds += 1;
+        Ok(())
+    }
+
+    /// How many times the table has been built (for tests and diagnostics).
+    pub fn builds(&self) -> u64 {
+        self.builds
+    }
+
+    pub fn image(&self) -> &Image {
+        &self.image
+    }
+
+    /// Read both layers back: (colour + opacity, medium), row-major with the back value
+    /// along rows (index = back * 256 + front).
+    pub fn read(&self, ctx: &Context) -> Result<(Vec<[f32; 4]>, Vec<[f32; 4]>)> {
+        let l0 = ctx.read_image(&self.image, 0)?;
+        let l1 = ctx.read_image(&self.image, 1)?;
+        Ok((
+            bytemuck::cast_slice(&l0).to_vec(),
+            bytemuck::cast_slice(&l1).to_vec(),
+        ))
+    }
+}

@@ -1,0 +1,294 @@
+//! Transfer functions of the thesis' optical model (sect. 4.1): particle colour c_tf,
+//! opacity α_tf, medium colour m_tf and refractive index η_tf, each a piecewise-linear
+//! function of the normalised scalar value s ∈ [0,1].
+//!
+//! Opacity is specified for a reference sample distance of one voxel (sample distance 1.0,
+//! the smallest voxel side); renderers correct it for their actual step (eq. 3.13).
+//! With η ≡ 1 and m ≡ white the model is plain emission–absorption volume rendering.
+//!
+//! On the GPU the four functions are sampled at [`TF_SAMPLES`] points into one 1D image with
+//! two layers of RGBA32F: layer 0 = (colour.rgb, opacity), layer 1 = (medium.rgb, η).
+
+use std::path::Path;
+
+use anyhow::{anyhow, bail, Context as _, Result};
+use serde::Deserialize;
+
+use crate::vk::{self, Context, Image, ImageDesc, ImageKind};
+
+/// Samples per transfer function on the GPU. Fine enough that linear interpolation between
+/// samples is within 1e-4 of the piecewise-linear function for slopes up to ~100 per unit s
+/// away from control points.
+pub const TF_SAMPLES: u32 = 4096;
+
+/// One piecewise-linear function: control points `(s, value)` with non-decreasing s in
+/// [0,1]. Two points at the same s make a step. Outside the first/last point the value is
+/// held constant.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Piecewise<const N: usize> {
+    pub points: Vec<(f32, [f32; N])>,
+}
+
+impl<const N: usize> Piecewise<N> {
+    pub fn constant(v: [f32; N]) -> Self {
+        Self {
+            points: vec![(0.0, v)],
+        }
+    }
+
+    pub fn new(points: Vec<(f32, [f32; N])>) -> Self {
+        Self { points }
+    }
+
+    /// Value at `s`, right-continuous at steps.
+    pub fn eval(&self, s: f32) -> [f32; N] {
+        let p = &self.points;
+        if s < p[0].0 {
+            return p[0].1;
+        }
+        // Last point with position <= s.
+        let i = p.partition_point(|(x, _)| *x <= s);
+        if i >= p.len() {
+            return p[p.len() - 1].1;
+        }
+        let (x0, v0) = p[i - 1];
+        let (x1, v1) = p[i];
+        let t = if x1 > x0 { (s - x0) / (x1 - x0) } else { 1.0 };
+        std::array::from_fn(|k| v0[k] + (v1[k] - v0[k]) * t)
+    }
+}
+
+/// The four transfer functions.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TransferFunctions {
+    pub name: String,
+    pub colour: Piecewise<3>,
+    pub opacity: Piecewise<1>,
+    pub medium: Piecewise<3>,
+    pub eta: Piecewise<1>,
+}
+
+impl Default for TransferFunctions {
+    /// Opacity 0, colour white, medium white, η 1: renders nothing.
+    fn default() -> Self {
+        Self {
+            name: "default".into(),
+            colour: Piecewise::constant([1.0; 3]),
+            opacity: Piecewise::constant([0.0]),
+            medium: Piecewise::constant([1.0; 3]),
+            eta: Piecewise::constant([1.0]),
+        }
+    }
+}
+
+/// The file format (TOML). See README "Transfer-function files".
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TfFile {
+    name: Option<String>,
+    description: Option<String>,
+    colour: Option<Vec<Vec<f64>>>,
+    opacity: Option<Vec<Vec<f64>>>,
+    medium: Option<Vec<Vec<f64>>>,
+    eta: Option<Vec<Vec<f64>>>,
+}
+
+/// Presets shipped in assets/tf/, embedded so the binary needs no files at run time.
+pub const PRESETS: &[(&str, &str)] = &[
+    ("ct-bone", include_str!("../assets/tf/ct-bone.toml")),
+    ("glass", include_str!("../assets/tf/glass.toml")),
+    ("wine-glass", include_str!("../assets/tf/wine-glass.toml")),
+    ("supernova", include_str!("../assets/tf/supernova.toml")),
+    ("sphere-white", include_str!("../assets/tf/sphere-white.toml")),
+];
+
+impl TransferFunctions {
+    /// A preset name (see [`PRESETS`]) or a path to a TOML file.
+    pub fn load(name_or_path: &str) -> Result<Self> {
+        if let Some((name, text)) = PRESETS.iter().find(|(n, _)| *n == name_or_path) {
+            return Self::parse(text, &format!("preset '{name}'"));
+        }
+        let path = Path::new(name_or_path);
+        if !path.exists() {
+            let names: Vec<&str> = PRESETS.iter().map(|(n, _)| *n).collect();
+            bail!(
+                "transfer function '{name_or_path}': no such file, and not a preset ({})",
+                names.join(", ")
+            );
+        }
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("reading transfer function file {}", path.display()))?;
+        Self::parse(&text, &path.display().to_string())
+    }
+
+    /// Parse TOML text; `origin` names the file in every error.
+    pub fn parse(text: &str, origin: &str) -> Result<Self> {
+        let file: TfFile = toml::from_str(text)
+            .map_err(|e| anyhow!("{origin}: {}", e.to_string().trim_end()))?;
+        let _ = file.description;
+        let mut tf = TransferFunctions {
+            name: file.name.unwrap_or_else(|| origin.to_string()),
+            ..Default::default()
+        };
+        if let Some(p) = file.colour {
+            tf.colour = parse_points::<3>(&p, origin, "colour", |v| v >= 0.0, "must be >= 0")?;
+        }
+        if let Some(p) = file.opacity {
+            tf.opacity = parse_points::<1>(
+                &p,
+                origin,
+                "opacity",
+                |v| (0.0..=1.0).contains(&v),
+                "must be in [0, 1]",
+            )?;
+        }
+        if let Some(p) = file.medium {
+            tf.medium = parse_points::<3>(
+                &p,
+                origin,
+                "medium",
+                |v| (0.0..=1.0).contains(&v),
+                "must be in [0, 1] (a filter transmits at most all light)",
+            )?;
+        }
+        if let Some(p) = file.eta {
+            tf.eta = parse_points::<1>(&p, origin, "eta", |v| v > 0.0, "must be > 0")?;
+        }
+        Ok(tf)
+    }
+
+    /// Serialise to the TOML file format (round-trips through [`Self::parse`]).
+    pub fn to_toml(&self) -> String {
+        fn rows<const N: usize>(key: &str, p: &Piecewise<N>) -> String {
+            let items: Vec<String> = p
+                .points
+                .iter()
+                .map(|(s, v)| {
+                    let vals: Vec<String> = v.iter().map(|x| format!("{x:?}")).collect();
+                    format!("  [{s:?}, {}],", vals.join(", "))
+                })
+                .collect();
+            format!("{key} = [\n{}\n]\n", items.join("\n"))
+        }
+        format!(
+            "name = {:?}\n{}{}{}{}",
+            self.name,
+            rows("colour", &self.colour),
+            rows("opacity", &self.opacity),
+            rows("medium", &self.medium),
+            rows("eta", &self.eta)
+        )
+    }
+
+    /// The texels of the 1D TF image: layer 0 then layer 1, each `TF_SAMPLES` RGBA f32,
+    /// sample i at s = i / (TF_SAMPLES - 1).
+    pub fn texels(&self) -> (Vec<[f32; 4]>, Vec<[f32; 4]>) {
+        let n = TF_SAMPLES as usize;
+        let mut l0 = Vec::with_capacity(n);
+        let mut l1 = Vec::with_capacity(n);
+        for i in 0..n {
+            let s = i as f32 / (n - 1) as f32;
+            let c = self.colour.eval(s);
+            let a = self.opacity.eval(s)[0];
+            let m = self.medium.eval(s);
+            let e = self.eta.eval(s)[0];
+            l0.push([c[0], c[1], c[2], a]);
+            l1.push([m[0], m[1], m[2], e]);
+        }
+        (l0, l1)
+    }
+
+    /// Upload into a new 1D-array image (2 layers of RGBA32F).
+    pub fn upload(&self, ctx: &Context) -> Result<Image> {
+        let image = Image::new(
+            ctx,
+            ImageDesc {
+                kind: ImageKind::D1Array,
+                format: vk::Format::R32G32B32A32_SFLOAT,
+                extent: [TF_SAMPLES, 1, 1],
+                layers: 2,
+                usage: vk::usage::SAMPLED | vk::usage::TRANSFER_DST | vk::usage::TRANSFER_SRC,
+            },
+            "transfer functions",
+        )?;
+        self.write_to(ctx, &image)?;
+        Ok(image)
+    }
+
+    /// Overwrite an existing TF image.
+    pub fn write_to(&self, ctx: &Context, image: &Image) -> Result<()> {
+        let (l0, l1) = self.texels();
+        ctx.upload_image(image, 0, bytemuck::cast_slice(&l0))?;
+        ctx.upload_image(image, 1, bytemuck::cast_slice(&l1))?;
+        Ok(())
+    }
+}
+
+fn parse_points<const N: usize>(
+    rows: &[Vec<f64>],
+    origin: &str,
+    key: &str,
+    valid: impl Fn(f64) -> bool,
+    rule: &str,
+) -> Result<Piecewise<N>> {
+    if rows.is_empty() {
+        bail!("{origin}: {key}: needs at least one control point");
+    }
+    let mut points = Vec::with_capacity(rows.len());
+    let mut prev_s = f64::NEG_INFINITY;
+    for (i, row) in rows.iter().enumerate() {
+        let at = format!("{origin}: {key}[{i}]");
+        if row.len() != N + 1 {
+            bail!(
+                "{at}: expected [s, {}] ({} numbers), got {} numbers",
+                if N == 1 { "value" } else { "r, g, b" },
+                N + 1,
+                row.len()
+            );
+        }
+        if let Some(bad) = row.iter().find(|x| !x.is_finite()) {
+            bail!("{at}: {bad} is not a finite number");
+        }
+        let s = row[0];
+        if !(0.0..=1.0).contains(&s) {
+            bail!("{at}: position s = {s} is outside [0, 1]");
+        }
+        if s < prev_s {
+            bail!("{at}: control points must be sorted by s, but s = {s} comes after {prev_s}");
+        }
+        if i >= 2 && s == prev_s && rows[i - 2][0] == s {
+            bail!("{at}: more than two control points at s = {s} (two make a step)");
+        }
+        for &v in &row[1..] {
+            if !valid(v) {
+                bail!("{at}: value {v} {rule}");
+            }
+        }
+        prev_s = s;
+        points.push((s as f32, std::array::from_fn(|k| row[k + 1] as f32)));
+    }
+    Ok(Piecewise { points })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn eval_interpolates_and_steps() {
+        let p = Piecewise::<1>::new(vec![(0.2, [0.0]), (0.4, [1.0]), (0.4, [0.5]), (1.0, [0.5])]);
+        assert_eq!(p.eval(0.0), [0.0]);
+        assert!((p.eval(0.3)[0] - 0.5).abs() < 1e-6);
+        assert_eq!(p.eval(0.4), [0.5]);
+        assert_eq!(p.eval(0.9), [0.5]);
+    }
+
+    #[test]
+    fn presets_parse_and_round_trip() {
+        for (name, _) in PRESETS {
+            let tf = TransferFunctions::load(name).unwrap();
+            let again = TransferFunctions::parse(&tf.to_toml(), "round trip").unwrap();
+            assert_eq!(tf, again, "{name}");
+        }
+    }
+}

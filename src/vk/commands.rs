@@ -1,0 +1,405 @@
+//! Command recording, submission, barriers and GPU timestamp scopes.
+//!
+//! One [`Recorder`] is one primary command buffer: a whole frame is recorded into it and
+//! submitted once ([`Context::execute`]). Named scopes write a timestamp pair and a debug
+//! label, so RenderDoc/Nsight captures and the printed GPU milliseconds use the same names.
+
+use std::ffi::CString;
+use std::ops::Range;
+
+use anyhow::{bail, Context as _, Result};
+use ash::vk;
+
+use super::resources::color_range;
+use super::{Access, Buffer, ComputePipeline, Context, DescriptorSet, Image, Memory};
+
+const MAX_QUERIES: u32 = 256;
+
+/// GPU time of each named scope, in recording order, in milliseconds.
+#[derive(Clone, Debug, Default)]
+pub struct Timings {
+    pub scopes: Vec<(String, f64)>,
+}
+
+impl Timings {
+    /// Sum of all scopes with this name.
+    pub fn get(&self, name: &str) -> Option<f64> {
+        let v: Vec<f64> = self
+            .scopes
+            .iter()
+            .filter(|(n, _)| n == name)
+            .map(|(_, t)| *t)
+            .collect();
+        (!v.is_empty()).then(|| v.iter().sum())
+    }
+    pub fn extend(&mut self, other: Timings) {
+        self.scopes.extend(other.scopes);
+    }
+}
+
+struct Scope {
+    name: String,
+    begin: u32,
+    end: Option<u32>,
+}
+
+pub struct Recorder<'a> {
+    ctx: &'a Context,
+    pub(crate) cmd: vk::CommandBuffer,
+    queries: Option<vk::QueryPool>,
+    next_query: u32,
+    scopes: Vec<Scope>,
+    open: Vec<usize>,
+}
+
+impl Recorder<'_> {
+    fn device(&self) -> &ash::Device {
+        self.ctx.device()
+    }
+
+    /// Open a named timing scope (and debug label). Scopes nest.
+    pub fn begin_scope(&mut self, name: &str) {
+        if let Some(dd) = &self.ctx.shared.debug_device {
+            let cname = CString::new(name).unwrap_or_default();
+            let label = vk::DebugUtilsLabelEXT::default().label_name(&cname);
+            // SAFETY: recording command buffer.
+            unsafe { dd.cmd_begin_debug_utils_label(self.cmd, &label) };
+        }
+        let begin = self.write_timestamp();
+        self.scopes.push(Scope {
+            name: name.to_owned(),
+            begin: begin.unwrap_or(u32::MAX),
+            end: None,
+        });
+        self.open.push(self.scopes.len() - 1);
+    }
+
+    pub fn end_scope(&mut self) {
+        let Some(idx) = self.open.pop() else { return };
+        let end = self.write_timestamp();
+        self.scopes[idx].end = end;
+        if let Some(dd) = &self.ctx.shared.debug_device {
+            // SAFETY: matches the begin label above.
+            unsafe { dd.cmd_end_debug_utils_label(self.cmd) };
+        }
+    }
+
+    fn write_timestamp(&mut self) -> Option<u32> {
+        let pool = self.queries?;
+        if self.next_query >= MAX_QUERIES {
+            return None;
+        }
+        let q = self.next_query;
+        self.next_query += 1;
+        // SAFETY: query index within the pool, which was reset at the start of recording.
+        unsafe {
+            self.device().cmd_write_timestamp2(
+                self.cmd,
+                vk::PipelineStageFlags2::ALL_COMMANDS,
+                pool,
+                q,
+            )
+        };
+        Some(q)
+    }
+
+    /// Make `layers` of `image` ready for `to`, with a barrier derived from the state the
+    /// previous use left. Read-after-read in the same layout needs no barrier and gets none.
+    pub fn transition(&mut self, image: &Image, layers: Range<u32>, to: Access) {
+        let mut state = image.layer_state.lock().unwrap();
+        let mut barriers = Vec::new();
+        let mut layer = layers.start;
+        while layer < layers.end {
+            let from = state[layer as usize];
+            // Group consecutive layers in the same state into one barrier.
+            let mut end = layer + 1;
+            while end < layers.end && state[end as usize] == from {
+                end += 1;
+            }
+            let needed = from != to || from.writes() || to.writes();
+            if needed {
+                barriers.push(
+                    vk::ImageMemoryBarrier2::default()
+                        .src_stage_mask(from.stage())
+                        .src_access_mask(from.access())
+                        .dst_stage_mask(to.stage())
+                        .dst_access_mask(to.access())
+                        .old_layout(from.layout())
+                        .new_layout(to.layout())
+                        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                        .image(image.raw)
+                        .subresource_range(color_range(layer, end - layer)),
+                );
+            }
+            for l in layer..end {
+                state[l as usize] = to;
+            }
+            layer = end;
+        }
+        if !barriers.is_empty() {
+            let dep = vk::DependencyInfo::default().image_memory_barriers(&barriers);
+            // SAFETY: recording; barriers reference a live image.
+            unsafe { self.device().cmd_pipeline_barrier2(self.cmd, &dep) };
+        }
+    }
+
+    /// Transition every layer of `image`.
+    pub fn transition_all(&mut self, image: &Image, to: Access) {
+        self.transition(image, 0..image.desc.layers, to);
+    }
+
+    /// Copy tightly packed texels from `buffer` into one layer of `image`.
+    pub fn copy_buffer_to_image(&mut self, buffer: &Buffer, image: &Image, layer: u32) {
+        self.transition(image, layer..layer + 1, Access::TransferDst);
+        let region = buffer_image_copy(image, layer);
+        // SAFETY: the image layer is in TRANSFER_DST_OPTIMAL after the transition.
+        unsafe {
+            self.device().cmd_copy_buffer_to_image(
+                self.cmd,
+                buffer.raw,
+                image.raw,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &[region],
+            )
+        };
+    }
+
+    /// Copy one layer of `image` into `buffer` and make it visible to the host.
+    pub fn copy_image_to_buffer(&mut self, image: &Image, layer: u32, buffer: &Buffer) {
+        self.transition(image, layer..layer + 1, Access::TransferSrc);
+        let region = buffer_image_copy(image, layer);
+        // SAFETY: layer is in TRANSFER_SRC_OPTIMAL after the transition.
+        unsafe {
+            self.device().cmd_copy_image_to_buffer(
+                self.cmd,
+                image.raw,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                buffer.raw,
+                &[region],
+            );
+            let barrier = vk::BufferMemoryBarrier2::default()
+                .src_stage_mask(vk::PipelineStageFlags2::COPY)
+                .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+                .dst_stage_mask(vk::PipelineStageFlags2::HOST)
+                .dst_access_mask(vk::AccessFlags2::HOST_READ)
+                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .buffer(buffer.raw)
+                .offset(0)
+                .size(vk::WHOLE_SIZE);
+            let barriers = [barrier];
+            let dep = vk::DependencyInfo::default().buffer_memory_barriers(&barriers);
+            self.device().cmd_pipeline_barrier2(self.cmd, &dep);
+        }
+    }
+
+    /// Bind a compute pipeline with its set, push constants, and dispatch `groups`.
+    pub fn dispatch(
+        &mut self,
+        pipeline: &ComputePipeline,
+        set: &DescriptorSet,
+        push: &[u8],
+        groups: [u32; 3],
+    ) -> Result<()> {
+        if push.len() as u32 != pipeline.push_size {
+            bail!(
+                "pipeline '{}' takes {} bytes of push constants, got {}",
+                pipeline.name,
+                pipeline.push_size,
+                push.len()
+            );
+        }
+        let d = self.device();
+        // SAFETY: recording; pipeline, layout and set are alive and compatible.
+        unsafe {
+            d.cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::COMPUTE, pipeline.raw);
+            d.cmd_bind_descriptor_sets(
+                self.cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                pipeline.layout,
+                0,
+                &[set.raw],
+                &[],
+            );
+            if !push.is_empty() {
+                d.cmd_push_constants(
+                    self.cmd,
+                    pipeline.layout,
+                    vk::ShaderStageFlags::COMPUTE
+                        | vk::ShaderStageFlags::FRAGMENT
+                        | vk::ShaderStageFlags::VERTEX,
+                    0,
+                    push,
+                );
+            }
+            d.cmd_dispatch(self.cmd, groups[0], groups[1], groups[2]);
+        }
+        Ok(())
+    }
+}
+
+fn buffer_image_copy(image: &Image, layer: u32) -> vk::BufferImageCopy {
+    let [w, h, d] = image.desc.extent;
+    vk::BufferImageCopy {
+        buffer_offset: 0,
+        buffer_row_length: 0,
+        buffer_image_height: 0,
+        image_subresource: vk::ImageSubresourceLayers {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            mip_level: 0,
+            base_array_layer: layer,
+            layer_count: 1,
+        },
+        image_offset: vk::Offset3D::default(),
+        image_extent: vk::Extent3D {
+            width: w,
+            height: h,
+            depth: d,
+        },
+    }
+}
+
+impl Context {
+    /// Record a command buffer with `record`, submit it, wait for it, and return the GPU
+    /// time of each scope the recording opened.
+    pub fn execute(&self, record: impl FnOnce(&mut Recorder) -> Result<()>) -> Result<Timings> {
+        let device = self.device();
+        let pool = *self.shared.command_pool.lock().unwrap();
+        let alloc = vk::CommandBufferAllocateInfo::default()
+            .command_pool(pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        // The pool is shared by all threads using this context; allocation and freeing hold
+        // its lock, recording happens on a buffer nobody else sees.
+        let cmd = {
+            let _guard = self.shared.command_pool.lock().unwrap();
+            // SAFETY: the pool lock is held.
+            unsafe { device.allocate_command_buffers(&alloc) }?[0]
+        };
+        let queries = if self.info().timestamps {
+            let info = vk::QueryPoolCreateInfo::default()
+                .query_type(vk::QueryType::TIMESTAMP)
+                .query_count(MAX_QUERIES);
+            // SAFETY: valid device.
+            Some(unsafe { device.create_query_pool(&info, None) }?)
+        } else {
+            None
+        };
+        let result = (|| -> Result<Timings> {
+            // SAFETY: fresh command buffer.
+            unsafe {
+                device.begin_command_buffer(
+                    cmd,
+                    &vk::CommandBufferBeginInfo::default()
+                        .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+                )?;
+                if let Some(q) = queries {
+                    device.cmd_reset_query_pool(cmd, q, 0, MAX_QUERIES);
+                }
+            }
+            let mut rec = Recorder {
+                ctx: self,
+                cmd,
+                queries,
+                next_query: 0,
+                scopes: Vec::new(),
+                open: Vec::new(),
+            };
+            record(&mut rec)?;
+            while !rec.open.is_empty() {
+                rec.end_scope();
+            }
+            let used = rec.next_query;
+            let scopes = std::mem::take(&mut rec.scopes);
+            // SAFETY: recording finished; fence waited before anything is read or freed.
+            unsafe {
+                device.end_command_buffer(cmd)?;
+                let fence = device.create_fence(&vk::FenceCreateInfo::default(), None)?;
+                let cmd_infos = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
+                let submit = vk::SubmitInfo2::default().command_buffer_infos(&cmd_infos);
+                let submitted = {
+                    let queue = self.shared.queue.lock().unwrap();
+                    device.queue_submit2(*queue, &[submit], fence)
+                };
+                let waited = submitted.and_then(|_| device.wait_for_fences(&[fence], true, u64::MAX));
+                device.destroy_fence(fence, None);
+                waited.context("GPU submission failed (device lost?)")?;
+            }
+            let mut timings = Timings::default();
+            if let (Some(q), true) = (queries, used > 0) {
+                let mut raw = vec![0u64; used as usize];
+                // SAFETY: `used` queries were written and the work has completed.
+                unsafe {
+                    device.get_query_pool_results(
+                        q,
+                        0,
+                        &mut raw,
+                        vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+                    )
+                }?;
+                let period = self.info().limits.timestamp_period as f64;
+                for s in scopes {
+                    if let (Some(e), true) = (s.end, s.begin != u32::MAX) {
+                        let ticks = raw[e as usize].saturating_sub(raw[s.begin as usize]);
+                        timings.scopes.push((s.name, ticks as f64 * period * 1e-6));
+                    }
+                }
+            }
+            Ok(timings)
+        })();
+        // SAFETY: the submission (if any) has completed or failed; nothing references these.
+        unsafe {
+            if let Some(q) = queries {
+                device.destroy_query_pool(q, None);
+            }
+            let _guard = self.shared.command_pool.lock().unwrap();
+            device.free_command_buffers(pool, &[cmd]);
+        }
+        result
+    }
+
+    /// Upload tightly packed texels into one layer of `image`; the layer ends up ready for
+    /// sampling.
+    pub fn upload_image(&self, image: &Image, layer: u32, bytes: &[u8]) -> Result<()> {
+        let expected = image.layer_bytes()?;
+        if bytes.len() as u64 != expected {
+            bail!(
+                "upload to '{}' has {} bytes, one layer is {expected}",
+                image.name(),
+                bytes.len()
+            );
+        }
+        let mut staging = Buffer::new(
+            self,
+            expected,
+            vk::BufferUsageFlags::TRANSFER_SRC,
+            Memory::Upload,
+            "staging upload",
+        )?;
+        staging.write(0, bytes)?;
+        self.execute(|rec| {
+            rec.copy_buffer_to_image(&staging, image, layer);
+            rec.transition(image, layer..layer + 1, Access::Sampled);
+            Ok(())
+        })?;
+        Ok(())
+    }
+
+    /// Read one layer of `image` back to the host as tightly packed texels.
+    pub fn read_image(&self, image: &Image, layer: u32) -> Result<Vec<u8>> {
+        let size = image.layer_bytes()?;
+        let staging = Buffer::new(
+            self,
+            size,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            Memory::Readback,
+            "staging readback",
+        )?;
+        self.execute(|rec| {
+            rec.copy_image_to_buffer(image, layer, &staging);
+            Ok(())
+        })?;
+        Ok(staging.mapped()?[..size as usize].to_vec())
+    }
+}

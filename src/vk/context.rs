@@ -1,0 +1,538 @@
+//! Instance, physical-device choice, logical device, allocator and the validation messenger.
+//!
+//! Everything is headless: no surface extension is requested here, so the same code runs on a
+//! machine with no window system (CI on lavapipe). A [`Context`] is a cheap handle (an `Arc`);
+//! every resource keeps one, so the device outlives whatever was made from it.
+
+use std::ffi::{c_void, CStr, CString};
+use std::mem::ManuallyDrop;
+use std::sync::{Arc, Mutex};
+
+use anyhow::{anyhow, bail, Context as _, Result};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+
+const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
+
+/// How to build a [`Context`].
+#[derive(Clone, Debug, Default)]
+pub struct ContextDesc {
+    /// Turn on VK_LAYER_KHRONOS_validation with synchronization validation.
+    pub validate: bool,
+    /// Device name (case-insensitive substring) or index into the enumeration order.
+    pub device: Option<String>,
+}
+
+impl ContextDesc {
+    /// Validation on when `validate` is set or `REFRAKT_VALIDATE` is `1`/`true`.
+    pub fn from_env(validate: bool, device: Option<String>) -> Self {
+        let env = std::env::var("REFRAKT_VALIDATE")
+            .map(|v| v == "1" || v.eq_ignore_ascii_case("true"))
+            .unwrap_or(false);
+        Self {
+            validate: validate || env,
+            device,
+        }
+    }
+}
+
+/// Messages the validation layer reported (warnings and errors only).
+#[derive(Default)]
+pub struct ValidationLog {
+    messages: Mutex<Vec<String>>,
+}
+
+impl ValidationLog {
+    pub fn messages(&self) -> Vec<String> {
+        self.messages.lock().unwrap().clone()
+    }
+    pub fn count(&self) -> usize {
+        self.messages.lock().unwrap().len()
+    }
+}
+
+/// What `refrakt info` prints and what the renderer checks against.
+#[derive(Clone, Debug)]
+pub struct DeviceInfo {
+    pub index: usize,
+    pub name: String,
+    pub device_type: vk::PhysicalDeviceType,
+    pub api_version: u32,
+    pub driver_version: u32,
+    pub driver_name: String,
+    pub driver_info: String,
+    pub limits: vk::PhysicalDeviceLimits,
+    /// (bytes, device-local) per heap.
+    pub memory_heaps: Vec<(u64, bool)>,
+    pub timestamps: bool,
+}
+
+pub fn version_string(v: u32) -> String {
+    format!(
+        "{}.{}.{}",
+        vk::api_version_major(v),
+        vk::api_version_minor(v),
+        vk::api_version_patch(v)
+    )
+}
+
+pub fn device_type_name(t: vk::PhysicalDeviceType) -> &'static str {
+    match t {
+        vk::PhysicalDeviceType::DISCRETE_GPU => "discrete GPU",
+        vk::PhysicalDeviceType::INTEGRATED_GPU => "integrated GPU",
+        vk::PhysicalDeviceType::VIRTUAL_GPU => "virtual GPU",
+        vk::PhysicalDeviceType::CPU => "CPU",
+        _ => "other",
+    }
+}
+
+fn type_rank(t: vk::PhysicalDeviceType) -> u32 {
+    match t {
+        vk::PhysicalDeviceType::DISCRETE_GPU => 4,
+        vk::PhysicalDeviceType::INTEGRATED_GPU => 3,
+        vk::PhysicalDeviceType::VIRTUAL_GPU => 2,
+        vk::PhysicalDeviceType::CPU => 1,
+        _ => 0,
+    }
+}
+
+pub(crate) struct Shared {
+    _entry: ash::Entry,
+    pub(crate) instance: ash::Instance,
+    debug_instance: Option<ash::ext::debug_utils::Instance>,
+    messenger: vk::DebugUtilsMessengerEXT,
+    pub(crate) debug_device: Option<ash::ext::debug_utils::Device>,
+    pub(crate) physical: vk::PhysicalDevice,
+    pub(crate) device: ash::Device,
+    pub(crate) queue: Mutex<vk::Queue>,
+    pub(crate) queue_family: u32,
+    pub(crate) allocator: ManuallyDrop<Mutex<Allocator>>,
+    pub(crate) command_pool: Mutex<vk::CommandPool>,
+    validation: Arc<ValidationLog>,
+    // Keeps the messenger's user data alive for as long as the messenger exists.
+    _callback_data: Option<Box<Arc<ValidationLog>>>,
+    pub(crate) info: DeviceInfo,
+    loader_version: u32,
+}
+
+/// A Vulkan 1.3 device with one graphics+compute queue.
+#[derive(Clone)]
+pub struct Context {
+    pub(crate) shared: Arc<Shared>,
+}
+
+unsafe extern "system" fn debug_callback(
+    severity: vk::DebugUtilsMessageSeverityFlagsEXT,
+    types: vk::DebugUtilsMessageTypeFlagsEXT,
+    data: *const vk::DebugUtilsMessengerCallbackDataEXT<'_>,
+    user: *mut c_void,
+) -> vk::Bool32 {
+    // SAFETY: the layer passes a valid callback-data pointer; `user` is the boxed Arc that
+    // `Shared` owns until after the messenger is destroyed.
+    let (msg, log) = unsafe {
+        let data = &*data;
+        let msg = if data.p_message.is_null() {
+            String::from("(no message)")
+        } else {
+            CStr::from_ptr(data.p_message).to_string_lossy().into_owned()
+        };
+        (msg, &*(user as *const Arc<ValidationLog>))
+    };
+    let counted = severity.intersects(
+        vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+    );
+    if counted {
+        log::error!("[vulkan {types:?} {severity:?}] {msg}");
+        log.messages.lock().unwrap().push(msg);
+    } else {
+        log::debug!("[vulkan {types:?} {severity:?}] {msg}");
+    }
+    vk::FALSE
+}
+
+fn load_entry() -> Result<ash::Entry> {
+    // SAFETY: loading the system Vulkan loader library; nothing else runs concurrently with
+    // its initialisation in this process that could observe a half-loaded library.
+    unsafe { ash::Entry::load() }.map_err(|e| {
+        anyhow!(
+            "cannot load the Vulkan loader (libvulkan.so.1): {e}. Install it with \
+             `sudo apt-get install libvulkan1 mesa-vulkan-drivers` or run scripts/setup.sh"
+        )
+    })
+}
+
+impl Context {
+    /// List the devices the loader sees, in enumeration order.
+    pub fn list_devices() -> Result<Vec<DeviceInfo>> {
+        let entry = load_entry()?;
+        let instance = create_instance(&entry, false, false)?;
+        let result = (|| {
+            // SAFETY: valid instance.
+            let physicals = unsafe { instance.enumerate_physical_devices() }?;
+            Ok(physicals
+                .iter()
+                .enumerate()
+                .map(|(i, &p)| query_info(&instance, p, i))
+                .collect())
+        })();
+        // SAFETY: nothing made from this instance survives.
+        unsafe { instance.destroy_instance(None) };
+        result
+    }
+
+    pub fn new(desc: &ContextDesc) -> Result<Self> {
+        let entry = load_entry()?;
+        // SAFETY: plain enumeration calls on a loaded entry.
+        let layers = unsafe { entry.enumerate_instance_layer_properties() }?;
+        let have_validation = layers
+            .iter()
+            .any(|l| l.layer_name_as_c_str().ok() == Some(VALIDATION_LAYER));
+        if desc.validate && !have_validation {
+            bail!(
+                "validation was requested but VK_LAYER_KHRONOS_validation is not installed \
+                 (Debian package vulkan-validationlayers; scripts/setup.sh installs it)"
+            );
+        }
+        let exts = unsafe { entry.enumerate_instance_extension_properties(None) }?;
+        let have_debug_utils = exts
+            .iter()
+            .any(|e| e.extension_name_as_c_str().ok() == Some(ash::ext::debug_utils::NAME));
+        // SAFETY: plain query.
+        let loader_version = unsafe { entry.try_enumerate_instance_version() }?
+            .unwrap_or(vk::API_VERSION_1_0);
+        if loader_version < vk::API_VERSION_1_3 {
+            bail!(
+                "the Vulkan loader supports only {}, refrakt needs 1.3",
+                version_string(loader_version)
+            );
+        }
+
+        let instance = create_instance(&entry, desc.validate, have_debug_utils)?;
+        let validation = Arc::new(ValidationLog::default());
+        let (debug_instance, messenger, callback_data) = if have_debug_utils {
+            let di = ash::ext::debug_utils::Instance::new(&entry, &instance);
+            let data = Box::new(validation.clone());
+            let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
+                .message_severity(
+                    vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
+                        | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR
+                        | vk::DebugUtilsMessageSeverityFlagsEXT::INFO,
+                )
+                .message_type(
+                    vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
+                        | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                        | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+                )
+                .pfn_user_callback(Some(debug_callback))
+                .user_data(&*data as *const Arc<ValidationLog> as *mut c_void);
+            // SAFETY: `data` is kept alive in `Shared` until the messenger is destroyed.
+            let m = unsafe { di.create_debug_utils_messenger(&info, None) }?;
+            (Some(di), m, Some(data))
+        } else {
+            (None, vk::DebugUtilsMessengerEXT::null(), None)
+        };
+
+        let built = Self::create_device(&instance, desc);
+        let (physical, info, device, queue_family) = match built {
+            Ok(v) => v,
+            Err(e) => {
+                // SAFETY: nothing else was created from the instance.
+                unsafe {
+                    if let Some(di) = &debug_instance {
+                        di.destroy_debug_utils_messenger(messenger, None);
+                    }
+                    instance.destroy_instance(None);
+                }
+                return Err(e);
+            }
+        };
+        // SAFETY: family index was chosen from this device's queue families.
+        let queue = unsafe { device.get_device_queue(queue_family, 0) };
+        let allocator = Allocator::new(&AllocatorCreateDesc {
+            instance: instance.clone(),
+            device: device.clone(),
+            physical_device: physical,
+            debug_settings: Default::default(),
+            buffer_device_address: false,
+            allocation_sizes: Default::default(),
+        })
+        .context("creating the GPU memory allocator")?;
+        let pool_info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(queue_family)
+            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+        // SAFETY: valid device.
+        let command_pool = unsafe { device.create_command_pool(&pool_info, None) }?;
+        let debug_device = have_debug_utils
+            .then(|| ash::ext::debug_utils::Device::new(&instance, &device));
+
+        Ok(Self {
+            shared: Arc::new(Shared {
+                _entry: entry,
+                instance,
+                debug_instance,
+                messenger,
+                debug_device,
+                physical,
+                device,
+                queue: Mutex::new(queue),
+                queue_family,
+                allocator: ManuallyDrop::new(Mutex::new(allocator)),
+                command_pool: Mutex::new(command_pool),
+                validation,
+                _callback_data: callback_data,
+                info,
+                loader_version,
+            }),
+        })
+    }
+
+    fn create_device(
+        instance: &ash::Instance,
+        desc: &ContextDesc,
+    ) -> Result<(vk::PhysicalDevice, DeviceInfo, ash::Device, u32)> {
+        // SAFETY: valid instance.
+        let physicals = unsafe { instance.enumerate_physical_devices() }?;
+        if physicals.is_empty() {
+            bail!(
+                "no Vulkan device found. On a machine without a GPU install Mesa's lavapipe: \
+                 `sudo apt-get install mesa-vulkan-drivers` (scripts/setup.sh does this)"
+            );
+        }
+        let infos: Vec<DeviceInfo> = physicals
+            .iter()
+            .enumerate()
+            .map(|(i, &p)| query_info(instance, p, i))
+            .collect();
+        let chosen = match &desc.device {
+            Some(sel) => select_device(&infos, sel)?,
+            None => infos
+                .iter()
+                .filter(|i| i.api_version >= vk::API_VERSION_1_3)
+                .max_by_key(|i| (type_rank(i.device_type), usize::MAX - i.index))
+                .map(|i| i.index)
+                .ok_or_else(|| {
+                    anyhow!(
+                        "no Vulkan 1.3 device found; devices seen: {}",
+                        device_list(&infos)
+                    )
+                })?,
+        };
+        let info = infos[chosen].clone();
+        if info.api_version < vk::API_VERSION_1_3 {
+            bail!(
+                "device '{}' supports Vulkan {}, refrakt needs 1.3",
+                info.name,
+                version_string(info.api_version)
+            );
+        }
+        let physical = physicals[chosen];
+        // SAFETY: valid physical device.
+        let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
+        let family = families
+            .iter()
+            .position(|f| {
+                f.queue_flags
+                    .contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE)
+            })
+            .ok_or_else(|| anyhow!("device '{}' has no graphics+compute queue", info.name))?
+            as u32;
+        let mut info = info;
+        info.timestamps = info.limits.timestamp_compute_and_graphics == vk::TRUE
+            && families[family as usize].timestamp_valid_bits > 0;
+
+        let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
+        let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut f13);
+        // SAFETY: valid physical device and a well-formed pNext chain.
+        unsafe { instance.get_physical_device_features2(physical, &mut f2) };
+        if f13.synchronization2 != vk::TRUE {
+            bail!("device '{}' lacks synchronization2", info.name);
+        }
+        let priorities = [1.0f32];
+        let queue_infos = [vk::DeviceQueueCreateInfo::default()
+            .queue_family_index(family)
+            .queue_priorities(&priorities)];
+        // maintenance4 is required by Vulkan 1.3; glslang targeting 1.3 emits LocalSizeId, which
+        // needs it enabled.
+        let mut enable13 = vk::PhysicalDeviceVulkan13Features::default()
+            .synchronization2(true)
+            .maintenance4(true);
+        let device_info = vk::DeviceCreateInfo::default()
+            .queue_create_infos(&queue_infos)
+            .push_next(&mut enable13);
+        // SAFETY: create info references locals that outlive the call.
+        let device = unsafe { instance.create_device(physical, &device_info, None) }
+            .with_context(|| format!("creating a logical device on '{}'", info.name))?;
+        Ok((physical, info, device, family))
+    }
+
+    pub fn info(&self) -> &DeviceInfo {
+        &self.shared.info
+    }
+
+    pub fn loader_version(&self) -> u32 {
+        self.shared.loader_version
+    }
+
+    /// The validation messages (warnings and errors) reported so far. Kept alive by the
+    /// returned `Arc` even after the context is dropped, so a test can check destruction too.
+    pub fn validation_log(&self) -> Arc<ValidationLog> {
+        self.shared.validation.clone()
+    }
+
+    pub fn device(&self) -> &ash::Device {
+        &self.shared.device
+    }
+
+    /// Whether a format supports the given features for optimal-tiling images.
+    pub fn format_supports(&self, format: vk::Format, features: vk::FormatFeatureFlags) -> bool {
+        // SAFETY: valid physical device.
+        let props = unsafe {
+            self.shared
+                .instance
+                .get_physical_device_format_properties(self.shared.physical, format)
+        };
+        props.optimal_tiling_features.contains(features)
+    }
+
+    /// Wait until the device is idle (used before teardown and in tests).
+    pub fn wait_idle(&self) -> Result<()> {
+        // SAFETY: valid device; the queue lock keeps other submits out meanwhile.
+        let _q = self.shared.queue.lock().unwrap();
+        unsafe { self.shared.device.device_wait_idle() }?;
+        Ok(())
+    }
+
+    /// Attach a debug name to a Vulkan object (shows up in RenderDoc, Nsight and in
+    /// validation messages).
+    pub(crate) fn set_name<H: vk::Handle>(&self, handle: H, name: &str) {
+        if let Some(dd) = &self.shared.debug_device {
+            let Ok(cname) = CString::new(name) else { return };
+            let info = vk::DebugUtilsObjectNameInfoEXT::default()
+                .object_handle(handle)
+                .object_name(&cname);
+            // SAFETY: handle belongs to this device.
+            let _ = unsafe { dd.set_debug_utils_object_name(&info) };
+        }
+    }
+}
+
+impl Drop for Shared {
+    fn drop(&mut self) {
+        // SAFETY: every resource holds a Context, so when Shared drops nothing made from the
+        // device is alive any more. Order: idle, allocator, pool, device, messenger, instance.
+        unsafe {
+            let _ = self.device.device_wait_idle();
+            ManuallyDrop::drop(&mut self.allocator);
+            self.device
+                .destroy_command_pool(*self.command_pool.get_mut().unwrap(), None);
+            self.device.destroy_device(None);
+            if let Some(di) = &self.debug_instance {
+                di.destroy_debug_utils_messenger(self.messenger, None);
+            }
+            self.instance.destroy_instance(None);
+        }
+    }
+}
+
+fn create_instance(entry: &ash::Entry, validate: bool, debug_utils: bool) -> Result<ash::Instance> {
+    let app = vk::ApplicationInfo::default()
+        .application_name(c"refrakt")
+        .engine_name(c"refrakt")
+        .api_version(vk::API_VERSION_1_3);
+    let layers: Vec<*const i8> = if validate {
+        vec![VALIDATION_LAYER.as_ptr()]
+    } else {
+        vec![]
+    };
+    let mut exts: Vec<*const i8> = vec![];
+    if debug_utils {
+        exts.push(ash::ext::debug_utils::NAME.as_ptr());
+    }
+    // Synchronization validation is off by default in the layer; it is the check that
+    // vouches for our barriers (plane sweep, compute passes), so it is always on with
+    // --validate.
+    let enabled = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
+    let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&enabled);
+    let mut info = vk::InstanceCreateInfo::default()
+        .application_info(&app)
+        .enabled_layer_names(&layers)
+        .enabled_extension_names(&exts);
+    if validate {
+        info = info.push_next(&mut features);
+    }
+    // SAFETY: create info references locals that outlive the call.
+    unsafe { entry.create_instance(&info, None) }.context("creating the Vulkan instance")
+}
+
+fn query_info(instance: &ash::Instance, p: vk::PhysicalDevice, index: usize) -> DeviceInfo {
+    let mut driver = vk::PhysicalDeviceDriverProperties::default();
+    let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
+    // SAFETY: valid physical device and pNext chain.
+    unsafe { instance.get_physical_device_properties2(p, &mut props2) };
+    let props = props2.properties;
+    let mem = unsafe { instance.get_physical_device_memory_properties(p) };
+    let heaps = mem.memory_heaps[..mem.memory_heap_count as usize]
+        .iter()
+        .map(|h| (h.size, h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL)))
+        .collect();
+    DeviceInfo {
+        index,
+        name: props
+            .device_name_as_c_str()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default(),
+        device_type: props.device_type,
+        api_version: props.api_version,
+        driver_version: props.driver_version,
+        driver_name: driver
+            .driver_name_as_c_str()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default(),
+        driver_info: driver
+            .driver_info_as_c_str()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default(),
+        limits: props.limits,
+        memory_heaps: heaps,
+        timestamps: props.limits.timestamp_compute_and_graphics == vk::TRUE,
+    }
+}
+
+fn device_list(infos: &[DeviceInfo]) -> String {
+    infos
+        .iter()
+        .map(|i| format!("[{}] {} ({})", i.index, i.name, device_type_name(i.device_type)))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// `--device` accepts an index or a case-insensitive substring of the device name.
+fn select_device(infos: &[DeviceInfo], sel: &str) -> Result<usize> {
+    if let Ok(idx) = sel.trim().parse::<usize>() {
+        if idx < infos.len() {
+            return Ok(idx);
+        }
+        bail!(
+            "--device {sel}: there is no device with index {idx}; devices: {}",
+            device_list(infos)
+        );
+    }
+    let needle = sel.to_lowercase();
+    let matches: Vec<usize> = infos
+        .iter()
+        .filter(|i| i.name.to_lowercase().contains(&needle))
+        .map(|i| i.index)
+        .collect();
+    match matches.as_slice() {
+        [one] => Ok(*one),
+        [] => bail!(
+            "--device '{sel}' matches no Vulkan device; devices: {}",
+            device_list(infos)
+        ),
+        many => bail!(
+            "--device '{sel}' matches {} devices ({}); give an index instead",
+            many.len(),
+            device_list(infos)
+        ),
+    }
+}

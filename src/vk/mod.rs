@@ -1,0 +1,38 @@
+//! The Vulkan backend: raw `ash` behind safe wrappers. It knows nothing about volumes or
+//! rendering; `crate::render` builds passes out of these pieces.
+//!
+//! Safety model: every object holds a [`Context`] (an `Arc` of the device), so the device
+//! outlives its objects; every submission is waited for before [`Context::execute`]
+//! returns, so dropping a resource after use never races the GPU.
+
+mod commands;
+mod context;
+mod pipeline;
+mod resources;
+
+pub use ash::vk::Format;
+pub use commands::{Recorder, Timings};
+pub use context::{
+    device_type_name, version_string, Context, ContextDesc, DeviceInfo, ValidationLog,
+};
+pub use pipeline::{Binding, ComputePipeline, DescriptorSet};
+pub use resources::{
+    format_size, Access, Buffer, Filter, Image, ImageDesc, ImageKind, LayerView, Memory, Sampler,
+};
+
+/// Usage flags re-exported so callers need not import ash.
+pub mod usage {
+    use ash::vk::{BufferUsageFlags as B, ImageUsageFlags as I};
+    pub const SAMPLED: I = I::SAMPLED;
+    pub const STORAGE: I = I::STORAGE;
+    pub const TRANSFER_DST: I = I::TRANSFER_DST;
+    pub const TRANSFER_SRC: I = I::TRANSFER_SRC;
+    pub const COLOR_ATTACHMENT: I = I::COLOR_ATTACHMENT;
+    pub const UNIFORM_BUFFER: B = B::UNIFORM_BUFFER;
+    pub const STORAGE_BUFFER: B = B::STORAGE_BUFFER;
+    pub const BUFFER_TRANSFER_DST: B = B::TRANSFER_DST;
+    pub const BUFFER_TRANSFER_SRC: B = B::TRANSFER_SRC;
+}
+
+/// Format features re-exported for capability checks.
+pub use ash::vk::FormatFeatureFlags;

@@ -1,0 +1,256 @@
+//! Descriptor sets and pipelines.
+//!
+//! A [`DescriptorSet`] owns its layout and pool: refrakt binds one set per pass and never
+//! updates it while a frame is being recorded, so the simplest ownership is the right one.
+
+use anyhow::{Context as _, Result};
+use ash::vk;
+
+use super::{Buffer, Context, Image, Sampler};
+
+/// One binding of a descriptor set, in binding order (binding i = slice index i).
+pub enum Binding<'a> {
+    /// Combined image sampler over the image's full view, in SHADER_READ_ONLY_OPTIMAL.
+    Texture(&'a Image, &'a Sampler),
+    /// Storage image over the full view, in GENERAL.
+    StorageImage(&'a Image),
+    Uniform(&'a Buffer),
+    Storage(&'a Buffer),
+}
+
+pub struct DescriptorSet {
+    ctx: Context,
+    pub(crate) layout: vk::DescriptorSetLayout,
+    pool: vk::DescriptorPool,
+    pub(crate) raw: vk::DescriptorSet,
+}
+
+impl DescriptorSet {
+    pub fn new(ctx: &Context, bindings: &[Binding<'_>], name: &str) -> Result<Self> {
+        let device = ctx.device();
+        let stages = vk::ShaderStageFlags::COMPUTE
+            | vk::ShaderStageFlags::FRAGMENT
+            | vk::ShaderStageFlags::VERTEX;
+        let ty = |b: &Binding| match b {
+            Binding::Texture(..) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+            Binding::StorageImage(_) => vk::DescriptorType::STORAGE_IMAGE,
+            Binding::Uniform(_) => vk::DescriptorType::UNIFORM_BUFFER,
+            Binding::Storage(_) => vk::DescriptorType::STORAGE_BUFFER,
+        };
+        let layout_bindings: Vec<_> = bindings
+            .iter()
+            .enumerate()
+            .map(|(i, b)| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(i as u32)
+                    .descriptor_type(ty(b))
+                    .descriptor_count(1)
+                    .stage_flags(stages)
+            })
+            .collect();
+        // SAFETY: valid device; infos reference locals.
+        let layout = unsafe {
+            device.create_descriptor_set_layout(
+                &vk::DescriptorSetLayoutCreateInfo::default().bindings(&layout_bindings),
+                None,
+            )
+        }?;
+        let sizes: Vec<_> = bindings
+            .iter()
+            .map(|b| vk::DescriptorPoolSize {
+                ty: ty(b),
+                descriptor_count: 1,
+            })
+            .collect();
+        let pool = unsafe {
+            device.create_descriptor_pool(
+                &vk::DescriptorPoolCreateInfo::default()
+                    .max_sets(1)
+                    .pool_sizes(&sizes),
+                None,
+            )
+        }?;
+        let layouts = [layout];
+        let raw = unsafe {
+            device.allocate_descriptor_sets(
+                &vk::DescriptorSetAllocateInfo::default()
+                    .descriptor_pool(pool)
+                    .set_layouts(&layouts),
+            )
+        }?[0];
+        let set = Self {
+            ctx: ctx.clone(),
+            layout,
+            pool,
+            raw,
+        };
+        set.write(bindings);
+        ctx.set_name(raw, name);
+        ctx.set_name(layout, name);
+        Ok(set)
+    }
+
+    fn write(&self, bindings: &[Binding<'_>]) {
+        let image_infos: Vec<[vk::DescriptorImageInfo; 1]> = bindings
+            .iter()
+            .map(|b| match b {
+                Binding::Texture(img, s) => [vk::DescriptorImageInfo {
+                    sampler: s.raw,
+                    image_view: img.view,
+                    image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                }],
+                Binding::StorageImage(img) => [vk::DescriptorImageInfo {
+                    sampler: vk::Sampler::null(),
+                    image_view: img.view,
+                    image_layout: vk::ImageLayout::GENERAL,
+                }],
+                _ => [vk::DescriptorImageInfo::default()],
+            })
+            .collect();
+        let buffer_infos: Vec<[vk::DescriptorBufferInfo; 1]> = bindings
+            .iter()
+            .map(|b| match b {
+                Binding::Uniform(buf) | Binding::Storage(buf) => [vk::DescriptorBufferInfo {
+                    buffer: buf.raw,
+                    offset: 0,
+                    range: vk::WHOLE_SIZE,
+                }],
+                _ => [vk::DescriptorBufferInfo::default()],
+            })
+            .collect();
+        let writes: Vec<_> = bindings
+            .iter()
+            .enumerate()
+            .map(|(i, b)| {
+                let w = vk::WriteDescriptorSet::default()
+                    .dst_set(self.raw)
+                    .dst_binding(i as u32);
+                match b {
+                    Binding::Texture(..) => w
+                        .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+                        .image_info(&image_infos[i]),
+                    Binding::StorageImage(_) => w
+                        .descriptor_type(vk::DescriptorType::STORAGE_IMAGE)
+                        .image_info(&image_infos[i]),
+                    Binding::Uniform(_) => w
+                        .descriptor_type(vk::DescriptorType::UNIFORM_BUFFER)
+                        .buffer_info(&buffer_infos[i]),
+                    Binding::Storage(_) => w
+                        .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+                        .buffer_info(&buffer_infos[i]),
+                }
+            })
+            .collect();
+        // SAFETY: the set is not in use by pending work while being written.
+        unsafe { self.ctx.device().update_descriptor_sets(&writes, &[]) };
+    }
+}
+
+impl Drop for DescriptorSet {
+    fn drop(&mut self) {
+        // SAFETY: not in use by pending GPU work.
+        unsafe {
+            self.ctx.device().destroy_descriptor_pool(self.pool, None);
+            self.ctx
+                .device()
+                .destroy_descriptor_set_layout(self.layout, None);
+        }
+    }
+}
+
+pub(crate) fn shader_module(ctx: &Context, spirv: &[u8], name: &str) -> Result<vk::ShaderModule> {
+    let words = ash::util::read_spv(&mut std::io::Cursor::new(spirv))
+        .with_context(|| format!("shader '{name}' is not valid SPIR-V"))?;
+    // SAFETY: valid device; code is SPIR-V produced by build.rs.
+    let module = unsafe {
+        ctx.device()
+            .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&words), None)
+    }?;
+    ctx.set_name(module, name);
+    Ok(module)
+}
+
+/// A compute pipeline with one descriptor set and optional push constants.
+pub struct ComputePipeline {
+    ctx: Context,
+    pub(crate) raw: vk::Pipeline,
+    pub(crate) layout: vk::PipelineLayout,
+    pub(crate) push_size: u32,
+    pub(crate) name: String,
+}
+
+impl ComputePipeline {
+    pub fn new(
+        ctx: &Context,
+        spirv: &[u8],
+        set: &DescriptorSet,
+        push_size: u32,
+        name: &str,
+    ) -> Result<Self> {
+        let device = ctx.device();
+        let layout = pipeline_layout(ctx, set, push_size)?;
+        let module = shader_module(ctx, spirv, name)?;
+        let stage = vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::COMPUTE)
+            .module(module)
+            .name(c"main");
+        let info = vk::ComputePipelineCreateInfo::default()
+            .stage(stage)
+            .layout(layout);
+        // SAFETY: valid module and layout.
+        let result =
+            unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &[info], None) };
+        unsafe { device.destroy_shader_module(module, None) };
+        let raw = match result {
+            Ok(p) => p[0],
+            Err((_, e)) => {
+                unsafe { device.destroy_pipeline_layout(layout, None) };
+                return Err(e).with_context(|| format!("creating compute pipeline '{name}'"));
+            }
+        };
+        ctx.set_name(raw, name);
+        Ok(Self {
+            ctx: ctx.clone(),
+            raw,
+            layout,
+            push_size,
+            name: name.to_owned(),
+        })
+    }
+}
+
+pub(crate) fn pipeline_layout(
+    ctx: &Context,
+    set: &DescriptorSet,
+    push_size: u32,
+) -> Result<vk::PipelineLayout> {
+    let max_push = ctx.info().limits.max_push_constants_size;
+    anyhow::ensure!(
+        push_size <= max_push,
+        "push constants of {push_size} bytes exceed the device limit of {max_push}"
+    );
+    let ranges = [vk::PushConstantRange {
+        stage_flags: vk::ShaderStageFlags::COMPUTE
+            | vk::ShaderStageFlags::FRAGMENT
+            | vk::ShaderStageFlags::VERTEX,
+        offset: 0,
+        size: push_size,
+    }];
+    let layouts = [set.layout];
+    let mut info = vk::PipelineLayoutCreateInfo::default().set_layouts(&layouts);
+    if push_size > 0 {
+        info = info.push_constant_ranges(&ranges);
+    }
+    // SAFETY: valid device and set layout.
+    Ok(unsafe { ctx.device().create_pipeline_layout(&info, None) }?)
+}
+
+impl Drop for ComputePipeline {
+    fn drop(&mut self) {
+        // SAFETY: not in use by pending GPU work.
+        unsafe {
+            self.ctx.device().destroy_pipeline(self.raw, None);
+            self.ctx.device().destroy_pipeline_layout(self.layout, None);
+        }
+    }
+}

@@ -1,0 +1,439 @@
+//! Buffers, images, views and samplers, with memory from gpu-allocator.
+//!
+//! Images remember the state (layout, last stage, last access) of each array layer, so a
+//! barrier is derived in one place ([`crate::vk::Recorder::transition`]) from what the next
+//! use declares, rather than written by hand at every call site.
+
+use std::sync::Mutex;
+
+use anyhow::{bail, Context as _, Result};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::MemoryLocation;
+
+use super::Context;
+
+/// Where a buffer lives.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Memory {
+    /// Device-local, not mapped.
+    Gpu,
+    /// Host-visible, mapped, for uploads and uniforms written every frame.
+    Upload,
+    /// Host-visible, mapped, cached, for readback.
+    Readback,
+}
+
+pub struct Buffer {
+    ctx: Context,
+    pub(crate) raw: vk::Buffer,
+    allocation: Option<Allocation>,
+    size: u64,
+}
+
+impl Buffer {
+    pub fn new(
+        ctx: &Context,
+        size: u64,
+        usage: vk::BufferUsageFlags,
+        memory: Memory,
+        name: &str,
+    ) -> Result<Self> {
+        let size = size.max(4);
+        let device = ctx.device();
+        let info = vk::BufferCreateInfo::default()
+            .size(size)
+            .usage(usage)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE);
+        // SAFETY: valid device and create info.
+        let raw = unsafe { device.create_buffer(&info, None) }?;
+        let requirements = unsafe { device.get_buffer_memory_requirements(raw) };
+        let location = match memory {
+            Memory::Gpu => MemoryLocation::GpuOnly,
+            Memory::Upload => MemoryLocation::CpuToGpu,
+            Memory::Readback => MemoryLocation::GpuToCpu,
+        };
+        let allocation = ctx
+            .shared
+            .allocator
+            .lock()
+            .unwrap()
+            .allocate(&AllocationCreateDesc {
+                name,
+                requirements,
+                location,
+                linear: true,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            });
+        let allocation = match allocation {
+            Ok(a) => a,
+            Err(e) => {
+                unsafe { device.destroy_buffer(raw, None) };
+                return Err(e).with_context(|| format!("allocating {size} bytes for buffer '{name}'"));
+            }
+        };
+        // SAFETY: memory comes from the allocator for exactly these requirements.
+        unsafe { device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) }?;
+        ctx.set_name(raw, name);
+        Ok(Self {
+            ctx: ctx.clone(),
+            raw,
+            allocation: Some(allocation),
+            size,
+        })
+    }
+
+    pub fn size(&self) -> u64 {
+        self.size
+    }
+
+    /// Copy bytes into a mapped buffer at `offset`.
+    pub fn write(&mut self, offset: usize, bytes: &[u8]) -> Result<()> {
+        let slice = self
+            .allocation
+            .as_mut()
+            .and_then(|a| a.mapped_slice_mut())
+            .context("buffer is not host-visible")?;
+        if offset + bytes.len() > slice.len() {
+            bail!(
+                "write of {} bytes at {offset} overruns a {}-byte buffer",
+                bytes.len(),
+                slice.len()
+            );
+        }
+        slice[offset..offset + bytes.len()].copy_from_slice(bytes);
+        Ok(())
+    }
+
+    /// The mapped contents (host-visible buffers only). Read after the GPU work that wrote
+    /// them has been waited for.
+    pub fn mapped(&self) -> Result<&[u8]> {
+        self.allocation
+            .as_ref()
+            .and_then(|a| a.mapped_slice())
+            .context("buffer is not host-visible")
+    }
+}
+
+impl Drop for Buffer {
+    fn drop(&mut self) {
+        // SAFETY: users wait for the GPU work that uses a buffer before dropping it (every
+        // submission in this crate is waited for).
+        unsafe { self.ctx.device().destroy_buffer(self.raw, None) };
+        if let Some(a) = self.allocation.take() {
+            let _ = self.ctx.shared.allocator.lock().unwrap().free(a);
+        }
+    }
+}
+
+/// How an image is used next; each maps to a layout, pipeline stage and access mask.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Access {
+    Undefined,
+    TransferDst,
+    TransferSrc,
+    /// Sampled (texture()) from a compute or fragment shader.
+    Sampled,
+    /// Read and written as a storage image from a compute shader.
+    ComputeStorage,
+    /// Written as a colour attachment of a render pass.
+    ColorAttachment,
+}
+
+impl Access {
+    pub(crate) fn layout(self) -> vk::ImageLayout {
+        match self {
+            Access::Undefined => vk::ImageLayout::UNDEFINED,
+            Access::TransferDst => vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            Access::TransferSrc => vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            Access::Sampled => vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+            Access::ComputeStorage => vk::ImageLayout::GENERAL,
+            Access::ColorAttachment => vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+        }
+    }
+    pub(crate) fn stage(self) -> vk::PipelineStageFlags2 {
+        match self {
+            Access::Undefined => vk::PipelineStageFlags2::NONE,
+            Access::TransferDst | Access::TransferSrc => vk::PipelineStageFlags2::COPY,
+            Access::Sampled => {
+                vk::PipelineStageFlags2::COMPUTE_SHADER | vk::PipelineStageFlags2::FRAGMENT_SHADER
+            }
+            Access::ComputeStorage => vk::PipelineStageFlags2::COMPUTE_SHADER,
+            Access::ColorAttachment => vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
+        }
+    }
+    pub(crate) fn access(self) -> vk::AccessFlags2 {
+        match self {
+            Access::Undefined => vk::AccessFlags2::NONE,
+            Access::TransferDst => vk::AccessFlags2::TRANSFER_WRITE,
+            Access::TransferSrc => vk::AccessFlags2::TRANSFER_READ,
+            Access::Sampled => vk::AccessFlags2::SHADER_SAMPLED_READ,
+            Access::ComputeStorage => {
+                vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE
+            }
+            Access::ColorAttachment => {
+                vk::AccessFlags2::COLOR_ATTACHMENT_WRITE | vk::AccessFlags2::COLOR_ATTACHMENT_READ
+            }
+        }
+    }
+    pub(crate) fn writes(self) -> bool {
+        !matches!(self, Access::Sampled | Access::TransferSrc | Access::Undefined)
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageKind {
+    D1Array,
+    D2,
+    D2Array,
+    D3,
+}
+
+/// Description of an image to create.
+#[derive(Clone, Debug)]
+pub struct ImageDesc {
+    pub kind: ImageKind,
+    pub format: vk::Format,
+    pub extent: [u32; 3],
+    pub layers: u32,
+    pub usage: vk::ImageUsageFlags,
+}
+
+pub struct Image {
+    ctx: Context,
+    pub(crate) raw: vk::Image,
+    pub(crate) view: vk::ImageView,
+    allocation: Option<Allocation>,
+    pub(crate) desc: ImageDesc,
+    pub(crate) layer_state: Mutex<Vec<Access>>,
+    name: String,
+}
+
+/// Bytes per texel of the formats refrakt uses.
+pub fn format_size(format: vk::Format) -> Result<u32> {
+    Ok(match format {
+        vk::Format::R8_UNORM => 1,
+        vk::Format::R16_UNORM | vk::Format::R16_SFLOAT => 2,
+        vk::Format::R32_SFLOAT | vk::Format::R8G8B8A8_UNORM | vk::Format::R8G8B8A8_SRGB => 4,
+        vk::Format::R16G16B16A16_SFLOAT | vk::Format::R32G32_SFLOAT => 8,
+        vk::Format::R32G32B32A32_SFLOAT => 16,
+        other => bail!("format {other:?} has no known texel size"),
+    })
+}
+
+impl Image {
+    pub fn new(ctx: &Context, desc: ImageDesc, name: &str) -> Result<Self> {
+        let device = ctx.device();
+        let (image_type, view_type) = match desc.kind {
+            ImageKind::D1Array => (vk::ImageType::TYPE_1D, vk::ImageViewType::TYPE_1D_ARRAY),
+            ImageKind::D2 => (vk::ImageType::TYPE_2D, vk::ImageViewType::TYPE_2D),
+            ImageKind::D2Array => (vk::ImageType::TYPE_2D, vk::ImageViewType::TYPE_2D_ARRAY),
+            ImageKind::D3 => (vk::ImageType::TYPE_3D, vk::ImageViewType::TYPE_3D),
+        };
+        let limits = &ctx.info().limits;
+        let max = match desc.kind {
+            ImageKind::D1Array => limits.max_image_dimension1_d,
+            ImageKind::D2 | ImageKind::D2Array => limits.max_image_dimension2_d,
+            ImageKind::D3 => limits.max_image_dimension3_d,
+        };
+        if desc.extent.iter().any(|&e| e == 0 || e > max) {
+            bail!(
+                "image '{name}' extent {:?} is outside this device's limit of 1..={max} per axis",
+                desc.extent
+            );
+        }
+        if desc.layers == 0 || desc.layers > limits.max_image_array_layers {
+            bail!(
+                "image '{name}' wants {} layers; device allows {}",
+                desc.layers,
+                limits.max_image_array_layers
+            );
+        }
+        let info = vk::ImageCreateInfo::default()
+            .image_type(image_type)
+            .format(desc.format)
+            .extent(vk::Extent3D {
+                width: desc.extent[0],
+                height: desc.extent[1],
+                depth: desc.extent[2],
+            })
+            .mip_levels(1)
+            .array_layers(desc.layers)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .tiling(vk::ImageTiling::OPTIMAL)
+            .usage(desc.usage)
+            .sharing_mode(vk::SharingMode::EXCLUSIVE)
+            .initial_layout(vk::ImageLayout::UNDEFINED);
+        // SAFETY: valid device and create info.
+        let raw = unsafe { device.create_image(&info, None) }
+            .with_context(|| format!("creating image '{name}' ({:?})", desc.format))?;
+        let requirements = unsafe { device.get_image_memory_requirements(raw) };
+        let allocation = ctx
+            .shared
+            .allocator
+            .lock()
+            .unwrap()
+            .allocate(&AllocationCreateDesc {
+                name,
+                requirements,
+                location: MemoryLocation::GpuOnly,
+                linear: false,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            });
+        let allocation = match allocation {
+            Ok(a) => a,
+            Err(e) => {
+                unsafe { device.destroy_image(raw, None) };
+                return Err(e).with_context(|| format!("allocating memory for image '{name}'"));
+            }
+        };
+        // SAFETY: memory from the allocator for this image's requirements.
+        unsafe { device.bind_image_memory(raw, allocation.memory(), allocation.offset()) }?;
+        let view = create_view(ctx, raw, view_type, desc.format, 0, desc.layers)?;
+        ctx.set_name(raw, name);
+        ctx.set_name(view, name);
+        let layers = desc.layers as usize;
+        Ok(Self {
+            ctx: ctx.clone(),
+            raw,
+            view,
+            allocation: Some(allocation),
+            desc,
+            layer_state: Mutex::new(vec![Access::Undefined; layers]),
+            name: name.to_owned(),
+        })
+    }
+
+    pub fn desc(&self) -> &ImageDesc {
+        &self.desc
+    }
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+    pub fn extent(&self) -> [u32; 3] {
+        self.desc.extent
+    }
+    /// Bytes in one array layer.
+    pub fn layer_bytes(&self) -> Result<u64> {
+        let [w, h, d] = self.desc.extent;
+        Ok(w as u64 * h as u64 * d as u64 * format_size(self.desc.format)? as u64)
+    }
+
+    /// A view of a single layer, as a non-array 2D view (colour attachments, per-layer
+    /// sampling in the plane sweep).
+    pub fn layer_view(&self, layer: u32) -> Result<LayerView> {
+        let view_type = match self.desc.kind {
+            ImageKind::D2 | ImageKind::D2Array => vk::ImageViewType::TYPE_2D,
+            ImageKind::D1Array => vk::ImageViewType::TYPE_1D,
+            ImageKind::D3 => bail!("3D images have no layers"),
+        };
+        if layer >= self.desc.layers {
+            bail!("image '{}' has no layer {layer}", self.name);
+        }
+        let view = create_view(&self.ctx, self.raw, view_type, self.desc.format, layer, 1)?;
+        self.ctx.set_name(view, &format!("{}[{layer}]", self.name));
+        Ok(LayerView {
+            ctx: self.ctx.clone(),
+            raw: view,
+            layer,
+        })
+    }
+}
+
+fn create_view(
+    ctx: &Context,
+    image: vk::Image,
+    view_type: vk::ImageViewType,
+    format: vk::Format,
+    base_layer: u32,
+    layers: u32,
+) -> Result<vk::ImageView> {
+    let info = vk::ImageViewCreateInfo::default()
+        .image(image)
+        .view_type(view_type)
+        .format(format)
+        .subresource_range(color_range(base_layer, layers));
+    // SAFETY: valid image of this device.
+    Ok(unsafe { ctx.device().create_image_view(&info, None) }?)
+}
+
+pub(crate) fn color_range(base_layer: u32, layers: u32) -> vk::ImageSubresourceRange {
+    vk::ImageSubresourceRange {
+        aspect_mask: vk::ImageAspectFlags::COLOR,
+        base_mip_level: 0,
+        level_count: 1,
+        base_array_layer: base_layer,
+        layer_count: layers,
+    }
+}
+
+impl Drop for Image {
+    fn drop(&mut self) {
+        // SAFETY: GPU work using the image has been waited for (all submissions are).
+        unsafe {
+            self.ctx.device().destroy_image_view(self.view, None);
+            self.ctx.device().destroy_image(self.raw, None);
+        }
+        if let Some(a) = self.allocation.take() {
+            let _ = self.ctx.shared.allocator.lock().unwrap().free(a);
+        }
+    }
+}
+
+/// A single-layer view of an image array.
+pub struct LayerView {
+    ctx: Context,
+    pub(crate) raw: vk::ImageView,
+    pub layer: u32,
+}
+
+impl Drop for LayerView {
+    fn drop(&mut self) {
+        // SAFETY: not in use by pending GPU work.
+        unsafe { self.ctx.device().destroy_image_view(self.raw, None) };
+    }
+}
+
+/// Texture filtering and addressing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Filter {
+    Nearest,
+    Linear,
+}
+
+pub struct Sampler {
+    ctx: Context,
+    pub(crate) raw: vk::Sampler,
+}
+
+impl Sampler {
+    /// Clamp-to-edge sampler with normalised coordinates.
+    pub fn new(ctx: &Context, filter: Filter, name: &str) -> Result<Self> {
+        let f = match filter {
+            Filter::Nearest => vk::Filter::NEAREST,
+            Filter::Linear => vk::Filter::LINEAR,
+        };
+        let info = vk::SamplerCreateInfo::default()
+            .mag_filter(f)
+            .min_filter(f)
+            .mipmap_mode(vk::SamplerMipmapMode::NEAREST)
+            .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+            .max_lod(0.0);
+        // SAFETY: valid device.
+        let raw = unsafe { ctx.device().create_sampler(&info, None) }?;
+        ctx.set_name(raw, name);
+        Ok(Self {
+            ctx: ctx.clone(),
+            raw,
+        })
+    }
+}
+
+impl Drop for Sampler {
+    fn drop(&mut self) {
+        // SAFETY: not in use by pending GPU work.
+        unsafe { self.ctx.device().destroy_sampler(self.raw, None) };
+    }
+}

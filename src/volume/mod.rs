@@ -1,0 +1,178 @@
+//! Volumes in memory: a regular grid of scalar voxels with per-axis spacing.
+//!
+//! On upload every voxel type becomes a [0,1] value in a 3D texture with trilinear
+//! filtering (thesis sect. 3.1): u8 and u16 through UNORM formats, f32 by mapping the
+//! volume's value range onto [0,1] on the CPU first.
+
+pub mod procedural;
+
+use anyhow::{bail, ensure, Result};
+
+use crate::vk::{self, Context, Image, ImageDesc, ImageKind};
+
+/// Voxel storage, x fastest, then y, then z.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Voxels {
+    U8(Vec<u8>),
+    U16(Vec<u16>),
+    F32(Vec<f32>),
+}
+
+impl Voxels {
+    pub fn len(&self) -> usize {
+        match self {
+            Voxels::U8(v) => v.len(),
+            Voxels::U16(v) => v.len(),
+            Voxels::F32(v) => v.len(),
+        }
+    }
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    pub fn type_name(&self) -> &'static str {
+        match self {
+            Voxels::U8(_) => "u8",
+            Voxels::U16(_) => "u16",
+            Voxels::F32(_) => "f32",
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Volume {
+    pub dims: [u32; 3],
+    /// Voxel size along x, y, z (any unit; only ratios matter for rendering).
+    pub spacing: [f32; 3],
+    pub voxels: Voxels,
+    /// For f32 voxels: the values mapped to 0 and 1 on upload. `None` uses the data's
+    /// minimum and maximum.
+    pub range: Option<(f32, f32)>,
+}
+
+impl Volume {
+    pub fn new(dims: [u32; 3], spacing: [f32; 3], voxels: Voxels) -> Result<Self> {
+        let v = Self {
+            dims,
+            spacing,
+            voxels,
+            range: None,
+        };
+        v.validate()?;
+        Ok(v)
+    }
+
+    pub fn validate(&self) -> Result<()> {
+        ensure!(
+            self.dims.iter().all(|&d| d >= 2),
+            "volume dimensions {:?} must be at least 2 along every axis",
+            self.dims
+        );
+        let n = self.voxel_count();
+        ensure!(
+            self.voxels.len() as u64 == n,
+            "volume of {:?} needs {n} voxels, has {}",
+            self.dims,
+            self.voxels.len()
+        );
+        ensure!(
+            self.spacing.iter().all(|s| s.is_finite() && *s > 0.0),
+            "voxel spacing {:?} must be finite and positive",
+            self.spacing
+        );
+        if let Voxels::F32(v) = &self.voxels {
+            if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+                bail!("voxel {i} is not a finite number ({})", v[i]);
+            }
+        }
+        if let Some((lo, hi)) = self.range {
+            ensure!(
+                lo.is_finite() && hi.is_finite() && hi > lo,
+                "value range ({lo}, {hi}) must be finite with max > min"
+            );
+        }
+        Ok(())
+    }
+
+    pub fn voxel_count(&self) -> u64 {
+        self.dims.iter().map(|&d| d as u64).product()
+    }
+
+    /// Physical size along each axis.
+    pub fn extent(&self) -> [f32; 3] {
+        [
+            self.dims[0] as f32 * self.spacing[0],
+            self.dims[1] as f32 * self.spacing[1],
+            self.dims[2] as f32 * self.spacing[2],
+        ]
+    }
+
+    /// Extent scaled so the largest side is 1: the renderer's world box is
+    /// [-e/2, e/2] with this `e`.
+    pub fn normalised_extent(&self) -> [f32; 3] {
+        let e = self.extent();
+        let m = e[0].max(e[1]).max(e[2]);
+        [e[0] / m, e[1] / m, e[2] / m]
+    }
+
+    /// The smallest voxel side in normalised (world) units: one "sample distance" unit.
+    pub fn min_voxel_size(&self) -> f32 {
+        let e = self.extent();
+        let m = e[0].max(e[1]).max(e[2]);
+        self.spacing.iter().fold(f32::INFINITY, |a, &s| a.min(s)) / m
+    }
+
+    fn texture_format(&self) -> vk::Format {
+        match self.voxels {
+            Voxels::U8(_) => vk::Format::R8_UNORM,
+            Voxels::U16(_) => vk::Format::R16_UNORM,
+            Voxels::F32(_) => vk::Format::R32_SFLOAT,
+        }
+    }
+
+    /// Texel bytes as uploaded (f32 values mapped to [0,1] through `range`).
+    pub fn texel_bytes(&self) -> Vec<u8> {
+        match &self.voxels {
+            Voxels::U8(v) => v.clone(),
+            Voxels::U16(v) => bytemuck::cast_slice(v).to_vec(),
+            Voxels::F32(v) => {
+                let (lo, hi) = self.range.unwrap_or_else(|| {
+                    let lo = v.iter().copied().fold(f32::INFINITY, f32::min);
+                    let hi = v.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+                    (lo, hi)
+                });
+                let scale = if hi > lo { 1.0 / (hi - lo) } else { 0.0 };
+                let mapped: Vec<f32> = v.iter().map(|&x| (x - lo) * scale).collect();
+                bytemuck::cast_slice(&mapped).to_vec()
+            }
+        }
+    }
+
+    /// Upload into a 3D texture ready for trilinear sampling.
+    pub fn upload(&self, ctx: &Context) -> Result<Image> {
+        self.validate()?;
+        let format = self.texture_format();
+        if !ctx.format_supports(
+            format,
+            vk::FormatFeatureFlags::SAMPLED_IMAGE | vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR,
+        ) {
+            bail!(
+                "device '{}' cannot filter {format:?} textures linearly, needed for {} volumes",
+                ctx.info().name,
+                self.voxels.type_name()
+            );
+        }
+        let image = Image::new(
+            ctx,
+            ImageDesc {
+                kind: ImageKind::D3,
+                format,
+                extent: self.dims,
+                layers: 1,
+                usage: vk::usage::SAMPLED | vk::usage::TRANSFER_DST | vk::usage::TRANSFER_SRC,
+            },
+            "volume",
+        )?;
+        ctx.upload_image(&image, 0, &self.texel_bytes())?;
+        Ok(image)
+    }
+}
