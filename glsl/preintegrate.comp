@@ -42,10 +42,12 @@ void main() {
         vec4 ca = fetch_tf(s, 0);
         vec3 m = fetch_tf(s, 1).rgb;
         float a = correct_opacity(ca.a, ratio);
+        vec3 half_m = correct_medium(m, 0.5 * ratio);
         // Oddy-Willis: particle light is filtered by the medium in front of it (eq. 4.16).
-        C += (1.0 - A) * M * ca.rgb * a;
+        // The sample's particles sit, on average, half a sub-step deep into its own medium.
+        C += (1.0 - A) * M * half_m * ca.rgb * a;
         A += (1.0 - A) * a;
-        M *= correct_medium(m, ratio);
+        M *= half_m * half_m;
     }
     imageStore(table, ivec3(id, 0), vec4(C, A));
     imageStore(table, ivec3(id, 1), vec4(M, 1.0));

@@ -6,11 +6,11 @@ use std::process::ExitCode;
 use anyhow::{bail, Context as _, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
+use refrakt::output;
 use refrakt::render::{Camera, Model, RenderOptions, Renderer};
 use refrakt::transfer::TransferFunctions;
 use refrakt::vk::{self, Context, ContextDesc};
 use refrakt::volume::{procedural, Volume};
-use refrakt::output;
 
 #[derive(Parser)]
 #[command(
@@ -150,10 +150,17 @@ fn finish(ctx: Context) -> Result<ExitCode> {
 fn info(desc: &ContextDesc) -> Result<ExitCode> {
     let devices = Context::list_devices()?;
     let ctx = Context::new(desc)?;
-    println!("Vulkan loader: {}", vk::version_string(ctx.loader_version()));
+    println!(
+        "Vulkan loader: {}",
+        vk::version_string(ctx.loader_version())
+    );
     println!("Devices:");
     for d in &devices {
-        let mark = if d.index == ctx.info().index { "*" } else { " " };
+        let mark = if d.index == ctx.info().index {
+            "*"
+        } else {
+            " "
+        };
         println!(
             " {mark}[{}] {} ({}), Vulkan {}",
             d.index,
@@ -165,13 +172,25 @@ fn info(desc: &ContextDesc) -> Result<ExitCode> {
     let i = ctx.info();
     let l = &i.limits;
     println!("\nSelected: [{}] {}", i.index, i.name);
-    println!("  type:                 {}", vk::device_type_name(i.device_type));
-    println!("  Vulkan version:       {}", vk::version_string(i.api_version));
-    println!("  driver:               {} ({})", i.driver_name, i.driver_info);
+    println!(
+        "  type:                 {}",
+        vk::device_type_name(i.device_type)
+    );
+    println!(
+        "  Vulkan version:       {}",
+        vk::version_string(i.api_version)
+    );
+    println!(
+        "  driver:               {} ({})",
+        i.driver_name, i.driver_info
+    );
     println!("  max 3D image size:    {}", l.max_image_dimension3_d);
     println!("  max 2D image size:    {}", l.max_image_dimension2_d);
     println!("  max array layers:     {}", l.max_image_array_layers);
-    println!("  max push constants:   {} bytes", l.max_push_constants_size);
+    println!(
+        "  max push constants:   {} bytes",
+        l.max_push_constants_size
+    );
     println!("  max colour attachments: {}", l.max_color_attachments);
     println!(
         "  timestamps:           {} (period {} ns)",
@@ -185,7 +204,10 @@ fn info(desc: &ContextDesc) -> Result<ExitCode> {
         } else {
             "host"
         };
-        println!("    [{n}] {:.1} GiB {local}", *size as f64 / (1u64 << 30) as f64);
+        println!(
+            "    [{n}] {:.1} GiB {local}",
+            *size as f64 / (1u64 << 30) as f64
+        );
     }
     finish(ctx)
 }
@@ -243,7 +265,11 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
     };
 
     let ctx = Context::new(desc)?;
-    println!("device: {} ({})", ctx.info().name, vk::device_type_name(ctx.info().device_type));
+    println!(
+        "device: {} ({})",
+        ctx.info().name,
+        vk::device_type_name(ctx.info().device_type)
+    );
     let mut renderer = Renderer::new(&ctx, &volume, &tf)?;
     let frame = renderer.render(model, &camera, &opts)?;
     output::write(&frame, &args.output)?;

@@ -99,7 +99,10 @@ pub const PRESETS: &[(&str, &str)] = &[
     ("glass", include_str!("../assets/tf/glass.toml")),
     ("wine-glass", include_str!("../assets/tf/wine-glass.toml")),
     ("supernova", include_str!("../assets/tf/supernova.toml")),
-    ("sphere-white", include_str!("../assets/tf/sphere-white.toml")),
+    (
+        "sphere-white",
+        include_str!("../assets/tf/sphere-white.toml"),
+    ),
 ];
 
 impl TransferFunctions {
@@ -123,8 +126,8 @@ impl TransferFunctions {
 
     /// Parse TOML text; `origin` names the file in every error.
     pub fn parse(text: &str, origin: &str) -> Result<Self> {
-        let file: TfFile = toml::from_str(text)
-            .map_err(|e| anyhow!("{origin}: {}", e.to_string().trim_end()))?;
+        let file: TfFile =
+            toml::from_str(text).map_err(|e| anyhow!("{origin}: {}", e.to_string().trim_end()))?;
         let _ = file.description;
         let mut tf = TransferFunctions {
             name: file.name.unwrap_or_else(|| origin.to_string()),

@@ -150,7 +150,8 @@ impl EaPass {
             rec.copy_image_to_buffer(&self.output, 0, readback);
             Ok(())
         })?;
-        let pixels: Vec<[f32; 4]> = bytemuck::cast_slice(&readback.mapped()?[..size as usize]).to_vec();
+        let pixels: Vec<[f32; 4]> =
+            bytemuck::cast_slice(&readback.mapped()?[..size as usize]).to_vec();
         // Longest possible ray through the box, in steps: the box diagonal.
         let diag = 2.0 * info.half_extent.length();
         let max_steps = (diag / (opts.sample_distance * info.ref_step)).ceil() as u32;

@@ -48,7 +48,8 @@ impl PreintegrationTable {
             ],
             "preintegration",
         )?;
-        let pipeline = ComputePipeline::new(ctx, shaders::PREINTEGRATE_COMP, &set, 0, "preintegrate")?;
+        let pipeline =
+            ComputePipeline::new(ctx, shaders::PREINTEGRATE_COMP, &set, 0, "preintegrate")?;
         Ok(Self {
             image,
             pipeline,

@@ -322,7 +322,8 @@ impl Context {
                     let queue = self.shared.queue.lock().unwrap();
                     device.queue_submit2(*queue, &[submit], fence)
                 };
-                let waited = submitted.and_then(|_| device.wait_for_fences(&[fence], true, u64::MAX));
+                let waited =
+                    submitted.and_then(|_| device.wait_for_fences(&[fence], true, u64::MAX));
                 device.destroy_fence(fence, None);
                 waited.context("GPU submission failed (device lost?)")?;
             }

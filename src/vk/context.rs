@@ -105,7 +105,6 @@ pub(crate) struct Shared {
     pub(crate) physical: vk::PhysicalDevice,
     pub(crate) device: ash::Device,
     pub(crate) queue: Mutex<vk::Queue>,
-    pub(crate) queue_family: u32,
     pub(crate) allocator: ManuallyDrop<Mutex<Allocator>>,
     pub(crate) command_pool: Mutex<vk::CommandPool>,
     validation: Arc<ValidationLog>,
@@ -134,12 +133,15 @@ unsafe extern "system" fn debug_callback(
         let msg = if data.p_message.is_null() {
             String::from("(no message)")
         } else {
-            CStr::from_ptr(data.p_message).to_string_lossy().into_owned()
+            CStr::from_ptr(data.p_message)
+                .to_string_lossy()
+                .into_owned()
         };
         (msg, &*(user as *const Arc<ValidationLog>))
     };
     let counted = severity.intersects(
-        vk::DebugUtilsMessageSeverityFlagsEXT::WARNING | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+        vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
+            | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
     );
     if counted {
         log::error!("[vulkan {types:?} {severity:?}] {msg}");
@@ -198,8 +200,8 @@ impl Context {
             .iter()
             .any(|e| e.extension_name_as_c_str().ok() == Some(ash::ext::debug_utils::NAME));
         // SAFETY: plain query.
-        let loader_version = unsafe { entry.try_enumerate_instance_version() }?
-            .unwrap_or(vk::API_VERSION_1_0);
+        let loader_version =
+            unsafe { entry.try_enumerate_instance_version() }?.unwrap_or(vk::API_VERSION_1_0);
         if loader_version < vk::API_VERSION_1_3 {
             bail!(
                 "the Vulkan loader supports only {}, refrakt needs 1.3",
@@ -262,8 +264,8 @@ impl Context {
             .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
         // SAFETY: valid device.
         let command_pool = unsafe { device.create_command_pool(&pool_info, None) }?;
-        let debug_device = have_debug_utils
-            .then(|| ash::ext::debug_utils::Device::new(&instance, &device));
+        let debug_device =
+            have_debug_utils.then(|| ash::ext::debug_utils::Device::new(&instance, &device));
 
         Ok(Self {
             shared: Arc::new(Shared {
@@ -275,7 +277,6 @@ impl Context {
                 physical,
                 device,
                 queue: Mutex::new(queue),
-                queue_family,
                 allocator: ManuallyDrop::new(Mutex::new(allocator)),
                 command_pool: Mutex::new(command_pool),
                 validation,
@@ -406,7 +407,9 @@ impl Context {
     /// validation messages).
     pub(crate) fn set_name<H: vk::Handle>(&self, handle: H, name: &str) {
         if let Some(dd) = &self.shared.debug_device {
-            let Ok(cname) = CString::new(name) else { return };
+            let Ok(cname) = CString::new(name) else {
+                return;
+            };
             let info = vk::DebugUtilsObjectNameInfoEXT::default()
                 .object_handle(handle)
                 .object_name(&cname);
@@ -501,7 +504,14 @@ fn query_info(instance: &ash::Instance, p: vk::PhysicalDevice, index: usize) -> 
 fn device_list(infos: &[DeviceInfo]) -> String {
     infos
         .iter()
-        .map(|i| format!("[{}] {} ({})", i.index, i.name, device_type_name(i.device_type)))
+        .map(|i| {
+            format!(
+                "[{}] {} ({})",
+                i.index,
+                i.name,
+                device_type_name(i.device_type)
+            )
+        })
         .collect::<Vec<_>>()
         .join(", ")
 }

@@ -69,7 +69,8 @@ impl Buffer {
             Ok(a) => a,
             Err(e) => {
                 unsafe { device.destroy_buffer(raw, None) };
-                return Err(e).with_context(|| format!("allocating {size} bytes for buffer '{name}'"));
+                return Err(e)
+                    .with_context(|| format!("allocating {size} bytes for buffer '{name}'"));
             }
         };
         // SAFETY: memory comes from the allocator for exactly these requirements.
@@ -177,7 +178,10 @@ impl Access {
         }
     }
     pub(crate) fn writes(self) -> bool {
-        !matches!(self, Access::Sampled | Access::TransferSrc | Access::Undefined)
+        !matches!(
+            self,
+            Access::Sampled | Access::TransferSrc | Access::Undefined
+        )
     }
 }
 

@@ -153,7 +153,8 @@ impl Volume {
         let format = self.texture_format();
         if !ctx.format_supports(
             format,
-            vk::FormatFeatureFlags::SAMPLED_IMAGE | vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR,
+            vk::FormatFeatureFlags::SAMPLED_IMAGE
+                | vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR,
         ) {
             bail!(
                 "device '{}' cannot filter {format:?} textures linearly, needed for {} volumes",

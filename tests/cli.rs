@@ -1,0 +1,145 @@
+//! The command line as a user meets it: `info`, `render` to PNG and EXR, and clear errors
+//! with a non-zero exit (never a panic) on bad input.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn refrakt(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_refrakt"))
+        .args(args)
+        .env("REFRAKT_VALIDATE", "1")
+        .output()
+        .expect("running refrakt")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// Fails unless the command exited non-zero with `needle` in its error and no panic.
+fn assert_clean_failure(args: &[&str], needle: &str) {
+    let o = refrakt(args);
+    let err = stderr(&o);
+    assert!(!o.status.success(), "{args:?} succeeded; stderr: {err}");
+    assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
+    assert!(
+        err.contains(needle),
+        "{args:?}: expected '{needle}' in: {err}"
+    );
+}
+
+#[test]
+fn info_lists_the_device_and_limits() {
+    let o = refrakt(&["info"]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let device = std::env::var("REFRAKT_EXPECT_DEVICE").unwrap_or_else(|_| "llvmpipe".into());
+    assert!(out.contains(&device), "no '{device}' in:\n{out}");
+    for key in [
+        "max 3D image size",
+        "max array layers",
+        "max push constants",
+        "timestamps",
+        "memory heaps",
+    ] {
+        assert!(out.contains(key), "no '{key}' in:\n{out}");
+    }
+}
+
+#[test]
+fn render_writes_png_and_exr_with_timings() {
+    let dir = tempfile::tempdir().unwrap();
+    for ext in ["png", "exr"] {
+        let path = dir.path().join(format!("out.{ext}"));
+        let p = path.to_str().unwrap();
+        let o = refrakt(&[
+            "render",
+            "-o",
+            p,
+            "--width",
+            "40",
+            "--height",
+            "30",
+            "--volume-size",
+            "24",
+        ]);
+        let out = String::from_utf8_lossy(&o.stdout);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(
+            out.contains("ea raymarch") && out.contains(" ms"),
+            "no timings in:\n{out}"
+        );
+        assert!(out.contains(p), "output path not printed:\n{out}");
+        let img = image_size(&path);
+        assert_eq!(img, (40, 30), "{ext} dimensions");
+    }
+}
+
+fn image_size(path: &Path) -> (usize, usize) {
+    if path.extension().unwrap() == "exr" {
+        let img = exr::prelude::read_first_rgba_layer_from_file(
+            path,
+            |res, _| vec![[0f32; 4]; res.width() * res.height()],
+            |px: &mut Vec<[f32; 4]>, pos, (r, g, b, a): (f32, f32, f32, f32)| {
+                let _ = pos;
+                px[0] = [r, g, b, a];
+            },
+        )
+        .unwrap();
+        let s = img.layer_data.size;
+        (s.width(), s.height())
+    } else {
+        let bytes = std::fs::read(path).unwrap();
+        // PNG IHDR: width and height are big-endian u32 at bytes 16..24.
+        assert_eq!(&bytes[1..4], b"PNG");
+        let w = u32::from_be_bytes(bytes[16..20].try_into().unwrap()) as usize;
+        let h = u32::from_be_bytes(bytes[20..24].try_into().unwrap()) as usize;
+        (w, h)
+    }
+}
+
+#[test]
+fn unknown_device_is_a_clear_error() {
+    assert_clean_failure(
+        &["--device", "no-such-gpu", "info"],
+        "matches no Vulkan device",
+    );
+    assert_clean_failure(&["--device", "17", "info"], "no device with index 17");
+}
+
+#[test]
+fn bad_output_paths_are_clear_errors() {
+    assert_clean_failure(
+        &["render", "-o", "/nonexistent-dir/x.png"],
+        "does not exist",
+    );
+    assert_clean_failure(
+        &["render", "-o", "out.jpg"],
+        "unknown output extension '.jpg'",
+    );
+    assert_clean_failure(&["render", "-o", "out"], "needs an extension");
+}
+
+#[test]
+fn bad_sample_distances_are_clear_errors() {
+    for sd in ["0", "-1", "NaN", "inf"] {
+        assert_clean_failure(
+            &["render", "--sample-distance", sd, "-o", "x.png"],
+            "sample distance",
+        );
+    }
+}
+
+#[test]
+fn bad_camera_and_sizes_are_clear_errors() {
+    assert_clean_failure(&["render", "--width", "0", "-o", "x.png"], "image size");
+    assert_clean_failure(&["render", "--elevation", "90", "-o", "x.png"], "elevation");
+    assert_clean_failure(
+        &["render", "--volume-size", "1", "-o", "x.png"],
+        "volume size",
+    );
+    assert_clean_failure(
+        &["render", "--background", "1,2", "-o", "x.png"],
+        "--background",
+    );
+}

@@ -1,0 +1,72 @@
+//! Shared test helpers: a validated lavapipe context and a check that the validation layer
+//! stayed silent for the whole life of the context (creation to destruction).
+#![allow(dead_code)]
+
+use std::sync::Arc;
+
+use refrakt::render::{Camera, Frame, Model, RenderOptions, Renderer};
+use refrakt::transfer::TransferFunctions;
+use refrakt::vk::{Context, ContextDesc, ValidationLog};
+use refrakt::volume::Volume;
+
+/// A context with validation and synchronization validation on. Honours REFRAKT_DEVICE so
+/// the suite can be pointed at a real GPU.
+pub fn context() -> Context {
+    Context::new(&ContextDesc {
+        validate: true,
+        device: std::env::var("REFRAKT_DEVICE").ok(),
+    })
+    .expect("creating a validated Vulkan context (is scripts/setup.sh run?)")
+}
+
+/// Panics with every message if the layer reported anything. Call after dropping the
+/// context and everything made from it.
+pub fn assert_no_validation_messages(log: &Arc<ValidationLog>) {
+    let msgs = log.messages();
+    assert!(
+        msgs.is_empty(),
+        "{} validation message(s):\n{}",
+        msgs.len(),
+        msgs.join("\n---\n")
+    );
+}
+
+/// Run `f` with a validated context and fail on any validation message.
+pub fn with_context<R>(f: impl FnOnce(&Context) -> R) -> R {
+    let ctx = context();
+    let log = ctx.validation_log();
+    let r = f(&ctx);
+    drop(ctx);
+    assert_no_validation_messages(&log);
+    r
+}
+
+/// Camera on the +z axis looking down -z at the volume centre.
+pub fn face_on(distance: f32, fov_y: f32) -> Camera {
+    Camera {
+        azimuth: 0.0,
+        elevation: 0.0,
+        distance,
+        fov_y,
+    }
+}
+
+pub fn render(
+    ctx: &Context,
+    volume: &Volume,
+    tf: &TransferFunctions,
+    camera: &Camera,
+    opts: &RenderOptions,
+) -> Frame {
+    let mut r = Renderer::new(ctx, volume, tf).expect("renderer");
+    r.render(Model::Ea, camera, opts).expect("render")
+}
+
+/// A TF with constant colour and opacity everywhere.
+pub fn constant_tf(colour: [f32; 3], opacity: f32) -> TransferFunctions {
+    let text = format!(
+        "colour = [[0.0, {}, {}, {}]]\nopacity = [[0.0, {opacity}]]\n",
+        colour[0], colour[1], colour[2]
+    );
+    TransferFunctions::parse(&text, "test tf").unwrap()
+}
