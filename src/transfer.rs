@@ -21,6 +21,10 @@ use crate::vk::{self, Context, Image, ImageDesc, ImageKind};
 /// away from control points.
 pub const TF_SAMPLES: u32 = 4096;
 
+/// Control points allowed per function (the preintegration shader reads them from a
+/// fixed-size buffer).
+pub const MAX_POINTS_PER_FUNCTION: usize = 256;
+
 /// One piecewise-linear function: control points `(s, value)` with non-decreasing s in
 /// [0,1]. Two points at the same s make a step. Outside the first/last point the value is
 /// held constant.
@@ -201,6 +205,46 @@ impl TransferFunctions {
         (l0, l1)
     }
 
+    /// The control points as the preintegration shader reads them (std430): a header of
+    /// `count` (uvec4) and `offset` (uvec4) for colour, opacity, medium, eta, then every
+    /// point as (s, value.xyz) (scalar functions use x only).
+    pub fn control_points(&self) -> Vec<[f32; 4]> {
+        fn push<const N: usize>(out: &mut Vec<[f32; 4]>, p: &Piecewise<N>) {
+            for (s, v) in &p.points {
+                let mut row = [*s, 0.0, 0.0, 0.0];
+                row[1..1 + N].copy_from_slice(v);
+                out.push(row);
+            }
+        }
+        let counts = [
+            self.colour.points.len(),
+            self.opacity.points.len(),
+            self.medium.points.len(),
+            self.eta.points.len(),
+        ];
+        let mut offsets = [0usize; 4];
+        for i in 1..4 {
+            offsets[i] = offsets[i - 1] + counts[i - 1];
+        }
+        let mut out = vec![
+            counts.map(|c| f32::from_bits(c as u32)),
+            offsets.map(|o| f32::from_bits(o as u32)),
+        ];
+        push(&mut out, &self.colour);
+        push(&mut out, &self.opacity);
+        push(&mut out, &self.medium);
+        push(&mut out, &self.eta);
+        out
+    }
+
+    /// Total number of control points over the four functions.
+    pub fn point_count(&self) -> usize {
+        self.colour.points.len()
+            + self.opacity.points.len()
+            + self.medium.points.len()
+            + self.eta.points.len()
+    }
+
     /// Upload into a new 1D-array image (2 layers of RGBA32F).
     pub fn upload(&self, ctx: &Context) -> Result<Image> {
         let image = Image::new(
@@ -236,6 +280,12 @@ fn parse_points<const N: usize>(
 ) -> Result<Piecewise<N>> {
     if rows.is_empty() {
         bail!("{origin}: {key}: needs at least one control point");
+    }
+    if rows.len() > MAX_POINTS_PER_FUNCTION {
+        bail!(
+            "{origin}: {key}: {} control points, at most {MAX_POINTS_PER_FUNCTION} are supported",
+            rows.len()
+        );
     }
     let mut points = Vec::with_capacity(rows.len());
     let mut prev_s = f64::NEG_INFINITY;

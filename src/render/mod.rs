@@ -181,7 +181,7 @@ impl Renderer {
         let volume_tex = volume.upload(ctx)?;
         let tf_image = tf.upload(ctx)?;
         let linear = Sampler::new(ctx, Filter::Linear, "linear clamp")?;
-        let preint = PreintegrationTable::new(ctx, &tf_image, &linear)?;
+        let preint = PreintegrationTable::new(ctx)?;
         let e = volume.normalised_extent();
         Ok(Self {
             ctx: ctx.clone(),
@@ -228,8 +228,8 @@ impl Renderer {
         if !self.tf_dirty {
             return Ok(Timings::default());
         }
-        let (preint, tf_image) = (&mut self.preint, &self.tf_image);
-        let t = self.ctx.execute(|rec| preint.record_build(rec, tf_image))?;
+        let (preint, tf) = (&mut self.preint, &self.tf);
+        let t = self.ctx.execute(|rec| preint.record_build(rec, tf))?;
         self.tf_dirty = false;
         Ok(t)
     }

@@ -10,25 +10,36 @@
 use anyhow::Result;
 
 use crate::shaders;
+use crate::transfer::{TransferFunctions, MAX_POINTS_PER_FUNCTION};
 use crate::vk::{
-    self, Access, Binding, ComputePipeline, Context, DescriptorSet, Image, ImageDesc, ImageKind,
-    Recorder, Sampler,
+    self, Access, Binding, Buffer, ComputePipeline, Context, DescriptorSet, Image, ImageDesc,
+    ImageKind, Memory, Recorder,
 };
 
 /// Entries per axis; must match PREINT_SIZE in glsl/common.glsl.
 pub const TABLE_SIZE: u32 = 256;
 
+/// Both table layers read back: (colour + opacity, medium), index = back * 256 + front.
+pub type TableLayers = (Vec<[f32; 4]>, Vec<[f32; 4]>);
+
 pub struct PreintegrationTable {
     pub(crate) image: Image,
+    control_points: Buffer,
     pipeline: ComputePipeline,
     set: DescriptorSet,
     builds: u64,
 }
 
 impl PreintegrationTable {
-    /// `tf_image` is the 1D-array transfer-function image the table is built from; the set
-    /// keeps referring to it, so later uploads into it are picked up by [`Self::record_build`].
-    pub fn new(ctx: &Context, tf_image: &Image, tf_sampler: &Sampler) -> Result<Self> {
+    pub fn new(ctx: &Context) -> Result<Self> {
+        // Header (2 x uvec4) plus every control point of the four functions.
+        let control_points = Buffer::new(
+            ctx,
+            ((2 + 4 * MAX_POINTS_PER_FUNCTION) * 16) as u64,
+            vk::usage::STORAGE_BUFFER,
+            Memory::Upload,
+            "tf control points",
+        )?;
         let image = Image::new(
             ctx,
             ImageDesc {
@@ -43,7 +54,7 @@ impl PreintegrationTable {
         let set = DescriptorSet::new(
             ctx,
             &[
-                Binding::Texture(tf_image, tf_sampler),
+                Binding::Storage(&control_points),
                 Binding::StorageImage(&image),
             ],
             "preintegration",
@@ -52,16 +63,20 @@ impl PreintegrationTable {
             ComputePipeline::new(ctx, shaders::PREINTEGRATE_COMP, &set, 0, "preintegrate")?;
         Ok(Self {
             image,
+            control_points,
             pipeline,
             set,
             builds: 0,
         })
     }
 
-    /// Record a rebuild of the table; leaves it ready for sampling.
-    pub fn record_build(&mut self, rec: &mut Recorder, tf_image: &Image) -> Result<()> {
+    /// Record a rebuild of the table from `tf`; leaves it ready for sampling. The control
+    /// points are written to a host-visible buffer now, so the recording must be submitted
+    /// before the next call.
+    pub fn record_build(&mut self, rec: &mut Recorder, tf: &TransferFunctions) -> Result<()> {
+        self.control_points
+            .write(0, bytemuck::cast_slice(&tf.control_points()))?;
         rec.begin_scope("preintegration");
-        rec.transition_all(tf_image, Access::Sampled);
         rec.transition_all(&self.image, Access::ComputeStorage);
         let groups = TABLE_SIZE.div_ceil(16);
         rec.dispatch(&self.pipeline, &self.set, &[], [groups, groups, 1])?;
@@ -82,7 +97,7 @@ impl PreintegrationTable {
 
     /// Read both layers back: (colour + opacity, medium), row-major with the back value
     /// along rows (index = back * 256 + front).
-    pub fn read(&self, ctx: &Context) -> Result<(Vec<[f32; 4]>, Vec<[f32; 4]>)> {
+    pub fn read(&self, ctx: &Context) -> Result<TableLayers> {
         let l0 = ctx.read_image(&self.image, 0)?;
         let l1 = ctx.read_image(&self.image, 1)?;
         Ok((

@@ -107,9 +107,9 @@ pub(crate) struct Shared {
     pub(crate) queue: Mutex<vk::Queue>,
     pub(crate) allocator: ManuallyDrop<Mutex<Allocator>>,
     pub(crate) command_pool: Mutex<vk::CommandPool>,
+    // Also the messenger's user data: it outlives the messenger because Shared destroys
+    // the messenger in Drop before its fields drop.
     validation: Arc<ValidationLog>,
-    // Keeps the messenger's user data alive for as long as the messenger exists.
-    _callback_data: Option<Box<Arc<ValidationLog>>>,
     pub(crate) info: DeviceInfo,
     loader_version: u32,
 }
@@ -126,8 +126,8 @@ unsafe extern "system" fn debug_callback(
     data: *const vk::DebugUtilsMessengerCallbackDataEXT<'_>,
     user: *mut c_void,
 ) -> vk::Bool32 {
-    // SAFETY: the layer passes a valid callback-data pointer; `user` is the boxed Arc that
-    // `Shared` owns until after the messenger is destroyed.
+    // SAFETY: the layer passes a valid callback-data pointer; `user` points into the
+    // `Arc<ValidationLog>` that `Shared` owns until after the messenger is destroyed.
     let (msg, log) = unsafe {
         let data = &*data;
         let msg = if data.p_message.is_null() {
@@ -137,7 +137,7 @@ unsafe extern "system" fn debug_callback(
                 .to_string_lossy()
                 .into_owned()
         };
-        (msg, &*(user as *const Arc<ValidationLog>))
+        (msg, &*(user as *const ValidationLog))
     };
     let counted = severity.intersects(
         vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
@@ -211,9 +211,8 @@ impl Context {
 
         let instance = create_instance(&entry, desc.validate, have_debug_utils)?;
         let validation = Arc::new(ValidationLog::default());
-        let (debug_instance, messenger, callback_data) = if have_debug_utils {
+        let (debug_instance, messenger) = if have_debug_utils {
             let di = ash::ext::debug_utils::Instance::new(&entry, &instance);
-            let data = Box::new(validation.clone());
             let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
                 .message_severity(
                     vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
@@ -226,12 +225,12 @@ impl Context {
                         | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
                 )
                 .pfn_user_callback(Some(debug_callback))
-                .user_data(&*data as *const Arc<ValidationLog> as *mut c_void);
-            // SAFETY: `data` is kept alive in `Shared` until the messenger is destroyed.
+                .user_data(Arc::as_ptr(&validation) as *mut c_void);
+            // SAFETY: `validation` is kept alive in `Shared` until the messenger is destroyed.
             let m = unsafe { di.create_debug_utils_messenger(&info, None) }?;
-            (Some(di), m, Some(data))
+            (Some(di), m)
         } else {
-            (None, vk::DebugUtilsMessengerEXT::null(), None)
+            (None, vk::DebugUtilsMessengerEXT::null())
         };
 
         let built = Self::create_device(&instance, desc);
@@ -280,7 +279,6 @@ impl Context {
                 allocator: ManuallyDrop::new(Mutex::new(allocator)),
                 command_pool: Mutex::new(command_pool),
                 validation,
-                _callback_data: callback_data,
                 info,
                 loader_version,
             }),

@@ -1,0 +1,11 @@
+#!/usr/bin/env bash
+# Installs what is missing, then runs the whole check: formatting, clippy with warnings as
+# errors, and the test suite on lavapipe (or the GPU REFRAKT_DEVICE names) with the
+# validation layer and synchronization validation on. Any validation message fails a test.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/setup.sh
+source scripts/env.sh
+cargo fmt --all -- --check
+cargo clippy --all-targets --locked -- -D warnings
+cargo test --locked "$@"
