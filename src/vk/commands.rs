@@ -11,7 +11,10 @@ use anyhow::{bail, Context as _, Result};
 use ash::vk;
 
 use super::resources::color_range;
-use super::{Access, Buffer, ComputePipeline, Context, DescriptorSet, Image, Memory};
+use super::{
+    Access, Buffer, ComputePipeline, Context, DescriptorSet, Framebuffer, GraphicsPipeline, Image,
+    Memory, RenderPass,
+};
 
 const MAX_QUERIES: u32 = 256;
 
@@ -236,6 +239,115 @@ impl Recorder<'_> {
             d.cmd_dispatch(self.cmd, groups[0], groups[1], groups[2]);
         }
         Ok(())
+    }
+}
+
+impl Recorder<'_> {
+    /// Bring `attachments` (image, layer) into the pass's attachment state and begin it.
+    /// The pass itself performs no layout transitions, so this is the only barrier.
+    pub fn begin_render_pass(
+        &mut self,
+        pass: &RenderPass,
+        framebuffer: &Framebuffer,
+        attachments: &[(&Image, u32)],
+    ) -> Result<()> {
+        if attachments.len() != pass.attachments {
+            bail!(
+                "render pass has {} attachments, {} images given",
+                pass.attachments,
+                attachments.len()
+            );
+        }
+        let access = if pass.layout == vk::ImageLayout::GENERAL {
+            Access::General
+        } else {
+            Access::ColorAttachment
+        };
+        for (image, layer) in attachments {
+            self.transition(image, *layer..*layer + 1, access);
+        }
+        let info = vk::RenderPassBeginInfo::default()
+            .render_pass(pass.raw)
+            .framebuffer(framebuffer.raw)
+            .render_area(vk::Rect2D {
+                offset: vk::Offset2D::default(),
+                extent: framebuffer.extent,
+            });
+        let e = framebuffer.extent;
+        // SAFETY: recording; pass and framebuffer are compatible (checked at creation).
+        unsafe {
+            self.device()
+                .cmd_begin_render_pass(self.cmd, &info, vk::SubpassContents::INLINE);
+            self.device().cmd_set_viewport(
+                self.cmd,
+                0,
+                &[vk::Viewport {
+                    x: 0.0,
+                    y: 0.0,
+                    width: e.width as f32,
+                    height: e.height as f32,
+                    min_depth: 0.0,
+                    max_depth: 1.0,
+                }],
+            );
+            self.device().cmd_set_scissor(
+                self.cmd,
+                0,
+                &[vk::Rect2D {
+                    offset: vk::Offset2D::default(),
+                    extent: e,
+                }],
+            );
+        }
+        Ok(())
+    }
+
+    /// Draw one full-screen triangle with `pipeline`.
+    pub fn draw_fullscreen(
+        &mut self,
+        pipeline: &GraphicsPipeline,
+        set: &DescriptorSet,
+        push: &[u8],
+    ) -> Result<()> {
+        if push.len() as u32 != pipeline.push_size {
+            bail!(
+                "pipeline '{}' takes {} bytes of push constants, got {}",
+                pipeline.name,
+                pipeline.push_size,
+                push.len()
+            );
+        }
+        let d = self.device();
+        // SAFETY: recording inside a compatible render pass.
+        unsafe {
+            d.cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::GRAPHICS, pipeline.raw);
+            d.cmd_bind_descriptor_sets(
+                self.cmd,
+                vk::PipelineBindPoint::GRAPHICS,
+                pipeline.layout,
+                0,
+                &[set.raw],
+                &[],
+            );
+            if !push.is_empty() {
+                d.cmd_push_constants(
+                    self.cmd,
+                    pipeline.layout,
+                    vk::ShaderStageFlags::COMPUTE
+                        | vk::ShaderStageFlags::FRAGMENT
+                        | vk::ShaderStageFlags::VERTEX,
+                    0,
+                    push,
+                );
+            }
+            d.cmd_draw(self.cmd, 3, 1, 0, 0);
+        }
+        Ok(())
+    }
+
+    pub fn end_render_pass(&mut self) {
+        // SAFETY: matches begin_render_pass.
+        unsafe { self.device().cmd_end_render_pass(self.cmd) };
     }
 }
 

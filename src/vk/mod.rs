@@ -7,6 +7,7 @@
 
 mod commands;
 mod context;
+mod graphics;
 mod pipeline;
 mod resources;
 
@@ -15,6 +16,7 @@ pub use commands::{Recorder, Timings};
 pub use context::{
     device_type_name, version_string, Context, ContextDesc, DeviceInfo, ValidationLog,
 };
+pub use graphics::{Framebuffer, GraphicsPipeline, RenderPass};
 pub use pipeline::{Binding, ComputePipeline, DescriptorSet};
 pub use resources::{
     format_size, Access, Buffer, Filter, Image, ImageDesc, ImageKind, LayerView, Memory, Sampler,

@@ -6,12 +6,14 @@
 use anyhow::{Context as _, Result};
 use ash::vk;
 
-use super::{Buffer, Context, Image, Sampler};
+use super::{Buffer, Context, Image, LayerView, Sampler};
 
 /// One binding of a descriptor set, in binding order (binding i = slice index i).
 pub enum Binding<'a> {
     /// Combined image sampler over the image's full view, in SHADER_READ_ONLY_OPTIMAL.
     Texture(&'a Image, &'a Sampler),
+    /// Combined image sampler over one layer of an array, in SHADER_READ_ONLY_OPTIMAL.
+    LayerTexture(&'a LayerView, &'a Sampler),
     /// Storage image over the full view, in GENERAL.
     StorageImage(&'a Image),
     Uniform(&'a Buffer),
@@ -32,7 +34,9 @@ impl DescriptorSet {
             | vk::ShaderStageFlags::FRAGMENT
             | vk::ShaderStageFlags::VERTEX;
         let ty = |b: &Binding| match b {
-            Binding::Texture(..) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+            Binding::Texture(..) | Binding::LayerTexture(..) => {
+                vk::DescriptorType::COMBINED_IMAGE_SAMPLER
+            }
             Binding::StorageImage(_) => vk::DescriptorType::STORAGE_IMAGE,
             Binding::Uniform(_) => vk::DescriptorType::UNIFORM_BUFFER,
             Binding::Storage(_) => vk::DescriptorType::STORAGE_BUFFER,
@@ -99,6 +103,11 @@ impl DescriptorSet {
                     image_view: img.view,
                     image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
                 }],
+                Binding::LayerTexture(view, s) => [vk::DescriptorImageInfo {
+                    sampler: s.raw,
+                    image_view: view.raw,
+                    image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                }],
                 Binding::StorageImage(img) => [vk::DescriptorImageInfo {
                     sampler: vk::Sampler::null(),
                     image_view: img.view,
@@ -126,7 +135,7 @@ impl DescriptorSet {
                     .dst_set(self.raw)
                     .dst_binding(i as u32);
                 match b {
-                    Binding::Texture(..) => w
+                    Binding::Texture(..) | Binding::LayerTexture(..) => w
                         .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
                         .image_info(&image_infos[i]),
                     Binding::StorageImage(_) => w

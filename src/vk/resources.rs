@@ -139,6 +139,9 @@ pub enum Access {
     ComputeStorage,
     /// Written as a colour attachment of a render pass.
     ColorAttachment,
+    /// GENERAL layout, any shader or attachment access: for images sampled and rendered to
+    /// in alternation without layout transitions (only memory dependencies between uses).
+    General,
 }
 
 impl Access {
@@ -150,6 +153,7 @@ impl Access {
             Access::Sampled => vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
             Access::ComputeStorage => vk::ImageLayout::GENERAL,
             Access::ColorAttachment => vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+            Access::General => vk::ImageLayout::GENERAL,
         }
     }
     pub(crate) fn stage(self) -> vk::PipelineStageFlags2 {
@@ -161,6 +165,11 @@ impl Access {
             }
             Access::ComputeStorage => vk::PipelineStageFlags2::COMPUTE_SHADER,
             Access::ColorAttachment => vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
+            Access::General => {
+                vk::PipelineStageFlags2::COMPUTE_SHADER
+                    | vk::PipelineStageFlags2::FRAGMENT_SHADER
+                    | vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT
+            }
         }
     }
     pub(crate) fn access(self) -> vk::AccessFlags2 {
@@ -174,6 +183,13 @@ impl Access {
             }
             Access::ColorAttachment => {
                 vk::AccessFlags2::COLOR_ATTACHMENT_WRITE | vk::AccessFlags2::COLOR_ATTACHMENT_READ
+            }
+            Access::General => {
+                vk::AccessFlags2::SHADER_SAMPLED_READ
+                    | vk::AccessFlags2::SHADER_STORAGE_READ
+                    | vk::AccessFlags2::SHADER_STORAGE_WRITE
+                    | vk::AccessFlags2::COLOR_ATTACHMENT_READ
+                    | vk::AccessFlags2::COLOR_ATTACHMENT_WRITE
             }
         }
     }

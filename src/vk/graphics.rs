@@ -1,0 +1,248 @@
+//! Render passes, framebuffers and graphics pipelines for full-screen passes.
+//!
+//! Passes whose output a later pass samples use a `VkRenderPass` rather than dynamic
+//! rendering: the Debian validation layer (1.3.239) tracks synchronization hazards on
+//! render-pass attachments only (measured), and we want sync validation to vouch for them.
+//! The render pass performs no layout transitions (initial = subpass = final layout);
+//! attachments are brought into that layout by `Recorder::transition` before the pass, so
+//! every barrier stays explicit and visible in one place.
+
+use anyhow::{ensure, Context as _, Result};
+use ash::vk;
+
+use super::pipeline::{pipeline_layout, shader_module};
+use super::{Access, Context, DescriptorSet, LayerView};
+
+pub struct RenderPass {
+    ctx: Context,
+    pub(crate) raw: vk::RenderPass,
+    pub(crate) attachments: usize,
+    pub(crate) layout: vk::ImageLayout,
+}
+
+impl RenderPass {
+    /// One subpass writing `formats.len()` colour attachments. `access` is the state the
+    /// attachments are in during the pass: `Access::ColorAttachment`, or
+    /// `Access::General` for images that are sampled and rendered to without transitions.
+    pub fn new(ctx: &Context, formats: &[vk::Format], access: Access, name: &str) -> Result<Self> {
+        ensure!(
+            matches!(access, Access::ColorAttachment | Access::General),
+            "render pass attachments must be in ColorAttachment or General state"
+        );
+        let max = ctx.info().limits.max_color_attachments as usize;
+        ensure!(
+            !formats.is_empty() && formats.len() <= max,
+            "render pass '{name}' wants {} colour attachments; the device allows 1..={max}",
+            formats.len()
+        );
+        let layout = access.layout();
+        let attachments: Vec<_> = formats
+            .iter()
+            .map(|&format| {
+                vk::AttachmentDescription::default()
+                    .format(format)
+                    .samples(vk::SampleCountFlags::TYPE_1)
+                    // Full-screen passes overwrite every pixel.
+                    .load_op(vk::AttachmentLoadOp::DONT_CARE)
+                    .store_op(vk::AttachmentStoreOp::STORE)
+                    .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
+                    .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
+                    .initial_layout(layout)
+                    .final_layout(layout)
+            })
+            .collect();
+        let refs: Vec<_> = (0..formats.len() as u32)
+            .map(|i| vk::AttachmentReference {
+                attachment: i,
+                layout,
+            })
+            .collect();
+        let subpass = vk::SubpassDescription::default()
+            .pipeline_bind_point(vk::PipelineBindPoint::GRAPHICS)
+            .color_attachments(&refs);
+        let subpasses = [subpass];
+        let info = vk::RenderPassCreateInfo::default()
+            .attachments(&attachments)
+            .subpasses(&subpasses);
+        // SAFETY: valid device; info references locals.
+        let raw = unsafe { ctx.device().create_render_pass(&info, None) }
+            .with_context(|| format!("creating render pass '{name}'"))?;
+        ctx.set_name(raw, name);
+        Ok(Self {
+            ctx: ctx.clone(),
+            raw,
+            attachments: formats.len(),
+            layout,
+        })
+    }
+}
+
+impl Drop for RenderPass {
+    fn drop(&mut self) {
+        // SAFETY: not in use by pending GPU work.
+        unsafe { self.ctx.device().destroy_render_pass(self.raw, None) };
+    }
+}
+
+pub struct Framebuffer {
+    ctx: Context,
+    pub(crate) raw: vk::Framebuffer,
+    pub(crate) extent: vk::Extent2D,
+}
+
+impl Framebuffer {
+    /// A framebuffer over single-layer views (one per attachment of `pass`).
+    pub fn new(
+        ctx: &Context,
+        pass: &RenderPass,
+        views: &[&LayerView],
+        width: u32,
+        height: u32,
+        name: &str,
+    ) -> Result<Self> {
+        ensure!(
+            views.len() == pass.attachments,
+            "framebuffer '{name}' has {} views for a pass of {} attachments",
+            views.len(),
+            pass.attachments
+        );
+        let raws: Vec<vk::ImageView> = views.iter().map(|v| v.raw).collect();
+        let info = vk::FramebufferCreateInfo::default()
+            .render_pass(pass.raw)
+            .attachments(&raws)
+            .width(width)
+            .height(height)
+            .layers(1);
+        // SAFETY: views belong to this device and match the pass.
+        let raw = unsafe { ctx.device().create_framebuffer(&info, None) }
+            .with_context(|| format!("creating framebuffer '{name}'"))?;
+        ctx.set_name(raw, name);
+        Ok(Self {
+            ctx: ctx.clone(),
+            raw,
+            extent: vk::Extent2D { width, height },
+        })
+    }
+}
+
+impl Drop for Framebuffer {
+    fn drop(&mut self) {
+        // SAFETY: not in use by pending GPU work.
+        unsafe { self.ctx.device().destroy_framebuffer(self.raw, None) };
+    }
+}
+
+/// A graphics pipeline that draws one full-screen triangle (vertex shader generates it
+/// from gl_VertexIndex; no vertex buffers), with dynamic viewport and scissor, no blending.
+pub struct GraphicsPipeline {
+    ctx: Context,
+    pub(crate) raw: vk::Pipeline,
+    pub(crate) layout: vk::PipelineLayout,
+    pub(crate) push_size: u32,
+    pub(crate) name: String,
+}
+
+impl GraphicsPipeline {
+    pub fn fullscreen(
+        ctx: &Context,
+        vertex: &[u8],
+        fragment: &[u8],
+        pass: &RenderPass,
+        set: &DescriptorSet,
+        push_size: u32,
+        name: &str,
+    ) -> Result<Self> {
+        let device = ctx.device();
+        let layout = pipeline_layout(ctx, set, push_size)?;
+        let vs = shader_module(ctx, vertex, &format!("{name} vs"))?;
+        let fs = match shader_module(ctx, fragment, &format!("{name} fs")) {
+            Ok(m) => m,
+            Err(e) => {
+                // SAFETY: created above, unused.
+                unsafe {
+                    device.destroy_shader_module(vs, None);
+                    device.destroy_pipeline_layout(layout, None);
+                }
+                return Err(e);
+            }
+        };
+        let stages = [
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::VERTEX)
+                .module(vs)
+                .name(c"main"),
+            vk::PipelineShaderStageCreateInfo::default()
+                .stage(vk::ShaderStageFlags::FRAGMENT)
+                .module(fs)
+                .name(c"main"),
+        ];
+        let vertex_input = vk::PipelineVertexInputStateCreateInfo::default();
+        let assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
+            .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+        let viewport = vk::PipelineViewportStateCreateInfo::default()
+            .viewport_count(1)
+            .scissor_count(1);
+        let raster = vk::PipelineRasterizationStateCreateInfo::default()
+            .polygon_mode(vk::PolygonMode::FILL)
+            .cull_mode(vk::CullModeFlags::NONE)
+            .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+            .line_width(1.0);
+        let multisample = vk::PipelineMultisampleStateCreateInfo::default()
+            .rasterization_samples(vk::SampleCountFlags::TYPE_1);
+        let blend_attachments: Vec<_> = (0..pass.attachments)
+            .map(|_| {
+                vk::PipelineColorBlendAttachmentState::default()
+                    .blend_enable(false)
+                    .color_write_mask(vk::ColorComponentFlags::RGBA)
+            })
+            .collect();
+        let blend =
+            vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend_attachments);
+        let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
+        let info = vk::GraphicsPipelineCreateInfo::default()
+            .stages(&stages)
+            .vertex_input_state(&vertex_input)
+            .input_assembly_state(&assembly)
+            .viewport_state(&viewport)
+            .rasterization_state(&raster)
+            .multisample_state(&multisample)
+            .color_blend_state(&blend)
+            .dynamic_state(&dynamic)
+            .layout(layout)
+            .render_pass(pass.raw)
+            .subpass(0);
+        // SAFETY: all referenced state lives until the call returns.
+        let result =
+            unsafe { device.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) };
+        unsafe {
+            device.destroy_shader_module(vs, None);
+            device.destroy_shader_module(fs, None);
+        }
+        let raw = match result {
+            Ok(p) => p[0],
+            Err((_, e)) => {
+                unsafe { device.destroy_pipeline_layout(layout, None) };
+                return Err(e).with_context(|| format!("creating graphics pipeline '{name}'"));
+            }
+        };
+        ctx.set_name(raw, name);
+        Ok(Self {
+            ctx: ctx.clone(),
+            raw,
+            layout,
+            push_size,
+            name: name.to_owned(),
+        })
+    }
+}
+
+impl Drop for GraphicsPipeline {
+    fn drop(&mut self) {
+        // SAFETY: not in use by pending GPU work.
+        unsafe {
+            self.ctx.device().destroy_pipeline(self.raw, None);
+            self.ctx.device().destroy_pipeline_layout(self.layout, None);
+        }
+    }
+}
