@@ -147,6 +147,15 @@ impl Recorder<'_> {
         }
     }
 
+    /// Record that `layers` are now used as `to` WITHOUT a barrier. Only for tests that prove
+    /// synchronization validation catches a missing barrier; rendering never calls it.
+    pub fn assume_without_barrier(&mut self, image: &Image, layers: Range<u32>, to: Access) {
+        let mut state = image.layer_state.lock().unwrap();
+        for l in layers {
+            state[l as usize] = to;
+        }
+    }
+
     /// Transition every layer of `image`.
     pub fn transition_all(&mut self, image: &Image, to: Access) {
         self.transition(image, 0..image.desc.layers, to);
@@ -258,13 +267,8 @@ impl Recorder<'_> {
                 attachments.len()
             );
         }
-        let access = if pass.layout == vk::ImageLayout::GENERAL {
-            Access::General
-        } else {
-            Access::ColorAttachment
-        };
         for (image, layer) in attachments {
-            self.transition(image, *layer..*layer + 1, access);
+            self.transition(image, *layer..*layer + 1, pass.access);
         }
         let info = vk::RenderPassBeginInfo::default()
             .render_pass(pass.raw)

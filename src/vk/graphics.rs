@@ -17,17 +17,18 @@ pub struct RenderPass {
     ctx: Context,
     pub(crate) raw: vk::RenderPass,
     pub(crate) attachments: usize,
-    pub(crate) layout: vk::ImageLayout,
+    pub(crate) access: Access,
 }
 
 impl RenderPass {
     /// One subpass writing `formats.len()` colour attachments. `access` is the state the
     /// attachments are in during the pass: `Access::ColorAttachment`, or
-    /// `Access::General` for images that are sampled and rendered to without transitions.
+    /// `Access::AttachmentGeneral` for image arrays whose layers are rendered to and sampled
+    /// in alternation.
     pub fn new(ctx: &Context, formats: &[vk::Format], access: Access, name: &str) -> Result<Self> {
         ensure!(
-            matches!(access, Access::ColorAttachment | Access::General),
-            "render pass attachments must be in ColorAttachment or General state"
+            matches!(access, Access::ColorAttachment | Access::AttachmentGeneral),
+            "render pass attachments must be in ColorAttachment or AttachmentGeneral state"
         );
         let max = ctx.info().limits.max_color_attachments as usize;
         ensure!(
@@ -42,8 +43,12 @@ impl RenderPass {
                 vk::AttachmentDescription::default()
                     .format(format)
                     .samples(vk::SampleCountFlags::TYPE_1)
-                    // Full-screen passes overwrite every pixel.
-                    .load_op(vk::AttachmentLoadOp::DONT_CARE)
+                    // LOAD although full-screen passes overwrite every pixel: sync validation
+                    // counts DONT_CARE as a write at vkCmdBeginRenderPass, and the plane sweep's
+                    // descriptor set statically uses the views of both layers, so the layer
+                    // being written would be reported as read-after-write (measured with the
+                    // Debian layer 1.3.239). On immediate-mode GPUs and lavapipe LOAD is free.
+                    .load_op(vk::AttachmentLoadOp::LOAD)
                     .store_op(vk::AttachmentStoreOp::STORE)
                     .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
                     .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
@@ -72,7 +77,7 @@ impl RenderPass {
             ctx: ctx.clone(),
             raw,
             attachments: formats.len(),
-            layout,
+            access,
         })
     }
 }

@@ -6,14 +6,15 @@
 use anyhow::{Context as _, Result};
 use ash::vk;
 
-use super::{Buffer, Context, Image, LayerView, Sampler};
+use super::{Access, Buffer, Context, Image, LayerView, Sampler};
 
 /// One binding of a descriptor set, in binding order (binding i = slice index i).
 pub enum Binding<'a> {
     /// Combined image sampler over the image's full view, in SHADER_READ_ONLY_OPTIMAL.
     Texture(&'a Image, &'a Sampler),
-    /// Combined image sampler over one layer of an array, in SHADER_READ_ONLY_OPTIMAL.
-    LayerTexture(&'a LayerView, &'a Sampler),
+    /// Combined image sampler over one layer of an array, in the layout of the given
+    /// access (`Access::Sampled` or `Access::SampledGeneral`).
+    LayerTexture(&'a LayerView, &'a Sampler, Access),
     /// Storage image over the full view, in GENERAL.
     StorageImage(&'a Image),
     Uniform(&'a Buffer),
@@ -103,10 +104,10 @@ impl DescriptorSet {
                     image_view: img.view,
                     image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
                 }],
-                Binding::LayerTexture(view, s) => [vk::DescriptorImageInfo {
+                Binding::LayerTexture(view, s, access) => [vk::DescriptorImageInfo {
                     sampler: s.raw,
                     image_view: view.raw,
-                    image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                    image_layout: access.layout(),
                 }],
                 Binding::StorageImage(img) => [vk::DescriptorImageInfo {
                     sampler: vk::Sampler::null(),

@@ -139,9 +139,12 @@ pub enum Access {
     ComputeStorage,
     /// Written as a colour attachment of a render pass.
     ColorAttachment,
-    /// GENERAL layout, any shader or attachment access: for images sampled and rendered to
-    /// in alternation without layout transitions (only memory dependencies between uses).
-    General,
+    /// Colour attachment in GENERAL layout. With [`Access::SampledGeneral`] this lets one
+    /// image array be rendered to and sampled layer by layer (the plane sweep's ping-pong)
+    /// with memory barriers only: descriptors of both layers stay valid at every draw.
+    AttachmentGeneral,
+    /// Sampled from a fragment or compute shader, in GENERAL layout.
+    SampledGeneral,
 }
 
 impl Access {
@@ -153,7 +156,7 @@ impl Access {
             Access::Sampled => vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
             Access::ComputeStorage => vk::ImageLayout::GENERAL,
             Access::ColorAttachment => vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-            Access::General => vk::ImageLayout::GENERAL,
+            Access::AttachmentGeneral | Access::SampledGeneral => vk::ImageLayout::GENERAL,
         }
     }
     pub(crate) fn stage(self) -> vk::PipelineStageFlags2 {
@@ -165,10 +168,9 @@ impl Access {
             }
             Access::ComputeStorage => vk::PipelineStageFlags2::COMPUTE_SHADER,
             Access::ColorAttachment => vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
-            Access::General => {
-                vk::PipelineStageFlags2::COMPUTE_SHADER
-                    | vk::PipelineStageFlags2::FRAGMENT_SHADER
-                    | vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT
+            Access::AttachmentGeneral => vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
+            Access::SampledGeneral => {
+                vk::PipelineStageFlags2::COMPUTE_SHADER | vk::PipelineStageFlags2::FRAGMENT_SHADER
             }
         }
     }
@@ -184,13 +186,10 @@ impl Access {
             Access::ColorAttachment => {
                 vk::AccessFlags2::COLOR_ATTACHMENT_WRITE | vk::AccessFlags2::COLOR_ATTACHMENT_READ
             }
-            Access::General => {
-                vk::AccessFlags2::SHADER_SAMPLED_READ
-                    | vk::AccessFlags2::SHADER_STORAGE_READ
-                    | vk::AccessFlags2::SHADER_STORAGE_WRITE
-                    | vk::AccessFlags2::COLOR_ATTACHMENT_READ
-                    | vk::AccessFlags2::COLOR_ATTACHMENT_WRITE
+            Access::AttachmentGeneral => {
+                vk::AccessFlags2::COLOR_ATTACHMENT_WRITE | vk::AccessFlags2::COLOR_ATTACHMENT_READ
             }
+            Access::SampledGeneral => vk::AccessFlags2::SHADER_SAMPLED_READ,
         }
     }
     pub(crate) fn writes(self) -> bool {
