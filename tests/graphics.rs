@@ -190,15 +190,11 @@ fn ping_pong(planes: u32, drop_barrier_at: Option<u32>) -> (f32, Vec<String>) {
         ctx.execute(|rec| {
             // Start both layers at zero (plane 0 reads layer 1). Every draw's descriptor set
             // names both layers, so both must hold defined, visible data from the start.
-            for layer in 0..2 {
-                rec.begin_render_pass(&pass, &fbs[layer], &[(&image, layer as u32)])?;
+            for (layer, fb) in (0u32..).zip(&fbs) {
+                rec.begin_render_pass(&pass, fb, &[(&image, layer)])?;
                 rec.draw_fullscreen(&fill, &set, bytemuck::cast_slice(&[0.0f32; 4]))?;
                 rec.end_render_pass();
-                rec.transition(
-                    &image,
-                    layer as u32..layer as u32 + 1,
-                    Access::SampledGeneral,
-                );
+                rec.transition(&image, layer..layer + 1, Access::SampledGeneral);
             }
             for i in 0..planes {
                 let (write, read) = (i % 2, 1 - i % 2);
