@@ -184,16 +184,16 @@ fn info(desc: &ContextDesc) -> Result<ExitCode> {
         "  driver:               {} ({})",
         i.driver_name, i.driver_info
     );
-    println!("  max 3D image size:    {}", l.max_image_dimension3_d);
-    println!("  max 2D image size:    {}", l.max_image_dimension2_d);
-    println!("  max array layers:     {}", l.max_image_array_layers);
+    println!("  max 3D image size:      {}", l.max_image_dimension3_d);
+    println!("  max 2D image size:      {}", l.max_image_dimension2_d);
+    println!("  max array layers:       {}", l.max_image_array_layers);
     println!(
         "  max push constants:   {} bytes",
         l.max_push_constants_size
     );
     println!("  max colour attachments: {}", l.max_color_attachments);
     println!(
-        "  timestamps:           {} (period {} ns)",
+        "  timestamps:             {} (period {} ns)",
         if i.timestamps { "yes" } else { "no" },
         l.timestamp_period
     );
@@ -210,6 +210,14 @@ fn info(desc: &ContextDesc) -> Result<ExitCode> {
         );
     }
     finish(ctx)
+}
+
+fn scene_name(scene: SceneArg) -> &'static str {
+    match scene {
+        SceneArg::Shell => "shell",
+        SceneArg::Sphere => "sphere",
+        SceneArg::Box => "box",
+    }
 }
 
 fn parse_background(s: &str) -> Result<[f32; 4]> {
@@ -274,14 +282,15 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
     let frame = renderer.render(model, &camera, &opts)?;
     output::write(&frame, &args.output)?;
     println!(
-        "rendered {}x{} of a {}x{}x{} volume ({}), model {:?}{}, sample distance {}, up to {} steps per ray",
+        "rendered {}x{} of the {} scene ({}x{}x{}, transfer functions {}), model {}{}, sample distance {}, up to {} steps per ray",
         opts.width,
         opts.height,
+        scene_name(args.scene),
         volume.dims[0],
         volume.dims[1],
         volume.dims[2],
         tf.name,
-        model,
+        model.name(),
         if opts.preintegrated { " (preintegrated)" } else { "" },
         opts.sample_distance,
         frame.max_steps

@@ -31,6 +31,9 @@ pub fn format_for(path: &Path) -> Result<ImageFormat> {
             path.display()
         ),
     };
+    if path.is_dir() {
+        bail!("{}: is a folder; give a file name", path.display());
+    }
     let parent = path.parent().filter(|p| !p.as_os_str().is_empty());
     if let Some(dir) = parent {
         if !dir.is_dir() {

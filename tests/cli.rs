@@ -118,6 +118,10 @@ fn bad_output_paths_are_clear_errors() {
         "unknown output extension '.jpg'",
     );
     assert_clean_failure(&["render", "-o", "out"], "needs an extension");
+    let dir = tempfile::tempdir().unwrap();
+    let folder = dir.path().join("looks-like.png");
+    std::fs::create_dir(&folder).unwrap();
+    assert_clean_failure(&["render", "-o", folder.to_str().unwrap()], "is a folder");
 }
 
 #[test]

@@ -153,8 +153,8 @@ impl EaPass {
         let pixels: Vec<[f32; 4]> =
             bytemuck::cast_slice(&readback.mapped()?[..size as usize]).to_vec();
         // Longest possible ray through the box, in steps: the box diagonal.
-        let diag = 2.0 * info.half_extent.length();
-        let max_steps = (diag / (opts.sample_distance * info.ref_step)).ceil() as u32;
+        let max_steps =
+            super::steps_for(info.half_extent, info.ref_step, opts.sample_distance) as u32;
         Ok(Frame {
             width: self.width,
             height: self.height,

@@ -109,40 +109,19 @@ impl Recorder<'_> {
     /// Make `layers` of `image` ready for `to`, with a barrier derived from the state the
     /// previous use left. Read-after-read in the same layout needs no barrier and gets none.
     pub fn transition(&mut self, image: &Image, layers: Range<u32>, to: Access) {
-        let mut state = image.layer_state.lock().unwrap();
+        self.transition_many(&[(image, layers, to)]);
+    }
+
+    /// Several transitions in one vkCmdPipelineBarrier2 (one dependency per plane in the
+    /// sweep instead of one per image).
+    pub fn transition_many(&mut self, items: &[(&Image, Range<u32>, Access)]) {
         let mut barriers = Vec::new();
-        let mut layer = layers.start;
-        while layer < layers.end {
-            let from = state[layer as usize];
-            // Group consecutive layers in the same state into one barrier.
-            let mut end = layer + 1;
-            while end < layers.end && state[end as usize] == from {
-                end += 1;
-            }
-            let needed = from != to || from.writes() || to.writes();
-            if needed {
-                barriers.push(
-                    vk::ImageMemoryBarrier2::default()
-                        .src_stage_mask(from.stage())
-                        .src_access_mask(from.access())
-                        .dst_stage_mask(to.stage())
-                        .dst_access_mask(to.access())
-                        .old_layout(from.layout())
-                        .new_layout(to.layout())
-                        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                        .image(image.raw)
-                        .subresource_range(color_range(layer, end - layer)),
-                );
-            }
-            for l in layer..end {
-                state[l as usize] = to;
-            }
-            layer = end;
+        for (image, layers, to) in items {
+            image_barriers(image, layers.clone(), *to, &mut barriers);
         }
         if !barriers.is_empty() {
             let dep = vk::DependencyInfo::default().image_memory_barriers(&barriers);
-            // SAFETY: recording; barriers reference a live image.
+            // SAFETY: recording; barriers reference live images.
             unsafe { self.device().cmd_pipeline_barrier2(self.cmd, &dep) };
         }
     }
@@ -267,9 +246,11 @@ impl Recorder<'_> {
                 attachments.len()
             );
         }
-        for (image, layer) in attachments {
-            self.transition(image, *layer..*layer + 1, pass.access);
-        }
+        let items: Vec<_> = attachments
+            .iter()
+            .map(|(image, layer)| (*image, *layer..*layer + 1, pass.access))
+            .collect();
+        self.transition_many(&items);
         let info = vk::RenderPassBeginInfo::default()
             .render_pass(pass.raw)
             .framebuffer(framebuffer.raw)
@@ -352,6 +333,43 @@ impl Recorder<'_> {
     pub fn end_render_pass(&mut self) {
         // SAFETY: matches begin_render_pass.
         unsafe { self.device().cmd_end_render_pass(self.cmd) };
+    }
+}
+
+fn image_barriers<'a>(
+    image: &Image,
+    layers: Range<u32>,
+    to: Access,
+    out: &mut Vec<vk::ImageMemoryBarrier2<'a>>,
+) {
+    let mut state = image.layer_state.lock().unwrap();
+    let mut layer = layers.start;
+    while layer < layers.end {
+        let from = state[layer as usize];
+        // Group consecutive layers in the same state into one barrier.
+        let mut end = layer + 1;
+        while end < layers.end && state[end as usize] == from {
+            end += 1;
+        }
+        if from != to || from.writes() || to.writes() {
+            out.push(
+                vk::ImageMemoryBarrier2::default()
+                    .src_stage_mask(from.stage())
+                    .src_access_mask(from.access())
+                    .dst_stage_mask(to.stage())
+                    .dst_access_mask(to.access())
+                    .old_layout(from.layout())
+                    .new_layout(to.layout())
+                    .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                    .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                    .image(image.raw)
+                    .subresource_range(color_range(layer, end - layer)),
+            );
+        }
+        for l in layer..end {
+            state[l as usize] = to;
+        }
+        layer = end;
     }
 }
 

@@ -1,0 +1,97 @@
+// Shared by the plane-sweep passes (sweep_setup.comp, sweep.frag, sweep_composite.comp).
+// View space: x right, y up, z forward (depth along the view direction), world units
+// (the volume's longest side is 1). Equation numbers refer to the thesis.
+#ifndef REFRAKT_SWEEP_COMMON_GLSL
+#define REFRAKT_SWEEP_COMMON_GLSL
+#include "common.glsl"
+
+// std140 mirror of render::sweep::SweepParams.
+layout(set = 0, binding = 0) uniform SweepParams {
+    mat4 view_to_tex;    // view space -> volume texture coordinates in [0,1]^3
+    mat4 view_to_world;  // for the clipping plane
+    vec4 camera;         // x = tan(fov_y / 2), y = aspect, z = width, w = height
+    vec4 planes;         // x = depth of plane 0, y = spacing ds, z = plane count, w = reference step
+    vec4 light_dir;      // xyz = direction light travels (view space, unit), w = softness
+    vec4 light_colour;   // rgb, w = bound on the intensity gain per plane
+    vec4 volume_dims;    // xyz = voxels per axis, w = 1 when unlit (diagnostic: i_d = 1, i_s = 0)
+    vec4 specular;       // x = roughness, y = specular strength
+    vec4 clip;           // xyz = world normal, w = offset: opacity is zero where dot(n, p) > w;
+                         // a zero normal disables clipping
+    vec4 background;     // linear RGBA behind the volume
+} P;
+
+layout(set = 0, binding = 1) uniform sampler3D volume;
+layout(set = 0, binding = 2) uniform sampler1DArray tf;       // layer 1 .a = eta
+layout(set = 0, binding = 3) uniform sampler2DArray preint;   // preintegration table
+
+// Light and viewing rays cannot turn by more than ~84 degrees from the sweep direction:
+// they must reach the next plane (thesis ch. 7). Directions are bent no further.
+const float MIN_FORWARD = 0.1;
+
+vec3 plane_point(vec2 uv, float depth) {
+    vec2 ndc = uv * 2.0 - 1.0;
+    return depth * vec3(ndc.x * P.camera.x * P.camera.y, -ndc.y * P.camera.x, 1.0);
+}
+
+vec2 project(vec3 q) {
+    vec2 ndc = vec2(q.x / (q.z * P.camera.x * P.camera.y), -q.y / (q.z * P.camera.x));
+    return ndc * 0.5 + 0.5;
+}
+
+vec3 to_tex(vec3 p) {
+    return (P.view_to_tex * vec4(p, 1.0)).xyz;
+}
+
+// Scalar value; zero outside the volume box.
+float value_at_tex(vec3 t) {
+    if (any(lessThan(t, vec3(0.0))) || any(greaterThan(t, vec3(1.0)))) return 0.0;
+    return textureLod(volume, t, 0.0).r;
+}
+
+float eta_of(float s) {
+    return textureLod(tf, vec2(tf_coord(s), 1.0), 0.0).a;
+}
+
+// Value, gradient of the value and gradient of eta at view-space p (view-space units), by
+// central differences one voxel apart (eq. 3.16); the six fetches serve both gradients,
+// eta_tf is applied to the neighbours before differencing (thesis sect. 5.2).
+void sample_field(vec3 p, out float value, out vec3 grad_f, out vec3 grad_eta) {
+    vec3 t = to_tex(p);
+    vec3 h = 1.0 / P.volume_dims.xyz;
+    value = value_at_tex(t);
+    vec3 gf, ge;
+    for (int k = 0; k < 3; ++k) {
+        vec3 e = vec3(0.0);
+        e[k] = h[k];
+        float a = value_at_tex(t + e);
+        float b = value_at_tex(t - e);
+        gf[k] = (a - b) / (2.0 * h[k]);
+        ge[k] = (eta_of(a) - eta_of(b)) / (2.0 * h[k]);
+    }
+    // d/d(view) = J^T d/d(tex), J = d(tex)/d(view).
+    mat3 jt = transpose(mat3(P.view_to_tex));
+    grad_f = jt * gf;
+    grad_eta = jt * ge;
+}
+
+bool clipped(vec3 p) {
+    if (dot(P.clip.xyz, P.clip.xyz) == 0.0) return false;
+    vec3 w = (P.view_to_world * vec4(p, 1.0)).xyz;
+    return dot(P.clip.xyz, w) > P.clip.w;
+}
+
+// Keep a direction (|v| = eta) inside the sweep's half-space.
+vec3 limit_direction(vec3 v) {
+    float n = length(v);
+    if (!(n > 0.0)) return vec3(0.0, 0.0, 1.0);
+    vec3 d = v / n;
+    if (d.z < MIN_FORWARD) {
+        vec2 lateral = d.xy;
+        float l = length(lateral);
+        lateral = l > 0.0 ? lateral / l : vec2(1.0, 0.0);
+        d = vec3(lateral * sqrt(1.0 - MIN_FORWARD * MIN_FORWARD), MIN_FORWARD);
+    }
+    return d * n;
+}
+
+#endif

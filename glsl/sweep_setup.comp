@@ -1,0 +1,37 @@
+#version 460
+// Setup pass (thesis ch. 5, Fig. 5.1): initialises both layers of the six state buffers.
+// Light: uniform colour and direction on "plane -1". Viewing rays: start on plane 0
+// along each pixel's camera ray, carrying the scalar value one plane earlier (plane -1)
+// so the first segment is integrated like every other. Colour/opacity 0, medium white.
+#extension GL_GOOGLE_include_directive : require
+#include "sweep_common.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(set = 0, binding = 4, rgba32f) uniform writeonly image2DArray light_colour;
+layout(set = 0, binding = 5, rgba32f) uniform writeonly image2DArray light_direction;
+layout(set = 0, binding = 6, rgba32f) uniform writeonly image2DArray view_position;
+layout(set = 0, binding = 7, rgba32f) uniform writeonly image2DArray view_direction;
+layout(set = 0, binding = 8, rgba32f) uniform writeonly image2DArray colour_opacity;
+layout(set = 0, binding = 9, rgba32f) uniform writeonly image2DArray medium;
+
+void main() {
+    ivec2 id = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThanEqual(id, ivec2(P.camera.zw)))) return;
+    vec2 uv = (vec2(id) + 0.5) / P.camera.zw;
+    float d0 = P.planes.x;
+    float ds = P.planes.y;
+    vec3 ray = plane_point(uv, 1.0);            // z = 1
+    vec3 vp = ray * d0;                          // on plane 0
+    float s_prev = value_at_tex(to_tex(ray * (d0 - ds)));
+    float eta = eta_of(s_prev);
+    vec3 vd = normalize(ray) * eta;              // v = eta dx/ds (eq. 4.2)
+    for (int layer = 0; layer < 2; ++layer) {
+        ivec3 at = ivec3(id, layer);
+        imageStore(light_colour, at, vec4(P.light_colour.rgb, 0.0));
+        imageStore(light_direction, at, vec4(P.light_dir.xyz, 0.0));
+        imageStore(view_position, at, vec4(vp, s_prev));
+        imageStore(view_direction, at, vec4(vd, eta));
+        imageStore(colour_opacity, at, vec4(0.0));
+        imageStore(medium, at, vec4(1.0, 1.0, 1.0, 0.0));
+    }
+}
