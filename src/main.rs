@@ -173,22 +173,22 @@ fn info(desc: &ContextDesc) -> Result<ExitCode> {
     let l = &i.limits;
     println!("\nSelected: [{}] {}", i.index, i.name);
     println!(
-        "  type:                 {}",
+        "  type:                   {}",
         vk::device_type_name(i.device_type)
     );
     println!(
-        "  Vulkan version:       {}",
+        "  Vulkan version:         {}",
         vk::version_string(i.api_version)
     );
     println!(
-        "  driver:               {} ({})",
+        "  driver:                 {} ({})",
         i.driver_name, i.driver_info
     );
     println!("  max 3D image size:      {}", l.max_image_dimension3_d);
     println!("  max 2D image size:      {}", l.max_image_dimension2_d);
     println!("  max array layers:       {}", l.max_image_array_layers);
     println!(
-        "  max push constants:   {} bytes",
+        "  max push constants:     {} bytes",
         l.max_push_constants_size
     );
     println!("  max colour attachments: {}", l.max_color_attachments);
