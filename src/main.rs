@@ -7,7 +7,7 @@ use anyhow::{bail, Context as _, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
 use refrakt::output;
-use refrakt::render::{Camera, Model, RenderOptions, Renderer};
+use refrakt::render::{Camera, Light, Model, RenderOptions, Renderer, StateBuffer, SweepOptions};
 use refrakt::transfer::TransferFunctions;
 use refrakt::vk::{self, Context, ContextDesc};
 use refrakt::volume::{procedural, Volume};
@@ -62,6 +62,8 @@ enum SceneArg {
 
 #[derive(Clone, Copy, ValueEnum)]
 enum ModelArg {
+    /// The refractive plane sweep: refraction, caustics, soft shadows, tinted media.
+    Refract,
     /// Emission-absorption ray marcher (the baseline).
     Ea,
 }
@@ -82,7 +84,7 @@ struct RenderArgs {
     #[arg(long, value_name = "PRESET|FILE")]
     tf: Option<String>,
     /// Rendering model.
-    #[arg(long, value_enum, default_value = "ea")]
+    #[arg(long, value_enum, default_value = "refract")]
     model: ModelArg,
     /// Sample the transfer function at each step instead of using the preintegration table.
     #[arg(long)]
@@ -112,6 +114,36 @@ struct RenderArgs {
     /// Background colour behind the volume, linear "r,g,b" or "r,g,b,a".
     #[arg(long, default_value = "0.08,0.08,0.1,1")]
     background: String,
+    /// World-space direction towards the light, "x,y,z" (refract). It must lie in the
+    /// viewer's hemisphere: the sweep runs front to back, so light cannot come from behind
+    /// the volume. Default: from the upper left of the camera.
+    #[arg(long, value_name = "X,Y,Z")]
+    light: Option<String>,
+    /// Light colour, linear "r,g,b" (refract).
+    #[arg(long, default_value = "1,1,1")]
+    light_colour: String,
+    /// Light softness: radius of the light's disc over its distance; 0 = hard shadows
+    /// (refract).
+    #[arg(long, default_value_t = 0.02)]
+    softness: f32,
+    /// GGX roughness of the specular highlights (refract).
+    #[arg(long, default_value_t = 0.3)]
+    roughness: f32,
+    /// Specular strength; 0 turns highlights off (refract).
+    #[arg(long, default_value_t = 1.0)]
+    specular: f32,
+    /// Clipping plane "nx,ny,nz,offset" in world space: opacity is zero where
+    /// n·p > offset, the medium and refraction stay (refract, thesis Fig. 6.6).
+    #[arg(long, value_name = "NX,NY,NZ,D", allow_hyphen_values = true)]
+    clip: Option<String>,
+    /// Write state buffers after given planes as EXR: "BUFFER@PLANE[,...]" with BUFFER one
+    /// of light-colour, light-direction, view-position, view-direction, colour-opacity,
+    /// medium (refract). Files go to --dump-dir as BUFFER-PLANE.exr.
+    #[arg(long, value_name = "BUFFER@PLANE,...")]
+    dump: Option<String>,
+    /// Folder for --dump files (default: the output image's folder).
+    #[arg(long)]
+    dump_dir: Option<PathBuf>,
 }
 
 fn main() -> ExitCode {
@@ -220,6 +252,36 @@ fn scene_name(scene: SceneArg) -> &'static str {
     }
 }
 
+fn parse_floats<const N: usize>(flag: &str, s: &str) -> Result<[f32; N]> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    if parts.len() != N {
+        bail!("{flag} '{s}': expected {N} comma-separated numbers");
+    }
+    let mut out = [0.0; N];
+    for (i, p) in parts.iter().enumerate() {
+        out[i] = p
+            .parse::<f32>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .with_context(|| format!("{flag} '{s}': '{p}' is not a finite number"))?;
+    }
+    Ok(out)
+}
+
+fn parse_dumps(s: &str) -> Result<Vec<(StateBuffer, u32)>> {
+    s.split(',')
+        .map(|item| {
+            let (b, p) = item.trim().split_once('@').with_context(|| {
+                format!("--dump '{item}': expected BUFFER@PLANE, e.g. light-colour@10")
+            })?;
+            let plane = p
+                .parse::<u32>()
+                .with_context(|| format!("--dump '{item}': '{p}' is not a plane number"))?;
+            Ok((StateBuffer::parse(b).with_context(|| format!("--dump '{item}'"))?, plane))
+        })
+        .collect()
+}
+
 fn parse_background(s: &str) -> Result<[f32; 4]> {
     let parts: Vec<&str> = s.split(',').map(str::trim).collect();
     if parts.len() != 3 && parts.len() != 4 {
@@ -245,7 +307,6 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
         background: parse_background(&args.background)?,
         ..Default::default()
     };
-    opts.validate()?;
     let camera = Camera {
         azimuth: args.azimuth,
         elevation: args.elevation,
@@ -253,7 +314,47 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
         fov_y: args.fov,
     };
     camera.validate()?;
+    let (_, forward, right, up) = camera.frame();
+    let towards = match &args.light {
+        Some(l) => glam::Vec3::from(parse_floats::<3>("--light", l)?),
+        // A key light from the upper left of the camera.
+        None => (-forward + 0.6 * up - 0.4 * right).normalize(),
+    };
+    let mut opts = opts;
+    opts.sweep = SweepOptions {
+        light: Light {
+            towards,
+            colour: parse_floats::<3>("--light-colour", &args.light_colour)?,
+            softness: args.softness,
+        },
+        roughness: args.roughness,
+        specular: args.specular,
+        clip: match &args.clip {
+            Some(c) => {
+                let v = parse_floats::<4>("--clip", c)?;
+                Some((glam::Vec3::new(v[0], v[1], v[2]), v[3]))
+            }
+            None => None,
+        },
+        dumps: match &args.dump {
+            Some(d) => parse_dumps(d)?,
+            None => Vec::new(),
+        },
+        ..Default::default()
+    };
+    opts.validate()?;
     output::format_for(&args.output)?;
+    let dump_dir = match &args.dump_dir {
+        Some(d) => d.clone(),
+        None => args
+            .output
+            .parent()
+            .map(|p| p.to_path_buf())
+            .unwrap_or_default(),
+    };
+    if !opts.sweep.dumps.is_empty() && !dump_dir.as_os_str().is_empty() && !dump_dir.is_dir() {
+        bail!("--dump-dir {}: the folder does not exist", dump_dir.display());
+    }
     let tf_name = args.tf.clone().unwrap_or_else(|| {
         match args.scene {
             SceneArg::Shell => "supernova",
@@ -270,6 +371,7 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
     };
     let model = match args.model {
         ModelArg::Ea => Model::Ea,
+        ModelArg::Refract => Model::Refract,
     };
 
     let ctx = Context::new(desc)?;
@@ -302,6 +404,22 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
         for (name, ms) in &frame.timings.scopes {
             println!("  {name:<16} {ms:9.3} ms");
         }
+    }
+    if let Some(stats) = &frame.sweep {
+        let planes = stats.planes.count;
+        println!(
+            "sweep: {planes} planes, spacing {:.5}, {:.1} MiB of state-buffer traffic per plane",
+            stats.planes.spacing,
+            stats.bytes_per_plane as f64 / (1 << 20) as f64
+        );
+        if let Some(ms) = frame.timings.get("sweep") {
+            println!("  {:.3} ms per plane", ms / planes as f64);
+        }
+    }
+    for d in &frame.dumps {
+        let path = dump_dir.join(format!("{}-{}.exr", d.buffer.name(), d.plane));
+        output::write_pixels(d.width, d.height, &d.pixels, &path)?;
+        println!("dumped {} after plane {} to {}", d.buffer.name(), d.plane, path.display());
     }
     println!("wrote {}", args.output.display());
     drop(renderer);

@@ -85,14 +85,17 @@ pub fn write(frame: &Frame, path: &Path) -> Result<()> {
             )
             .with_context(|| format!("writing {}", path.display()))?;
         }
-        ImageFormat::Exr => {
-            let w = frame.width as usize;
-            exr::prelude::write_rgba_file(path, w, frame.height as usize, |x, y| {
-                let p = frame.pixels[y * w + x];
-                (p[0], p[1], p[2], p[3])
-            })
-            .map_err(|e| anyhow::anyhow!("writing {}: {e}", path.display()))?;
-        }
+        ImageFormat::Exr => write_pixels(frame.width, frame.height, &frame.pixels, path)?,
     }
     Ok(())
+}
+
+/// Write raw RGBA f32 pixels (any meaning: colours, directions, positions) as EXR.
+pub fn write_pixels(width: u32, height: u32, pixels: &[[f32; 4]], path: &Path) -> Result<()> {
+    let w = width as usize;
+    exr::prelude::write_rgba_file(path, w, height as usize, |x, y| {
+        let p = pixels[y * w + x];
+        (p[0], p[1], p[2], p[3])
+    })
+    .map_err(|e| anyhow::anyhow!("writing {}: {e}", path.display()))
 }

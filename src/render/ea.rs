@@ -161,6 +161,8 @@ impl EaPass {
             pixels,
             timings,
             max_steps,
+            dumps: Vec::new(),
+            sweep: None,
         })
     }
 }

@@ -4,6 +4,7 @@
 
 mod ea;
 pub mod preintegration;
+pub mod sweep;
 
 use anyhow::{bail, ensure, Result};
 use glam::Vec3;
@@ -13,6 +14,7 @@ use crate::vk::{Context, Filter, Image, Sampler, Timings};
 use crate::volume::Volume;
 
 pub use preintegration::{PreintegrationTable, TABLE_SIZE};
+pub use sweep::{Dump, Light, Planes, StateBuffer, SweepOptions, SweepStats};
 
 /// Orbit camera around the volume centre (the world origin). The volume box's largest side
 /// is 1 world unit.
@@ -83,12 +85,15 @@ impl Camera {
 pub enum Model {
     /// Emission–absorption ray marcher, the baseline.
     Ea,
+    /// The refractive plane sweep (thesis ch. 4, Algorithm 1).
+    Refract,
 }
 
 impl Model {
     pub fn name(self) -> &'static str {
         match self {
             Model::Ea => "ea",
+            Model::Refract => "refract",
         }
     }
 }
@@ -114,8 +119,10 @@ pub struct RenderOptions {
     pub preintegrated: bool,
     /// Linear RGBA behind the volume.
     pub background: [f32; 4],
-    /// Stop marching once accumulated opacity reaches this.
+    /// Stop marching once accumulated opacity reaches this (EA).
     pub termination_alpha: f32,
+    /// Light, specular, clipping and diagnostics of the refractive model.
+    pub sweep: SweepOptions,
 }
 
 impl Default for RenderOptions {
@@ -127,6 +134,7 @@ impl Default for RenderOptions {
             preintegrated: true,
             background: [0.08, 0.08, 0.1, 1.0],
             termination_alpha: 0.99,
+            sweep: SweepOptions::default(),
         }
     }
 }
@@ -155,7 +163,7 @@ impl RenderOptions {
             "termination alpha {} must be in [0, 1]",
             self.termination_alpha
         );
-        Ok(())
+        self.sweep.validate()
     }
 }
 
@@ -166,8 +174,12 @@ pub struct Frame {
     pub height: u32,
     pub pixels: Vec<[f32; 4]>,
     pub timings: Timings,
-    /// Samples along the longest ray, for reporting.
+    /// Samples along the longest ray (EA) or planes (sweep), for reporting.
     pub max_steps: u32,
+    /// State buffers the sweep was asked to copy out.
+    pub dumps: Vec<Dump>,
+    /// Plane count and traffic of the sweep.
+    pub sweep: Option<SweepStats>,
 }
 
 impl Frame {
@@ -187,12 +199,14 @@ pub struct Renderer {
     linear: Sampler,
     preint: PreintegrationTable,
     ea: Option<ea::EaPass>,
+    sweep: Option<sweep::SweepPass>,
 }
 
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct VolumeInfo {
     pub half_extent: Vec3,
     pub ref_step: f32,
+    pub dims: [u32; 3],
 }
 
 impl Renderer {
@@ -207,6 +221,7 @@ impl Renderer {
             volume_info: VolumeInfo {
                 half_extent: Vec3::from(e) * 0.5,
                 ref_step: volume.min_voxel_size(),
+                dims: volume.dims,
             },
             volume_tex,
             tf: tf.clone(),
@@ -215,6 +230,7 @@ impl Renderer {
             linear,
             preint,
             ea: None,
+            sweep: None,
         })
     }
 
@@ -295,6 +311,35 @@ impl Renderer {
                 )?;
                 timings.extend(std::mem::take(&mut frame.timings));
                 frame.timings = timings;
+                Ok(frame)
+            }
+            Model::Refract => {
+                let mut timings = self.update_preintegration()?;
+                let pass = match &mut self.sweep {
+                    Some(p) if p.size() == (opts.width, opts.height) => p,
+                    slot => slot.insert(sweep::SweepPass::new(
+                        &self.ctx,
+                        &self.volume_tex,
+                        &self.tf_image,
+                        self.preint.image(),
+                        &self.linear,
+                        opts.width,
+                        opts.height,
+                    )?),
+                };
+                let (mut frame, dumps, stats) = pass.render(
+                    &self.ctx,
+                    self.volume_info,
+                    self.volume_info.dims,
+                    camera,
+                    opts,
+                    &opts.sweep,
+                    [&self.volume_tex, &self.tf_image, self.preint.image()],
+                )?;
+                timings.extend(std::mem::take(&mut frame.timings));
+                frame.timings = timings;
+                frame.dumps = dumps;
+                frame.sweep = Some(stats);
                 Ok(frame)
             }
         }

@@ -9,6 +9,7 @@ use ash::vk;
 use super::{Access, Buffer, Context, Image, LayerView, Sampler};
 
 /// One binding of a descriptor set, in binding order (binding i = slice index i).
+#[derive(Clone, Copy)]
 pub enum Binding<'a> {
     /// Combined image sampler over the image's full view, in SHADER_READ_ONLY_OPTIMAL.
     Texture(&'a Image, &'a Sampler),

@@ -1,0 +1,650 @@
+//! The refractive plane sweep (thesis ch. 4, ch. 5, Algorithm 1) on Vulkan.
+//!
+//! Per frame, in ONE command buffer: a compute setup pass initialises six state buffers
+//! (light colour, light direction, viewing-ray position, viewing-ray direction, colour +
+//! opacity, medium), then one full-screen draw per view-aligned plane propagates light
+//! (backward, semi-Lagrangian) and viewing rays (forward) together, then a compute pass
+//! composites the background. Each state buffer is ONE 2D image with 2 array layers; plane
+//! i renders layer i % 2 through a framebuffer of per-layer views and samples layer
+//! 1 - i % 2 through per-layer sampled views. The read layer arrives as a push constant:
+//! nothing is rebound or updated between planes.
+//!
+//! Synchronization: the state images live in GENERAL layout, so the only barriers between
+//! planes are memory dependencies on exactly the layers that change role (the layer just
+//! written becomes sampled, the layer just sampled becomes an attachment), batched into one
+//! vkCmdPipelineBarrier2. GENERAL is what lets one descriptor set name both layers: the
+//! validation layer checks the layout of every statically used descriptor at every draw
+//! (see docs/NOTES.md).
+
+use anyhow::{bail, ensure, Result};
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3};
+
+use super::{Camera, Frame, RenderOptions, VolumeInfo};
+use crate::shaders;
+use crate::vk::{
+    self, Access, Binding, Buffer, ComputePipeline, Context, DescriptorSet, Framebuffer,
+    GraphicsPipeline, Image, ImageDesc, ImageKind, LayerView, Memory, RenderPass, Sampler,
+    Timings,
+};
+
+/// The six state buffers, in attachment order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StateBuffer {
+    LightColour,
+    LightDirection,
+    ViewPosition,
+    ViewDirection,
+    ColourOpacity,
+    Medium,
+}
+
+impl StateBuffer {
+    pub const ALL: [StateBuffer; 6] = [
+        StateBuffer::LightColour,
+        StateBuffer::LightDirection,
+        StateBuffer::ViewPosition,
+        StateBuffer::ViewDirection,
+        StateBuffer::ColourOpacity,
+        StateBuffer::Medium,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            StateBuffer::LightColour => "light-colour",
+            StateBuffer::LightDirection => "light-direction",
+            StateBuffer::ViewPosition => "view-position",
+            StateBuffer::ViewDirection => "view-direction",
+            StateBuffer::ColourOpacity => "colour-opacity",
+            StateBuffer::Medium => "medium",
+        }
+    }
+
+    pub fn parse(s: &str) -> Result<Self> {
+        Self::ALL
+            .into_iter()
+            .find(|b| b.name() == s)
+            .ok_or_else(|| {
+                let names: Vec<_> = Self::ALL.iter().map(|b| b.name()).collect();
+                anyhow::anyhow!("unknown state buffer '{s}'; one of {}", names.join(", "))
+            })
+    }
+
+    fn index(self) -> usize {
+        self as usize
+    }
+}
+
+/// Every state buffer is RGBA32F: 16 bytes per pixel per layer. 32-bit floats because
+/// light and medium are products over hundreds of planes, and the equality with the EA
+/// baseline (1/255) and the Beer–Lambert test (1 %) must survive that many roundings.
+pub const STATE_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+pub const STATE_BYTES_PER_PIXEL: u64 = 16;
+
+/// One directional light (thesis sect. 4.2).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Light {
+    /// World-space direction pointing towards the light (where the light comes from).
+    pub towards: Vec3,
+    /// Linear RGB.
+    pub colour: [f32; 3],
+    /// Radius of the light's disc relative to its distance (tan of the angular radius):
+    /// 0 is a point-like (hard) light. Drives the elliptical filter's size.
+    pub softness: f32,
+}
+
+impl Default for Light {
+    fn default() -> Self {
+        Self {
+            towards: Vec3::new(-0.3, 0.6, 1.0).normalize(),
+            colour: [1.0, 1.0, 1.0],
+            softness: 0.02,
+        }
+    }
+}
+
+/// Light and viewing rays may deviate at most this much (cosine) from the sweep direction;
+/// see MIN_FORWARD in glsl/sweep_common.glsl.
+pub const MIN_FORWARD: f32 = 0.1;
+
+/// Options of the refractive model beyond the common [`RenderOptions`].
+#[derive(Clone, Debug)]
+pub struct SweepOptions {
+    pub light: Light,
+    /// GGX roughness of the Cook–Torrance specular term.
+    pub roughness: f32,
+    /// Scale of the specular term (0 = no specular).
+    pub specular: f32,
+    /// Bound on the intensity gain I = S_{i-1}/S_i per plane (chapter 7's bright spots).
+    /// Focusing by a strong lens stays well below it except right at a focus.
+    pub max_gain: f32,
+    /// Clipping plane in world space: opacity (not the medium or η) is zero where
+    /// dot(normal, p) > offset (thesis Fig. 6.6).
+    pub clip: Option<(Vec3, f32)>,
+    /// Diagnostic: diffuse light 1 and no specular, so with η ≡ 1 the sweep must equal the
+    /// EA baseline.
+    pub unlit: bool,
+    /// Copy these buffers after these planes (0-based) for inspection.
+    pub dumps: Vec<(StateBuffer, u32)>,
+    /// Test-only: skip the inter-plane barrier before this plane, to prove synchronization
+    /// validation notices.
+    pub drop_barrier_before_plane: Option<u32>,
+}
+
+impl Default for SweepOptions {
+    fn default() -> Self {
+        Self {
+            light: Light::default(),
+            roughness: 0.3,
+            specular: 1.0,
+            max_gain: 4.0,
+            clip: None,
+            unlit: false,
+            dumps: Vec::new(),
+            drop_barrier_before_plane: None,
+        }
+    }
+}
+
+impl SweepOptions {
+    pub fn validate(&self) -> Result<()> {
+        let l = &self.light;
+        ensure!(
+            l.towards.is_finite() && l.towards.length() > 1e-6,
+            "light direction {:?} must be a finite non-zero vector",
+            l.towards.to_array()
+        );
+        ensure!(
+            l.colour.iter().all(|c| c.is_finite() && *c >= 0.0),
+            "light colour {:?} must be finite and non-negative",
+            l.colour
+        );
+        ensure!(
+            l.softness.is_finite() && (0.0..=1.0).contains(&l.softness),
+            "light softness {} must be in [0, 1]",
+            l.softness
+        );
+        ensure!(
+            self.roughness.is_finite() && (0.01..=1.0).contains(&self.roughness),
+            "roughness {} must be in [0.01, 1]",
+            self.roughness
+        );
+        ensure!(
+            self.specular.is_finite() && self.specular >= 0.0,
+            "specular strength {} must be >= 0",
+            self.specular
+        );
+        ensure!(
+            self.max_gain.is_finite() && self.max_gain >= 1.0,
+            "intensity gain bound {} must be >= 1",
+            self.max_gain
+        );
+        if let Some((n, o)) = self.clip {
+            ensure!(
+                n.is_finite() && n.length() > 1e-6 && o.is_finite(),
+                "clipping plane needs a finite non-zero normal and a finite offset"
+            );
+        }
+        Ok(())
+    }
+}
+
+/// std140 mirror of `SweepParams` in glsl/sweep_common.glsl.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct SweepParams {
+    view_to_tex: [f32; 16],
+    view_to_world: [f32; 16],
+    camera: [f32; 4],
+    planes: [f32; 4],
+    light_dir: [f32; 4],
+    light_colour: [f32; 4],
+    volume_dims: [f32; 4],
+    specular: [f32; 4],
+    clip: [f32; 4],
+    background: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct PlanePush {
+    plane: u32,
+    read_layer: u32,
+    depth: f32,
+    pad: u32,
+}
+
+/// The view-aligned planes of one frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Planes {
+    pub first_depth: f32,
+    pub spacing: f32,
+    pub count: u32,
+}
+
+impl Planes {
+    /// Planes from the box's nearest to its farthest depth, `spacing` apart (thesis ch. 6:
+    /// sample distance × the smallest voxel side).
+    pub fn for_box(camera: &Camera, half_extent: Vec3, spacing: f32) -> Result<Self> {
+        let (eye, forward, _, _) = camera.frame();
+        let mut near = f32::INFINITY;
+        let mut far = f32::NEG_INFINITY;
+        for i in 0..8 {
+            let corner = Vec3::new(
+                if i & 1 == 0 { -1.0 } else { 1.0 },
+                if i & 2 == 0 { -1.0 } else { 1.0 },
+                if i & 4 == 0 { -1.0 } else { 1.0 },
+            ) * half_extent;
+            let d = (corner - eye).dot(forward);
+            near = near.min(d);
+            far = far.max(d);
+        }
+        if near <= spacing {
+            bail!(
+                "the plane sweep needs the camera outside the volume box (nearest box depth \
+                 {near:.3}); increase the camera distance"
+            );
+        }
+        let count = ((far - near) / spacing).floor() as u32 + 2;
+        Ok(Self {
+            first_depth: near,
+            spacing,
+            count,
+        })
+    }
+
+    pub fn depth(&self, i: u32) -> f32 {
+        self.first_depth + i as f32 * self.spacing
+    }
+}
+
+/// A state buffer copied out after a plane.
+#[derive(Clone, Debug)]
+pub struct Dump {
+    pub buffer: StateBuffer,
+    pub plane: u32,
+    pub depth: f32,
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<[f32; 4]>,
+}
+
+/// Diagnostics of one sweep, for performance engineers.
+#[derive(Clone, Debug)]
+pub struct SweepStats {
+    pub planes: Planes,
+    /// State-buffer bytes read and written per plane (render-pass loads, sampled reads
+    /// including filter taps, attachment writes), over the whole viewport.
+    pub bytes_per_plane: u64,
+}
+
+struct StateImage {
+    image: Image,
+    layers: [LayerView; 2],
+}
+
+pub(super) struct SweepPass {
+    width: u32,
+    height: u32,
+    params: Buffer,
+    states: Vec<StateImage>,
+    render_pass: RenderPass,
+    framebuffers: [Framebuffer; 2],
+    sweep_set: DescriptorSet,
+    setup_set: DescriptorSet,
+    composite_set: DescriptorSet,
+    setup: ComputePipeline,
+    sweep: GraphicsPipeline,
+    composite: ComputePipeline,
+    output: Image,
+    readback: Buffer,
+}
+
+impl SweepPass {
+    pub fn new(
+        ctx: &Context,
+        volume: &Image,
+        tf: &Image,
+        preint: &Image,
+        sampler: &Sampler,
+        width: u32,
+        height: u32,
+    ) -> Result<Self> {
+        let max_attachments = ctx.info().limits.max_color_attachments;
+        if max_attachments < 6 {
+            bail!(
+                "the plane sweep writes 6 colour attachments per plane; device '{}' allows {}",
+                ctx.info().name,
+                max_attachments
+            );
+        }
+        let params = Buffer::new(
+            ctx,
+            std::mem::size_of::<SweepParams>() as u64,
+            vk::usage::UNIFORM_BUFFER,
+            Memory::Upload,
+            "sweep params",
+        )?;
+        let mut states = Vec::new();
+        for b in StateBuffer::ALL {
+            let image = Image::new(
+                ctx,
+                ImageDesc {
+                    kind: ImageKind::D2Array,
+                    format: STATE_FORMAT,
+                    extent: [width, height, 1],
+                    layers: 2,
+                    usage: vk::usage::COLOR_ATTACHMENT
+                        | vk::usage::SAMPLED
+                        | vk::usage::STORAGE
+                        | vk::usage::TRANSFER_SRC,
+                },
+                b.name(),
+            )?;
+            let layers = [image.layer_view(0)?, image.layer_view(1)?];
+            states.push(StateImage { image, layers });
+        }
+        let render_pass = RenderPass::new(
+            ctx,
+            &[STATE_FORMAT; 6],
+            Access::AttachmentGeneral,
+            "sweep plane",
+        )?;
+        let fb = |layer: usize| {
+            let views: Vec<&LayerView> = states.iter().map(|s| &s.layers[layer]).collect();
+            Framebuffer::new(
+                ctx,
+                &render_pass,
+                &views,
+                width,
+                height,
+                &format!("sweep write layer {layer}"),
+            )
+        };
+        let framebuffers = [fb(0)?, fb(1)?];
+
+        let common = [
+            Binding::Uniform(&params),
+            Binding::Texture(volume, sampler),
+            Binding::Texture(tf, sampler),
+            Binding::Texture(preint, sampler),
+        ];
+        let mut sampled: Vec<Binding> = common.to_vec();
+        for s in &states {
+            for view in &s.layers {
+                sampled.push(Binding::LayerTexture(view, sampler, Access::SampledGeneral));
+            }
+        }
+        let sweep_set = DescriptorSet::new(ctx, &sampled, "sweep")?;
+        let output = Image::new(
+            ctx,
+            ImageDesc {
+                kind: ImageKind::D2,
+                format: vk::Format::R32G32B32A32_SFLOAT,
+                extent: [width, height, 1],
+                layers: 1,
+                usage: vk::usage::STORAGE | vk::usage::TRANSFER_SRC,
+            },
+            "sweep frame",
+        )?;
+        let mut composite_bindings = sampled.clone();
+        composite_bindings.push(Binding::StorageImage(&output));
+        let composite_set = DescriptorSet::new(ctx, &composite_bindings, "sweep composite")?;
+        let mut setup_bindings: Vec<Binding> = common.to_vec();
+        for s in &states {
+            setup_bindings.push(Binding::StorageImage(&s.image));
+        }
+        let setup_set = DescriptorSet::new(ctx, &setup_bindings, "sweep setup")?;
+
+        let setup = ComputePipeline::new(ctx, shaders::SWEEP_SETUP_COMP, &setup_set, 0, "sweep setup")?;
+        let sweep = GraphicsPipeline::fullscreen(
+            ctx,
+            shaders::FULLSCREEN_VERT,
+            shaders::SWEEP_FRAG,
+            &render_pass,
+            &sweep_set,
+            std::mem::size_of::<PlanePush>() as u32,
+            "sweep plane",
+        )?;
+        let composite = ComputePipeline::new(
+            ctx,
+            shaders::SWEEP_COMPOSITE_COMP,
+            &composite_set,
+            4,
+            "sweep composite",
+        )?;
+        let readback = Buffer::new(
+            ctx,
+            output.layer_bytes()?,
+            vk::usage::BUFFER_TRANSFER_DST,
+            Memory::Readback,
+            "sweep readback",
+        )?;
+        Ok(Self {
+            width,
+            height,
+            params,
+            states,
+            render_pass,
+            framebuffers,
+            sweep_set,
+            setup_set,
+            composite_set,
+            setup,
+            sweep,
+            composite,
+            output,
+            readback,
+        })
+    }
+
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// State-buffer traffic of one plane (see [`SweepStats::bytes_per_plane`]).
+    pub fn bytes_per_plane(&self, soft: bool, specular: bool) -> u64 {
+        let pixels = self.width as u64 * self.height as u64;
+        // Attachment loads (6) and writes (6); sampled: light direction here (1), light
+        // colour + direction at the back-projected point (2 per tap), viewing-ray state
+        // (4), light colour at the ray (1), light direction at the ray for specular (1).
+        let taps = if soft { 3 } else { 1 };
+        let reads = 6 + 1 + 2 * taps + 4 + 1 + u64::from(specular);
+        pixels * (reads + 6) * STATE_BYTES_PER_PIXEL
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    pub fn render(
+        &mut self,
+        ctx: &Context,
+        info: VolumeInfo,
+        volume_dims: [u32; 3],
+        camera: &Camera,
+        opts: &RenderOptions,
+        sweep: &SweepOptions,
+        inputs: [&Image; 3],
+    ) -> Result<(Frame, Vec<Dump>, SweepStats)> {
+        let (eye, forward, right, up) = camera.frame();
+        let travel = -sweep.light.towards.normalize();
+        let forwardness = travel.dot(forward);
+        if forwardness < MIN_FORWARD {
+            bail!(
+                "the light must come from the viewer's side: the sweep runs front to back, so \
+                 light travelling against it cannot be propagated (light direction makes {:.1}° \
+                 with the view direction; at most {:.1}° is supported)",
+                forwardness.clamp(-1.0, 1.0).acos().to_degrees(),
+                MIN_FORWARD.acos().to_degrees()
+            );
+        }
+        let planes = Planes::for_box(camera, info.half_extent, opts.sample_distance * info.ref_step)?;
+        for (b, plane) in &sweep.dumps {
+            ensure!(
+                *plane < planes.count,
+                "--dump {}@{plane}: this frame has planes 0..{}",
+                b.name(),
+                planes.count - 1
+            );
+        }
+        let view_to_world = Mat4::from_cols(
+            right.extend(0.0),
+            up.extend(0.0),
+            forward.extend(0.0),
+            eye.extend(1.0),
+        );
+        let view_to_tex = Mat4::from_translation(Vec3::splat(0.5))
+            * Mat4::from_scale(0.5 / info.half_extent)
+            * view_to_world;
+        let light_view = Vec3::new(travel.dot(right), travel.dot(up), travel.dot(forward));
+        let (clip_n, clip_o) = sweep.clip.map(|(n, o)| (n.normalize(), o)).unwrap_or((Vec3::ZERO, 0.0));
+        let p = SweepParams {
+            view_to_tex: view_to_tex.to_cols_array(),
+            view_to_world: view_to_world.to_cols_array(),
+            camera: [
+                (camera.fov_y.to_radians() * 0.5).tan(),
+                self.width as f32 / self.height as f32,
+                self.width as f32,
+                self.height as f32,
+            ],
+            planes: [planes.first_depth, planes.spacing, planes.count as f32, info.ref_step],
+            light_dir: [light_view.x, light_view.y, light_view.z, sweep.light.softness],
+            light_colour: [
+                sweep.light.colour[0],
+                sweep.light.colour[1],
+                sweep.light.colour[2],
+                sweep.max_gain,
+            ],
+            volume_dims: [
+                volume_dims[0] as f32,
+                volume_dims[1] as f32,
+                volume_dims[2] as f32,
+                if sweep.unlit { 1.0 } else { 0.0 },
+            ],
+            specular: [sweep.roughness, sweep.specular, 0.0, 0.0],
+            clip: [clip_n.x, clip_n.y, clip_n.z, clip_o],
+            background: opts.background,
+        };
+        self.params.write(0, bytemuck::bytes_of(&p))?;
+
+        let dump_buffers: Vec<(StateBuffer, u32, Buffer)> = sweep
+            .dumps
+            .iter()
+            .map(|&(b, plane)| {
+                let buf = Buffer::new(
+                    ctx,
+                    self.output.layer_bytes()?,
+                    vk::usage::BUFFER_TRANSFER_DST,
+                    Memory::Readback,
+                    &format!("dump {}@{plane}", b.name()),
+                )?;
+                Ok((b, plane, buf))
+            })
+            .collect::<Result<_>>()?;
+
+        let groups = [self.width.div_ceil(8), self.height.div_ceil(8), 1];
+        let timings: Timings = ctx.execute(|rec| {
+            for img in inputs {
+                rec.transition_all(img, Access::Sampled);
+            }
+            rec.begin_scope("sweep setup");
+            let all: Vec<_> = self
+                .states
+                .iter()
+                .map(|s| (&s.image, 0..2, Access::ComputeStorage))
+                .collect();
+            rec.transition_many(&all);
+            rec.dispatch(&self.setup, &self.setup_set, &[], groups)?;
+            // Both layers become sampled: every draw's set names both (see module docs).
+            let all: Vec<_> = self
+                .states
+                .iter()
+                .map(|s| (&s.image, 0..2, Access::SampledGeneral))
+                .collect();
+            rec.transition_many(&all);
+            rec.end_scope();
+
+            rec.begin_scope("sweep");
+            for i in 0..planes.count {
+                let write = i % 2;
+                let read = 1 - write;
+                // The layer the previous plane wrote becomes sampled; begin_render_pass then
+                // makes the layer the previous plane sampled an attachment. Both go into
+                // one barrier batch per plane.
+                if sweep.drop_barrier_before_plane == Some(i) {
+                    for s in &self.states {
+                        rec.assume_without_barrier(&s.image, read..read + 1, Access::SampledGeneral);
+                    }
+                } else {
+                    let items: Vec<_> = self
+                        .states
+                        .iter()
+                        .map(|s| (&s.image, read..read + 1, Access::SampledGeneral))
+                        .collect();
+                    rec.transition_many(&items);
+                }
+                let attachments: Vec<(&Image, u32)> =
+                    self.states.iter().map(|s| (&s.image, write)).collect();
+                rec.begin_render_pass(&self.render_pass, &self.framebuffers[write as usize], &attachments)?;
+                let push = PlanePush {
+                    plane: i,
+                    read_layer: read,
+                    depth: planes.depth(i),
+                    pad: 0,
+                };
+                rec.draw_fullscreen(&self.sweep, &self.sweep_set, bytemuck::bytes_of(&push))?;
+                rec.end_render_pass();
+                for (b, plane, buf) in &dump_buffers {
+                    if *plane == i {
+                        rec.copy_image_to_buffer(&self.states[b.index()].image, write, buf);
+                    }
+                }
+            }
+            rec.end_scope();
+
+            rec.begin_scope("composite");
+            let last = (planes.count - 1) % 2;
+            let all: Vec<_> = self
+                .states
+                .iter()
+                .map(|s| (&s.image, 0..2, Access::SampledGeneral))
+                .collect();
+            rec.transition_many(&all);
+            rec.transition_all(&self.output, Access::ComputeStorage);
+            rec.dispatch(&self.composite, &self.composite_set, &last.to_le_bytes(), groups)?;
+            rec.end_scope();
+            rec.copy_image_to_buffer(&self.output, 0, &self.readback);
+            Ok(())
+        })?;
+        let size = self.output.layer_bytes()? as usize;
+        let pixels: Vec<[f32; 4]> = bytemuck::cast_slice(&self.readback.mapped()?[..size]).to_vec();
+        let dumps = dump_buffers
+            .iter()
+            .map(|(b, plane, buf)| {
+                Ok(Dump {
+                    buffer: *b,
+                    plane: *plane,
+                    depth: planes.depth(*plane),
+                    width: self.width,
+                    height: self.height,
+                    pixels: bytemuck::cast_slice(&buf.mapped()?[..size]).to_vec(),
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let stats = SweepStats {
+            planes,
+            bytes_per_plane: self.bytes_per_plane(sweep.light.softness > 0.0, sweep.specular > 0.0),
+        };
+        Ok((
+            Frame {
+                width: self.width,
+                height: self.height,
+                pixels,
+                timings,
+                max_steps: planes.count,
+                dumps: Vec::new(),
+                sweep: None,
+            },
+            dumps,
+            stats,
+        ))
+    }
+}
