@@ -84,15 +84,17 @@ void main() {
     vec3 lp = p - ld_here * (ds / ld_here.z);
     vec2 uv_lp = project(lp);
 
-    // Elliptical 3-tap kernel (after Patel et al.): a disc of radius softness * (path
-    // length) perpendicular to the light, projected onto the plane (stretched along the
-    // light's lateral direction), with a per-pixel, per-plane random rotation.
+    // Elliptical 3-tap kernel (after Patel et al.): a disc of radius `softness` reference
+    // steps perpendicular to the light, projected onto the previous plane (stretched along
+    // the light's lateral direction), with a per-pixel, per-plane random rotation. Applied
+    // at every plane, the blur accumulates (incremental convolution): penumbrae widen with
+    // distance behind the occluder and with softness.
     vec3 light_prev = vec3(0.0);
     vec3 dir_prev = vec3(0.0);
     float softness = P.light_dir.w;
     if (softness > 0.0) {
         vec3 dn = normalize(ld_here);
-        float radius = softness * ds / dn.z;                       // world units
+        float radius = softness * ref_step;                          // world units
         vec2 lateral = length(dn.xy) > 1e-6 ? normalize(dn.xy) : vec2(1.0, 0.0);
         vec2 across = vec2(-lateral.y, lateral.x);
         float world_per_uv_y = 2.0 * (pc.depth - ds) * P.camera.x;  // plane i-1 height
@@ -152,7 +154,7 @@ void main() {
     vec3 dir = normalize(vd);
     float seg_len = ds / dir.z;   // arc length from plane i-1 to this plane
 
-    if (A < 0.999) {
+    if (A < P.specular.z) {
         vec2 uv_v = project(vp);
         vec3 i_d = READ_BUFFER(light_colour, R, uv_v).rgb;
         vec3 i_s = vec3(0.0);

@@ -12,9 +12,10 @@ layout(set = 0, binding = 0) uniform SweepParams {
     vec4 camera;         // x = tan(fov_y / 2), y = aspect, z = width, w = height
     vec4 planes;         // x = depth of plane 0, y = spacing ds, z = plane count, w = reference step
     vec4 light_dir;      // xyz = direction light travels (view space, unit), w = softness
+                         //   (filter radius per plane, in reference steps)
     vec4 light_colour;   // rgb, w = bound on the intensity gain per plane
     vec4 volume_dims;    // xyz = voxels per axis, w = 1 when unlit (diagnostic: i_d = 1, i_s = 0)
-    vec4 specular;       // x = roughness, y = specular strength
+    vec4 specular;       // x = roughness, y = specular strength, z = termination opacity
     vec4 clip;           // xyz = world normal, w = offset: opacity is zero where dot(n, p) > w;
                          // a zero normal disables clipping
     vec4 background;     // linear RGBA behind the volume

@@ -122,9 +122,9 @@ struct RenderArgs {
     /// Light colour, linear "r,g,b" (refract).
     #[arg(long, default_value = "1,1,1")]
     light_colour: String,
-    /// Light softness: radius of the light's disc over its distance; 0 = hard shadows
-    /// (refract).
-    #[arg(long, default_value_t = 0.02)]
+    /// Light softness: radius, in voxels, of the elliptical filter applied to the light at
+    /// every plane; 0 = hard shadows and sharp caustics (refract).
+    #[arg(long, default_value_t = 0.5)]
     softness: f32,
     /// GGX roughness of the specular highlights (refract).
     #[arg(long, default_value_t = 0.3)]

@@ -88,8 +88,9 @@ pub struct Light {
     pub towards: Vec3,
     /// Linear RGB.
     pub colour: [f32; 3],
-    /// Radius of the light's disc relative to its distance (tan of the angular radius):
-    /// 0 is a point-like (hard) light. Drives the elliptical filter's size.
+    /// Size of the elliptical filter applied to the light at every plane, in reference
+    /// steps (smallest voxel sides): 0 = one tap, hard shadows; larger = softer shadows
+    /// and caustics (the light source's apparent size).
     pub softness: f32,
 }
 
@@ -98,7 +99,7 @@ impl Default for Light {
         Self {
             towards: Vec3::new(-0.3, 0.6, 1.0).normalize(),
             colour: [1.0, 1.0, 1.0],
-            softness: 0.02,
+            softness: 0.5,
         }
     }
 }
@@ -160,8 +161,8 @@ impl SweepOptions {
             l.colour
         );
         ensure!(
-            l.softness.is_finite() && (0.0..=1.0).contains(&l.softness),
-            "light softness {} must be in [0, 1]",
+            l.softness.is_finite() && (0.0..=8.0).contains(&l.softness),
+            "light softness {} must be in [0, 8] (filter radius in voxels)",
             l.softness
         );
         ensure!(
@@ -519,7 +520,7 @@ impl SweepPass {
                 volume_dims[2] as f32,
                 if sweep.unlit { 1.0 } else { 0.0 },
             ],
-            specular: [sweep.roughness, sweep.specular, 0.0, 0.0],
+            specular: [sweep.roughness, sweep.specular, opts.termination_alpha, 0.0],
             clip: [clip_n.x, clip_n.y, clip_n.z, clip_o],
             background: opts.background,
         };

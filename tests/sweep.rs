@@ -1,0 +1,437 @@
+//! Issue 4: the refractive plane sweep against physics: equality with the EA baseline when
+//! nothing refracts, Beer–Lambert and medium filtering of light, the paraxial focus of a
+//! ball lens, energy conservation through a weak lens, shadow placement and penumbrae,
+//! total internal reflection, and sync validation of the inter-plane barriers.
+
+mod common;
+
+use common::*;
+use glam::Vec3;
+use refrakt::render::{
+    Camera, Dump, Light, Model, Planes, RenderOptions, Renderer, StateBuffer, SweepOptions,
+};
+use refrakt::transfer::{Piecewise, TransferFunctions};
+use refrakt::vk::Context;
+use refrakt::volume::{procedural, Volume, Voxels};
+
+fn f32_volume(n: u32, f: impl Fn([f32; 3]) -> f32) -> Volume {
+    let mut v = Vec::new();
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                let p = [x, y, z].map(|i| (i as f32 + 0.5) / n as f32 - 0.5);
+                v.push(f(p).clamp(0.0, 1.0));
+            }
+        }
+    }
+    let mut vol = Volume::new([n; 3], [1.0; 3], Voxels::F32(v)).unwrap();
+    vol.range = Some((0.0, 1.0));
+    vol
+}
+
+/// Value 1 inside a ball of radius r, 0 outside, a one-voxel linear ramp on the surface.
+fn ball(n: u32, r: f32) -> Volume {
+    f32_volume(n, |p| 0.5 + (r - Vec3::from(p).length()) * n as f32)
+}
+
+fn sweep(ctx: &Context, vol: &Volume, tf: &TransferFunctions, cam: &Camera, opts: &RenderOptions) -> refrakt::render::Frame {
+    let mut r = Renderer::new(ctx, vol, tf).unwrap();
+    r.render(Model::Refract, cam, opts).unwrap()
+}
+
+/// Light along the view axis (travelling away from the camera).
+fn headlight(cam: &Camera, softness: f32) -> Light {
+    Light { towards: cam.eye().normalize(), colour: [1.0; 3], softness }
+}
+
+fn dump<'a>(frame: &'a refrakt::render::Frame, b: StateBuffer, plane: u32) -> &'a Dump {
+    frame.dumps.iter().find(|d| d.buffer == b && d.plane == plane).unwrap()
+}
+
+/// The first plane at or beyond `depth` (view-space depth from the eye).
+fn plane_at(planes: &Planes, depth: f32) -> u32 {
+    (((depth - planes.first_depth) / planes.spacing).ceil().max(0.0)) as u32
+}
+
+/// Lateral (x, y) view-space position of pixel (x, y) on a plane at `depth`.
+fn pixel_point(cam: &Camera, w: u32, h: u32, x: u32, y: u32, depth: f32) -> (f32, f32) {
+    let t = (cam.fov_y.to_radians() * 0.5).tan();
+    let aspect = w as f32 / h as f32;
+    let nx = (x as f32 + 0.5) / w as f32 * 2.0 - 1.0;
+    let ny = (y as f32 + 0.5) / h as f32 * 2.0 - 1.0;
+    (depth * nx * t * aspect, -depth * ny * t)
+}
+
+fn tf_from(text: &str) -> TransferFunctions {
+    TransferFunctions::parse(text, "test").unwrap()
+}
+
+#[test]
+fn equals_ea_baseline_without_refraction_or_lighting() {
+    with_context(|ctx| {
+        let vol = procedural::sphere(32, 0.35, 1.0).unwrap();
+        let tf = tf_from("colour = [[0.0, 1.0, 0.6, 0.3], [1.0, 0.3, 0.6, 1.0]]\nopacity = [[0.0, 0.0], [1.0, 0.25]]\n");
+        let cam = Camera { azimuth: 25.0, elevation: 15.0, distance: 2.2, fov_y: 35.0 };
+        let mut opts = RenderOptions {
+            width: 48,
+            height: 48,
+            background: [0.1, 0.2, 0.3, 1.0],
+            termination_alpha: 0.999,
+            ..Default::default()
+        };
+        opts.sweep = SweepOptions { unlit: true, specular: 0.0, ..Default::default() };
+        let mut r = Renderer::new(ctx, &vol, &tf).unwrap();
+        let ea = r.render(Model::Ea, &cam, &opts).unwrap();
+        let sw = r.render(Model::Refract, &cam, &opts).unwrap();
+        let mut worst = 0.0f32;
+        for (a, b) in ea.pixels.iter().zip(&sw.pixels) {
+            for k in 0..4 {
+                worst = worst.max((a[k] - b[k]).abs());
+            }
+        }
+        println!("max |sweep - EA| = {worst:.5}");
+        assert!(worst <= 1.0 / 255.0, "sweep differs from EA by {worst}");
+        // The sphere is really there (the comparison is not between two backgrounds).
+        assert!((ea.pixel(24, 24)[0] - 0.1).abs() > 0.1);
+    });
+}
+
+/// A slab 8 voxels thick across the whole volume, perpendicular to the view axis, with a
+/// one-voxel ramp at each face; f(s) = s inside.
+fn slab_volume() -> Volume {
+    let n = 16u32;
+    f32_volume(n, |p| {
+        let z = (p[2] + 0.5) * n as f32; // voxel units, 0..16
+        (z - 3.5).clamp(0.0, 1.0).min((12.5 - z).clamp(0.0, 1.0))
+    })
+}
+
+/// Piecewise-linear approximation of x -> g(x) on [0, 1] with 65 points.
+fn sampled<const N: usize>(g: impl Fn(f32) -> [f32; N]) -> Piecewise<N> {
+    Piecewise::new((0..=64).map(|i| (i as f32 / 64.0, g(i as f32 / 64.0))).collect())
+}
+
+#[test]
+fn light_through_a_slab_follows_beer_lambert_and_the_medium_filter() {
+    with_context(|ctx| {
+        let vol = slab_volume();
+        let cam = Camera { azimuth: 0.0, elevation: 0.0, distance: 2.5, fov_y: 20.0 };
+        let sigma = 0.08f32; // extinction per voxel at s = 1
+        let m0 = [0.9f32, 0.75, 0.97];
+        let mut absorbing = TransferFunctions::default();
+        // sigma(s) = s * sigma: the ramps then add exactly the thickness they take away.
+        absorbing.opacity = sampled(|s| [1.0 - (-sigma * s).exp()]);
+        let mut tinted = TransferFunctions::default();
+        tinted.medium = sampled(|s| m0.map(|m| m.powf(s)));
+        let half = Vec3::splat(0.5);
+        let planes = Planes::for_box(&cam, half, 1.0 / 16.0).unwrap();
+        // The camera looks down -z: the slab's far face (world z = -0.25) is at depth
+        // distance + 0.25; take a plane two voxels behind it.
+        let behind = plane_at(&planes, cam.distance + 0.25 + 2.0 / 16.0);
+        for (name, tf, expected) in [
+            ("absorbing", &absorbing, [(-sigma * 8.0).exp(); 3]),
+            ("tinted", &tinted, m0.map(|m| m.powf(8.0))),
+        ] {
+            let mut opts = RenderOptions { width: 32, height: 32, ..Default::default() };
+            opts.sweep = SweepOptions {
+                light: headlight(&cam, 0.0),
+                dumps: vec![(StateBuffer::LightColour, behind)],
+                ..Default::default()
+            };
+            let f = sweep(ctx, &vol, tf, &cam, &opts);
+            let d = dump(&f, StateBuffer::LightColour, behind);
+            let l = d.pixels[(16 * 32 + 16) as usize];
+            for k in 0..3 {
+                let rel = (l[k] - expected[k]).abs() / expected[k];
+                println!("{name} channel {k}: light {:.5}, expected {:.5} ({:.2} %)", l[k], expected[k], rel * 100.0);
+                assert!(rel <= 0.01, "{name} channel {k}: {} vs {}", l[k], expected[k]);
+            }
+        }
+    });
+}
+
+/// Paraxial focus of a ball lens from the light directions just behind it.
+fn ball_lens_focus(ctx: &Context, n_index: f32, diameter: f32) -> (f32, f32) {
+    let n = 64u32;
+    let vol = ball(n, diameter / 2.0);
+    let mut tf = TransferFunctions::default();
+    tf.eta = Piecewise::new(vec![(0.0, [1.0]), (1.0, [n_index])]);
+    let cam = Camera { azimuth: 0.0, elevation: 0.0, distance: 2.0, fov_y: 20.0 };
+    let (w, h) = (96u32, 96u32);
+    let spacing = 0.5 / n as f32;
+    let planes = Planes::for_box(&cam, Vec3::splat(0.5), spacing).unwrap();
+    let behind = plane_at(&planes, cam.distance + diameter / 2.0 + 2.0 / n as f32);
+    let depth = planes.depth(behind);
+    // On-axis intensity along the axis behind the lens, to report its peak.
+    let peaks: Vec<u32> = (behind..planes.count).step_by(2).collect();
+    let mut dumps = vec![(StateBuffer::LightDirection, behind)];
+    dumps.extend(peaks.iter().map(|&p| (StateBuffer::LightColour, p)));
+    let mut opts = RenderOptions { width: w, height: h, sample_distance: 0.5, ..Default::default() };
+    opts.sweep = SweepOptions { light: headlight(&cam, 0.0), max_gain: 8.0, dumps, ..Default::default() };
+    let f = sweep(ctx, &vol, &tf, &cam, &opts);
+    let d = dump(&f, StateBuffer::LightDirection, behind);
+    // Rays at 10-30 % of the radius: near-axis, yet far enough for a clean slope.
+    let r = diameter / 2.0;
+    let mut sum = 0.0f64;
+    let mut count = 0;
+    for y in 0..h {
+        for x in 0..w {
+            let (px, py) = pixel_point(&cam, w, h, x, y, depth);
+            let rho = (px * px + py * py).sqrt();
+            if rho < 0.1 * r || rho > 0.3 * r {
+                continue;
+            }
+            let ld = d.pixels[(y * w + x) as usize];
+            let radial_slope = (ld[0] * px + ld[1] * py) / (rho * ld[2]);
+            if radial_slope >= 0.0 {
+                continue;
+            }
+            // Distance behind this plane where the ray crosses the axis.
+            let cross = -rho / radial_slope;
+            sum += (depth - cam.distance + cross) as f64;
+            count += 1;
+        }
+    }
+    assert!(count > 20, "too few paraxial rays ({count})");
+    let focus = (sum / count as f64) as f32;
+    // Where the on-axis light peaks.
+    let mut best = (0.0f32, 0.0f32);
+    for &p in &peaks {
+        let l = dump(&f, StateBuffer::LightColour, p);
+        let v = l.pixels[((h / 2) * w + w / 2) as usize][0];
+        if v > best.1 {
+            best = (planes.depth(p) - cam.distance, v);
+        }
+    }
+    (focus, best.0)
+}
+
+#[test]
+fn ball_lens_focuses_at_the_paraxial_focal_length() {
+    with_context(|ctx| {
+        for (n, d) in [(1.5f32, 0.5f32), (1.33, 0.4)] {
+            let expected = n * d / (4.0 * (n - 1.0));
+            let (focus, peak) = ball_lens_focus(ctx, n, d);
+            let err = (focus - expected).abs() / expected;
+            println!(
+                "ball lens n={n} D={d}: paraxial focus {focus:.4} from the centre, theory {expected:.4} \
+                 ({:.1} %); on-axis intensity peaks {peak:.4} from the centre",
+                err * 100.0
+            );
+            assert!(err <= 0.05, "n={n} D={d}: focus {focus} vs {expected}");
+        }
+    });
+}
+
+#[test]
+fn weak_lens_conserves_light_power() {
+    with_context(|ctx| {
+        let n = 48u32;
+        let vol = ball(n, 0.25);
+        let mut tf = TransferFunctions::default();
+        tf.eta = Piecewise::new(vec![(0.0, [1.0]), (1.0, [1.05])]);
+        let cam = Camera { azimuth: 0.0, elevation: 0.0, distance: 2.0, fov_y: 30.0 };
+        let (w, h) = (96u32, 96u32);
+        let planes = Planes::for_box(&cam, Vec3::splat(0.5), 1.0 / n as f32).unwrap();
+        let behind = plane_at(&planes, cam.distance + 0.25 + 3.0 / n as f32);
+        let mut opts = RenderOptions { width: w, height: h, ..Default::default() };
+        opts.sweep = SweepOptions {
+            light: headlight(&cam, 0.0),
+            dumps: vec![(StateBuffer::LightColour, behind)],
+            ..Default::default()
+        };
+        let f = sweep(ctx, &vol, &tf, &cam, &opts);
+        let d = dump(&f, StateBuffer::LightColour, behind);
+        // Every pixel of a plane has the same footprint, so power = footprint * sum(L).
+        // Light outside the lens' influence stays 1; the lens may only move power around.
+        let depth = planes.depth(behind);
+        let t = (cam.fov_y.to_radians() * 0.5).tan();
+        let pixel_area = (2.0 * depth * t / h as f32).powi(2);
+        let change: f64 = d.pixels.iter().map(|p| (p[0] - 1.0) as f64).sum::<f64>() * pixel_area as f64;
+        let aperture = std::f64::consts::PI * 0.25f64.powi(2);
+        let rel = change / aperture;
+        let max_l = d.pixels.iter().map(|p| p[0]).fold(0.0f32, f32::max);
+        println!("weak lens: power change behind the lens {:.3} % of the power through it (peak intensity {max_l:.3})", rel * 100.0);
+        assert!(max_l > 1.01, "the lens did not focus at all (peak {max_l})");
+        assert!(rel.abs() <= 0.02, "power changed by {:.2} %", rel * 100.0);
+    });
+}
+
+/// Shadow of an opaque ball on a plane behind it, lit at `angle` degrees from the view
+/// axis (in the x-z plane): (centroid x of the shadow, 10-90 % penumbra width) in view
+/// space.
+fn shadow(ctx: &Context, angle: f32, softness: f32) -> (f32, f32, f32) {
+    let n = 48u32;
+    let vol = ball(n, 0.15);
+    let mut tf = TransferFunctions::default();
+    tf.opacity = Piecewise::new(vec![(0.0, [0.0]), (0.5, [1.0])]);
+    let cam = Camera { azimuth: 0.0, elevation: 0.0, distance: 2.0, fov_y: 30.0 };
+    let (w, h) = (128u32, 64u32);
+    let planes = Planes::for_box(&cam, Vec3::splat(0.5), 1.0 / n as f32).unwrap();
+    let gap = 0.3; // shadow plane this far behind the ball's centre
+    let p = plane_at(&planes, cam.distance + gap);
+    let depth = planes.depth(p);
+    // Light travels along +depth tilted towards +x: it comes from the -x side.
+    let a = angle.to_radians();
+    let towards = Vec3::new(-a.sin(), 0.0, a.cos()); // world == view axes for this camera
+    let mut opts = RenderOptions { width: w, height: h, ..Default::default() };
+    opts.sweep = SweepOptions {
+        light: Light { towards, colour: [1.0; 3], softness },
+        dumps: vec![(StateBuffer::LightColour, p)],
+        ..Default::default()
+    };
+    let f = sweep(ctx, &vol, &tf, &cam, &opts);
+    let d = dump(&f, StateBuffer::LightColour, p);
+    let row = h / 2;
+    let (mut wsum, mut xsum) = (0.0f64, 0.0f64);
+    let mut profile = Vec::new();
+    for x in 0..w {
+        let (px, _) = pixel_point(&cam, w, h, x, row, depth);
+        let dark = (1.0 - d.pixels[(row * w + x) as usize][0]).max(0.0) as f64;
+        wsum += dark;
+        xsum += dark * px as f64;
+        profile.push((px, dark as f32));
+    }
+    assert!(wsum > 0.0, "no shadow at all");
+    let centre = (xsum / wsum) as f32;
+    // Penumbra on the right edge: from 90 % to 10 % darkness.
+    let peak = profile.iter().map(|p| p.1).fold(0.0f32, f32::max);
+    let right: Vec<_> = profile.iter().filter(|p| p.0 > centre).collect();
+    let x90 = right.iter().rev().find(|p| p.1 >= 0.9 * peak).map(|p| p.0).unwrap_or(centre);
+    let x10 = right.iter().rev().find(|p| p.1 >= 0.1 * peak).map(|p| p.0).unwrap_or(centre);
+    (centre, x10 - x90, gap)
+}
+
+#[test]
+fn shadows_fall_along_the_light_and_soften_with_softness() {
+    with_context(|ctx| {
+        let angle = 15.0f32;
+        let (centre, _, gap) = shadow(ctx, angle, 0.0);
+        let expected = gap * angle.to_radians().tan();
+        println!("shadow centre {centre:.4}, expected {expected:.4} (light {angle} deg off axis)");
+        assert!((centre - expected).abs() <= 1.5 / 48.0, "shadow at {centre}, expected {expected}");
+        let widths: Vec<f32> = [0.0f32, 0.5, 1.5].iter().map(|&s| shadow(ctx, angle, s).1).collect();
+        println!("penumbra widths for softness 0, 0.5, 1.5: {widths:?}");
+        assert!(widths[0] < widths[1] && widths[1] < widths[2], "penumbra not widening: {widths:?}");
+    });
+}
+
+#[test]
+fn total_internal_reflection_keeps_rays_inside_a_dense_block() {
+    with_context(|ctx| {
+        let n = 48u32;
+        // Block: x in [-0.5, 0], z in [-0.3, 0.3], all y; eta 1.5 inside.
+        let vol = f32_volume(n, |p| {
+            let vox = 1.0 / n as f32;
+            let inside = (-p[0]).min(0.3 - p[2].abs());
+            0.5 + inside / vox
+        });
+        let mut tf = TransferFunctions::default();
+        tf.eta = Piecewise::new(vec![(0.0, [1.0]), (1.0, [1.5])]);
+        // Rays enter the front face at ~50 degrees, refract to ~31 degrees and meet the side
+        // face x = 0 at ~59 degrees, beyond the critical angle asin(1/1.5) = 41.8 degrees.
+        let cam = Camera { azimuth: -50.0, elevation: 0.0, distance: 2.0, fov_y: 30.0 };
+        let (w, h) = (96u32, 8u32);
+        let spacing = 0.5 / n as f32;
+        let planes = Planes::for_box(&cam, Vec3::splat(0.5), spacing).unwrap();
+        let every: Vec<u32> = (0..planes.count).step_by(4).collect();
+        let mut opts = RenderOptions { width: w, height: h, sample_distance: 0.5, ..Default::default() };
+        opts.sweep = SweepOptions {
+            light: headlight(&cam, 0.0),
+            dumps: every.iter().map(|&p| (StateBuffer::ViewPosition, p)).collect(),
+            ..Default::default()
+        };
+        let f = sweep(ctx, &vol, &tf, &cam, &opts);
+        let (eye, fwd, right, up) = cam.frame();
+        let world = |q: [f32; 4]| eye + q[0] * right + q[1] * up + q[2] * fwd;
+        let row = h / 2;
+        let (mut hit_face, mut escaped) = (0, 0);
+        for x in 0..w {
+            let mut inside_block = false;
+            let mut reached_face = false;
+            for &p in &every {
+                let q = world(dump(&f, StateBuffer::ViewPosition, p).pixels[(row * w + x) as usize]);
+                if q.z.abs() < 0.27 && q.x < -0.03 {
+                    inside_block = true;
+                }
+                if inside_block && q.z.abs() < 0.27 {
+                    if q.x > -2.0 / n as f32 {
+                        reached_face = true;
+                    }
+                    if q.x > 2.0 / n as f32 {
+                        escaped += 1;
+                        break;
+                    }
+                }
+            }
+            hit_face += reached_face as u32;
+        }
+        println!("rays reaching the side face: {hit_face}, escaping through it: {escaped}");
+        assert!(hit_face >= 5, "too few rays reach the side face for the test to mean anything");
+        assert_eq!(escaped, 0, "{escaped} rays left the block through the side face");
+    });
+}
+
+#[test]
+fn light_from_behind_is_a_clear_error() {
+    with_context(|ctx| {
+        let vol = procedural::sphere(16, 0.3, 1.0).unwrap();
+        let cam = Camera::default();
+        let mut r = Renderer::new(ctx, &vol, &TransferFunctions::default()).unwrap();
+        let mut opts = RenderOptions { width: 16, height: 16, ..Default::default() };
+        opts.sweep.light.towards = -cam.eye();
+        let err = r.render(Model::Refract, &cam, &opts).unwrap_err().to_string();
+        assert!(err.contains("viewer's side"), "{err}");
+    });
+}
+
+#[test]
+fn clipping_removes_opacity_but_keeps_the_medium() {
+    with_context(|ctx| {
+        let vol = procedural::slab([16, 16, 16], 1.0).unwrap();
+        let tf = tf_from("colour = [[0.0, 1.0, 1.0, 1.0]]\nopacity = [[0.0, 0.2]]\nmedium = [[0.0, 0.9, 0.6, 0.9]]\n");
+        let cam = Camera { azimuth: 0.0, elevation: 0.0, distance: 2.5, fov_y: 20.0 };
+        let mut opts = RenderOptions { width: 32, height: 16, background: [1.0; 4], ..Default::default() };
+        opts.sweep = SweepOptions { specular: 0.0, clip: Some((Vec3::X, 0.0)), light: headlight(&cam, 0.0), ..Default::default() };
+        let f = sweep(ctx, &vol, &tf, &cam, &opts);
+        let left = f.pixel(8, 8); // x < 0: kept
+        let right = f.pixel(24, 8); // x > 0: clipped
+        assert!(left[1] < 0.5 && right[1] < 0.5, "the medium must still tint both halves: {left:?} {right:?}");
+        // Clipped: background through the medium only, m^16 for 16 voxels of green 0.6.
+        assert!((right[1] - 0.6f32.powf(16.0)).abs() < 0.01, "clipped half {right:?}");
+        // Kept: particles reflect light too, so it differs from the clipped half.
+        assert!((left[0] - right[0]).abs() > 0.05, "{left:?} vs {right:?}");
+    });
+}
+
+#[test]
+fn sweep_renders_are_deterministic() {
+    with_context(|ctx| {
+        let vol = procedural::shell(32, 5).unwrap();
+        let tf = TransferFunctions::load("supernova").unwrap();
+        let opts = RenderOptions { width: 40, height: 32, ..Default::default() };
+        let a = sweep(ctx, &vol, &tf, &Camera::default(), &opts);
+        let b = sweep(ctx, &vol, &tf, &Camera::default(), &opts);
+        assert!(a.pixels.iter().flatten().all(|c| c.is_finite()));
+        assert_eq!(bytemuck::cast_slice::<_, u8>(&a.pixels), bytemuck::cast_slice::<_, u8>(&b.pixels));
+    });
+}
+
+#[test]
+fn sync_validation_catches_a_dropped_plane_barrier() {
+    let ctx = context();
+    let log = ctx.validation_log();
+    {
+        let vol = procedural::sphere(16, 0.3, 1.0).unwrap();
+        let mut r = Renderer::new(&ctx, &vol, &TransferFunctions::load("glass").unwrap()).unwrap();
+        let mut opts = RenderOptions { width: 16, height: 16, ..Default::default() };
+        opts.sweep.drop_barrier_before_plane = Some(5);
+        r.render(Model::Refract, &Camera::default(), &opts).unwrap();
+    }
+    drop(ctx);
+    let msgs = log.messages();
+    assert!(
+        msgs.iter().any(|m| m.contains("SYNC-HAZARD")),
+        "dropping the barrier went unnoticed: {msgs:?}"
+    );
+}
