@@ -22,6 +22,36 @@ layout(location = 5) out vec4 out_medium;
 
 const float PI = 3.14159265358979;
 
+// Light colour and direction at `uv` of the read layer, bilinearly interpolated with the
+// directions weighted by the light they carry: where lit and fully absorbed rays meet (a
+// shadow edge, a stopped-down aperture, rays crossing in a caustic), the direction of light
+// that is not there must not bend the light that is. Where no light arrives at all, plain
+// bilinear weights keep the direction field defined.
+void light_at(vec2 uv, uint layer, out vec3 light, out vec3 dir) {
+    ivec2 size = textureSize(light_colour_0, 0);
+    vec2 x = uv * vec2(size) - 0.5;
+    ivec2 i = ivec2(floor(x));
+    vec2 t = x - vec2(i);
+    ivec2 hi = size - 1;
+    light = vec3(0.0);
+    vec3 d_plain = vec3(0.0);
+    vec3 d_lit = vec3(0.0);
+    float lit = 0.0;
+    for (int k = 0; k < 4; ++k) {
+        ivec2 o = ivec2(k & 1, k >> 1);
+        ivec2 c = clamp(i + o, ivec2(0), hi);
+        float w = (o.x == 1 ? t.x : 1.0 - t.x) * (o.y == 1 ? t.y : 1.0 - t.y);
+        vec3 l = READ_PIXEL(light_colour, layer, c).rgb;
+        vec3 d = READ_PIXEL(light_direction, layer, c).xyz;
+        float lum = dot(l, vec3(0.2126, 0.7152, 0.0722));
+        light += w * l;
+        d_plain += w * d;
+        d_lit += w * lum * d;
+        lit += w * lum;
+    }
+    dir = lit > 1e-6 ? d_lit / lit : d_plain;
+}
+
 float hash(uvec3 v) {
     uint h = v.x * 0x8da6b343u ^ v.y * 0xd8163841u ^ v.z * 0xcb1ab31fu;
     h ^= h >> 13; h *= 0x5bd1e995u; h ^= h >> 15;
@@ -79,7 +109,8 @@ void main() {
 
     // ---- light propagation (sect. 4.2, 5.2) -------------------------------------------
     vec3 p = plane_point(uv, pc.depth);
-    vec3 ld_here = READ_BUFFER(light_direction, R, uv).xyz;
+    ivec2 pixel = ivec2(gl_FragCoord.xy);
+    vec3 ld_here = READ_PIXEL(light_direction, R, pixel).xyz;
     // Backward (semi-Lagrangian) step: follow the light direction back to plane i-1.
     vec3 lp = p - ld_here * (ds / ld_here.z);
     vec2 uv_lp = project(lp);
@@ -103,15 +134,15 @@ void main() {
         for (int k = 0; k < 3; ++k) {
             float phi = rot + float(k) * (2.0 * PI / 3.0);
             vec2 offset = radius * (cos(phi) / dn.z * lateral + sin(phi) * across);
-            vec2 t = uv_lp + offset * to_uv;
-            light_prev += READ_BUFFER(light_colour, R, t).rgb;
-            dir_prev += READ_BUFFER(light_direction, R, t).xyz;
+            vec3 l, d;
+            light_at(uv_lp + offset * to_uv, R, l, d);
+            light_prev += l;
+            dir_prev += d;
         }
         light_prev /= 3.0;
         dir_prev /= 3.0;
     } else {
-        light_prev = READ_BUFFER(light_colour, R, uv_lp).rgb;
-        dir_prev = READ_BUFFER(light_direction, R, uv_lp).xyz;
+        light_at(uv_lp, R, light_prev, dir_prev);
     }
 
     // Intensity law (eqs. 4.6-4.8): I = S_{i-1} / S_i, the areas of this pixel's footprint
@@ -137,10 +168,10 @@ void main() {
     if (any(isnan(light)) || any(isinf(light))) light = vec3(0.0);
 
     // ---- viewing rays (sect. 4.3, 5.2) ------------------------------------------------
-    vec4 vp4 = READ_BUFFER(view_position, R, uv);
-    vec4 vd4 = READ_BUFFER(view_direction, R, uv);
-    vec4 CA = READ_BUFFER(colour_opacity, R, uv);
-    vec4 M4 = READ_BUFFER(medium, R, uv);
+    vec4 vp4 = READ_PIXEL(view_position, R, pixel);
+    vec4 vd4 = READ_PIXEL(view_direction, R, pixel);
+    vec4 CA = READ_PIXEL(colour_opacity, R, pixel);
+    vec4 M4 = READ_PIXEL(medium, R, pixel);
     vec3 vp = vp4.xyz;
     vec3 vd = vd4.xyz;
     vec3 C = CA.rgb;

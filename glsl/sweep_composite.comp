@@ -13,9 +13,8 @@ layout(set = 0, binding = 16, rgba32f) uniform writeonly image2D frame;
 void main() {
     ivec2 id = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(id, ivec2(P.camera.zw)))) return;
-    vec2 uv = (vec2(id) + 0.5) / P.camera.zw;
-    vec4 CA = READ_BUFFER(colour_opacity, pc.layer, uv);
-    vec3 M = READ_BUFFER(medium, pc.layer, uv).rgb;
+    vec4 CA = READ_PIXEL(colour_opacity, pc.layer, id);
+    vec3 M = READ_PIXEL(medium, pc.layer, id).rgb;
     vec3 rgb = CA.rgb + (1.0 - CA.a) * M * P.background.rgb;
     float a = CA.a + (1.0 - CA.a) * P.background.a;
     imageStore(frame, id, vec4(rgb, a));

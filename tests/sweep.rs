@@ -150,55 +150,54 @@ fn light_through_a_slab_follows_beer_lambert_and_the_medium_filter() {
     });
 }
 
-/// Paraxial focus of a ball lens from the light directions just behind it.
+/// Paraxial focus of a ball lens of index `n_index` and `diameter` in air, lit along the
+/// view axis, from the light directions a few voxels behind it: each near-axis ray's
+/// crossing with the axis. Also returns where the on-axis intensity peaks. Both from the
+/// lens centre. Measured at the thesis' sample distance 1; see docs/NOTES.md for why finer
+/// sample distances read the full-aperture ball's focus short (its marginal rays cross the
+/// axis right behind it, and the light buffer holds one direction per pixel).
 fn ball_lens_focus(ctx: &Context, n_index: f32, diameter: f32) -> (f32, f32) {
     let n = 64u32;
-    let vol = ball(n, diameter / 2.0);
+    let vox = 1.0 / n as f32;
+    let r = diameter / 2.0;
+    let vol = ball(n, r);
     let mut tf = TransferFunctions::default();
     tf.eta = Piecewise::new(vec![(0.0, [1.0]), (1.0, [n_index])]);
-    let cam = Camera { azimuth: 0.0, elevation: 0.0, distance: 2.0, fov_y: 20.0 };
-    let (w, h) = (96u32, 96u32);
-    let spacing = 0.5 / n as f32;
-    let planes = Planes::for_box(&cam, Vec3::splat(0.5), spacing).unwrap();
-    let behind = plane_at(&planes, cam.distance + diameter / 2.0 + 2.0 / n as f32);
+    let cam = Camera { azimuth: 0.0, elevation: 0.0, distance: 2.0, fov_y: 16.0 };
+    let (w, h) = (128u32, 128u32);
+    let planes = Planes::for_box(&cam, Vec3::splat(0.5), vox).unwrap();
+    // Past the smeared interface (one-voxel ramp, central differences one voxel apart).
+    let behind = plane_at(&planes, cam.distance + r + 3.0 * vox);
     let depth = planes.depth(behind);
-    // On-axis intensity along the axis behind the lens, to report its peak.
-    let peaks: Vec<u32> = (behind..planes.count).step_by(2).collect();
+    let peaks: Vec<u32> = (behind..planes.count).collect();
     let mut dumps = vec![(StateBuffer::LightDirection, behind)];
     dumps.extend(peaks.iter().map(|&p| (StateBuffer::LightColour, p)));
-    let mut opts = RenderOptions { width: w, height: h, sample_distance: 0.5, ..Default::default() };
+    let mut opts = RenderOptions { width: w, height: h, ..Default::default() };
     opts.sweep = SweepOptions { light: headlight(&cam, 0.0), max_gain: 8.0, dumps, ..Default::default() };
     let f = sweep(ctx, &vol, &tf, &cam, &opts);
     let d = dump(&f, StateBuffer::LightDirection, behind);
-    // Rays at 10-30 % of the radius: near-axis, yet far enough for a clean slope.
-    let r = diameter / 2.0;
-    let mut sum = 0.0f64;
-    let mut count = 0;
+    let (mut sum, mut count) = (0.0f64, 0);
     for y in 0..h {
         for x in 0..w {
             let (px, py) = pixel_point(&cam, w, h, x, y, depth);
             let rho = (px * px + py * py).sqrt();
-            if rho < 0.1 * r || rho > 0.3 * r {
+            if rho > 0.12 * r {
                 continue;
             }
             let ld = d.pixels[(y * w + x) as usize];
             let radial_slope = (ld[0] * px + ld[1] * py) / (rho * ld[2]);
-            if radial_slope >= 0.0 {
-                continue;
-            }
-            // Distance behind this plane where the ray crosses the axis.
-            let cross = -rho / radial_slope;
-            sum += (depth - cam.distance + cross) as f64;
+            assert!(radial_slope < 0.0, "a near-axis ray diverges after the lens");
+            sum += (depth - cam.distance - rho / radial_slope) as f64;
             count += 1;
         }
     }
     assert!(count > 20, "too few paraxial rays ({count})");
     let focus = (sum / count as f64) as f32;
-    // Where the on-axis light peaks.
     let mut best = (0.0f32, 0.0f32);
     for &p in &peaks {
         let l = dump(&f, StateBuffer::LightColour, p);
-        let v = l.pixels[((h / 2) * w + w / 2) as usize][0];
+        let c = |x: u32, y: u32| l.pixels[(y * w + x) as usize][0];
+        let v = (c(w / 2 - 1, h / 2 - 1) + c(w / 2, h / 2 - 1) + c(w / 2 - 1, h / 2) + c(w / 2, h / 2)) / 4.0;
         if v > best.1 {
             best = (planes.depth(p) - cam.distance, v);
         }
@@ -232,9 +231,11 @@ fn weak_lens_conserves_light_power() {
         tf.eta = Piecewise::new(vec![(0.0, [1.0]), (1.0, [1.05])]);
         let cam = Camera { azimuth: 0.0, elevation: 0.0, distance: 2.0, fov_y: 30.0 };
         let (w, h) = (96u32, 96u32);
-        let planes = Planes::for_box(&cam, Vec3::splat(0.5), 1.0 / n as f32).unwrap();
+        // Sample distance 0.5: at 1 the loss is 2.0 % (measured), at 0.5 about 0.5 %.
+        let sd = 0.5f32;
+        let planes = Planes::for_box(&cam, Vec3::splat(0.5), sd / n as f32).unwrap();
         let behind = plane_at(&planes, cam.distance + 0.25 + 3.0 / n as f32);
-        let mut opts = RenderOptions { width: w, height: h, ..Default::default() };
+        let mut opts = RenderOptions { width: w, height: h, sample_distance: sd, ..Default::default() };
         opts.sweep = SweepOptions {
             light: headlight(&cam, 0.0),
             dumps: vec![(StateBuffer::LightColour, behind)],
@@ -434,4 +435,74 @@ fn sync_validation_catches_a_dropped_plane_barrier() {
         msgs.iter().any(|m| m.contains("SYNC-HAZARD")),
         "dropping the barrier went unnoticed: {msgs:?}"
     );
+}
+
+/// A plano-convex lens (hemisphere of radius r, index 1.5) focuses parallel light at its
+/// back focal distance: r/(n-1) behind the curved vertex with the flat face towards the
+/// light, r(1/(n-1) - 1/n) behind the flat face the other way round. Checked at two
+/// sample distances (at 1 the curved-first lens reads 6 % long, measured; the error falls
+/// to 2.5 % at 0.25 as the planes get denser).
+#[test]
+fn plano_convex_lens_focuses_at_its_back_focal_distance() {
+    with_context(|ctx| {
+        let n = 64u32;
+        let vox = 1.0 / n as f32;
+        let r = 0.15f32;
+        let eta = 1.5f32;
+        let mut tf = TransferFunctions::default();
+        tf.eta = Piecewise::new(vec![(0.0, [1.0]), (1.0, [eta])]);
+        let cam = Camera { azimuth: 0.0, elevation: 0.0, distance: 2.0, fov_y: 16.0 };
+        let (w, h) = (128u32, 128u32);
+        for flat_first in [true, false] {
+            // Light travels towards world -z. The exit surface's vertex sits at world z = zv.
+            let (vol, zv, bfl) = if flat_first {
+                let c = Vec3::new(0.0, 0.0, 0.2);
+                let v = f32_volume(n, |p| {
+                    let p = Vec3::from(p);
+                    (0.5 + (r - (p - c).length()) / vox).min(0.5 + (c.z - p.z) / vox)
+                });
+                (v, c.z - r, r / (eta - 1.0))
+            } else {
+                let c = Vec3::new(0.0, 0.0, 0.2 - r);
+                let v = f32_volume(n, |p| {
+                    let p = Vec3::from(p);
+                    (0.5 + (r - (p - c).length()) / vox).min(0.5 + (p.z - c.z) / vox)
+                });
+                (v, c.z, r * (1.0 / (eta - 1.0) - 1.0 / eta))
+            };
+            for sd in [0.5f32, 0.25] {
+                let planes = Planes::for_box(&cam, Vec3::splat(0.5), sd * vox).unwrap();
+                let vertex_depth = cam.distance - zv;
+                let p = plane_at(&planes, vertex_depth + 4.0 * vox);
+                let depth = planes.depth(p);
+                let mut opts = RenderOptions { width: w, height: h, sample_distance: sd, ..Default::default() };
+                opts.sweep = SweepOptions {
+                    light: headlight(&cam, 0.0),
+                    dumps: vec![(StateBuffer::LightDirection, p)],
+                    ..Default::default()
+                };
+                let f = sweep(ctx, &vol, &tf, &cam, &opts);
+                let d = dump(&f, StateBuffer::LightDirection, p);
+                // Near-axis rays of the centre row: within 0.15 r of the axis.
+                let (mut sum, mut count) = (0.0f32, 0);
+                for x in (w / 2)..w {
+                    let (px, _) = pixel_point(&cam, w, h, x, h / 2, depth);
+                    if px > 0.15 * r {
+                        break;
+                    }
+                    let ld = d.pixels[((h / 2) * w + x) as usize];
+                    sum += depth - vertex_depth - px * ld[2] / ld[0];
+                    count += 1;
+                }
+                let focus = sum / count as f32;
+                let err = (focus - bfl).abs() / bfl;
+                println!(
+                    "plano-convex ({}), sample distance {sd}: back focus {focus:.4}, theory {bfl:.4} ({:.1} %)",
+                    if flat_first { "flat side first" } else { "curved side first" },
+                    err * 100.0
+                );
+                assert!(err <= 0.05, "back focus {focus} vs {bfl}");
+            }
+        }
+    });
 }
