@@ -47,7 +47,7 @@ enum Command {
     Info,
     /// Render a scene to an image (.png = 8-bit sRGB, .exr = linear float) and print the
     /// GPU time of each pass.
-    Render(RenderArgs),
+    Render(Box<RenderArgs>),
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -112,25 +112,25 @@ struct RenderArgs {
     #[arg(long, default_value_t = 35.0, allow_negative_numbers = true)]
     fov: f32,
     /// Background colour behind the volume, linear "r,g,b" or "r,g,b,a".
-    #[arg(long, default_value = "0.08,0.08,0.1,1")]
+    #[arg(long, default_value = "0.08,0.08,0.1,1", allow_hyphen_values = true)]
     background: String,
     /// World-space direction towards the light, "x,y,z" (refract). It must lie in the
     /// viewer's hemisphere: the sweep runs front to back, so light cannot come from behind
     /// the volume. Default: from the upper left of the camera.
-    #[arg(long, value_name = "X,Y,Z")]
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
     light: Option<String>,
     /// Light colour, linear "r,g,b" (refract).
     #[arg(long, default_value = "1,1,1")]
     light_colour: String,
     /// Light softness: radius, in voxels, of the elliptical filter applied to the light at
     /// every plane; 0 = hard shadows and sharp caustics (refract).
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
     softness: f32,
     /// GGX roughness of the specular highlights (refract).
-    #[arg(long, default_value_t = 0.3)]
+    #[arg(long, default_value_t = 0.3, allow_negative_numbers = true)]
     roughness: f32,
     /// Specular strength; 0 turns highlights off (refract).
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     specular: f32,
     /// Clipping plane "nx,ny,nz,offset" in world space: opacity is zero where
     /// n·p > offset, the medium and refraction stay (refract, thesis Fig. 6.6).
@@ -277,7 +277,10 @@ fn parse_dumps(s: &str) -> Result<Vec<(StateBuffer, u32)>> {
             let plane = p
                 .parse::<u32>()
                 .with_context(|| format!("--dump '{item}': '{p}' is not a plane number"))?;
-            Ok((StateBuffer::parse(b).with_context(|| format!("--dump '{item}'"))?, plane))
+            Ok((
+                StateBuffer::parse(b).with_context(|| format!("--dump '{item}'"))?,
+                plane,
+            ))
         })
         .collect()
 }
@@ -353,7 +356,10 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
             .unwrap_or_default(),
     };
     if !opts.sweep.dumps.is_empty() && !dump_dir.as_os_str().is_empty() && !dump_dir.is_dir() {
-        bail!("--dump-dir {}: the folder does not exist", dump_dir.display());
+        bail!(
+            "--dump-dir {}: the folder does not exist",
+            dump_dir.display()
+        );
     }
     let tf_name = args.tf.clone().unwrap_or_else(|| {
         match args.scene {
@@ -419,7 +425,12 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
     for d in &frame.dumps {
         let path = dump_dir.join(format!("{}-{}.exr", d.buffer.name(), d.plane));
         output::write_pixels(d.width, d.height, &d.pixels, &path)?;
-        println!("dumped {} after plane {} to {}", d.buffer.name(), d.plane, path.display());
+        println!(
+            "dumped {} after plane {} to {}",
+            d.buffer.name(),
+            d.plane,
+            path.display()
+        );
     }
     println!("wrote {}", args.output.display());
     drop(renderer);

@@ -65,14 +65,104 @@ fn render_writes_png_and_exr_with_timings() {
         ]);
         let out = String::from_utf8_lossy(&o.stdout);
         assert!(o.status.success(), "{}", stderr(&o));
-        assert!(
-            out.contains("ea raymarch") && out.contains(" ms"),
-            "no timings in:\n{out}"
-        );
+        for pass in [
+            "sweep setup",
+            "sweep ",
+            "composite",
+            "preintegration",
+            "planes",
+            "per plane",
+        ] {
+            assert!(out.contains(pass), "no '{pass}' in:\n{out}");
+        }
         assert!(out.contains(p), "output path not printed:\n{out}");
         let img = image_size(&path);
         assert_eq!(img, (40, 30), "{ext} dimensions");
     }
+}
+
+#[test]
+fn ea_model_and_dumps_from_the_command_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("ea.png");
+    let o = refrakt(&[
+        "render",
+        "--model",
+        "ea",
+        "-o",
+        out.to_str().unwrap(),
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--volume-size",
+        "16",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("ea raymarch"));
+    let out = dir.path().join("s.png");
+    let o = refrakt(&[
+        "render",
+        "-o",
+        out.to_str().unwrap(),
+        "--width",
+        "16",
+        "--height",
+        "12",
+        "--volume-size",
+        "16",
+        "--dump",
+        "light-colour@3,view-direction@5",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for name in ["light-colour-3.exr", "view-direction-5.exr"] {
+        assert_eq!(image_size(&dir.path().join(name)), (16, 12), "{name}");
+    }
+}
+
+#[test]
+fn bad_sweep_options_are_clear_errors() {
+    assert_clean_failure(
+        &["render", "--dump", "light@3", "-o", "x.png"],
+        "unknown state buffer 'light'",
+    );
+    assert_clean_failure(
+        &["render", "--dump", "medium", "-o", "x.png"],
+        "BUFFER@PLANE",
+    );
+    assert_clean_failure(
+        &[
+            "render",
+            "--dump",
+            "medium@99999",
+            "--volume-size",
+            "8",
+            "-o",
+            "x.png",
+        ],
+        "this frame has planes",
+    );
+    // The default camera looks from +z towards the origin: a light from -z is behind.
+    assert_clean_failure(
+        &[
+            "render",
+            "--light",
+            "0,0,-1",
+            "--azimuth",
+            "0",
+            "--elevation",
+            "0",
+            "-o",
+            "x.png",
+        ],
+        "viewer's side",
+    );
+    assert_clean_failure(
+        &["render", "--light", "0,0,0", "-o", "x.png"],
+        "light direction",
+    );
+    assert_clean_failure(&["render", "--softness", "-1", "-o", "x.png"], "softness");
+    assert_clean_failure(&["render", "--clip", "0,0,1", "-o", "x.png"], "--clip");
 }
 
 fn image_size(path: &Path) -> (usize, usize) {

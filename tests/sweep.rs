@@ -34,23 +34,39 @@ fn ball(n: u32, r: f32) -> Volume {
     f32_volume(n, |p| 0.5 + (r - Vec3::from(p).length()) * n as f32)
 }
 
-fn sweep(ctx: &Context, vol: &Volume, tf: &TransferFunctions, cam: &Camera, opts: &RenderOptions) -> refrakt::render::Frame {
+fn sweep(
+    ctx: &Context,
+    vol: &Volume,
+    tf: &TransferFunctions,
+    cam: &Camera,
+    opts: &RenderOptions,
+) -> refrakt::render::Frame {
     let mut r = Renderer::new(ctx, vol, tf).unwrap();
     r.render(Model::Refract, cam, opts).unwrap()
 }
 
 /// Light along the view axis (travelling away from the camera).
 fn headlight(cam: &Camera, softness: f32) -> Light {
-    Light { towards: cam.eye().normalize(), colour: [1.0; 3], softness }
+    Light {
+        towards: cam.eye().normalize(),
+        colour: [1.0; 3],
+        softness,
+    }
 }
 
-fn dump<'a>(frame: &'a refrakt::render::Frame, b: StateBuffer, plane: u32) -> &'a Dump {
-    frame.dumps.iter().find(|d| d.buffer == b && d.plane == plane).unwrap()
+fn dump(frame: &refrakt::render::Frame, b: StateBuffer, plane: u32) -> &Dump {
+    frame
+        .dumps
+        .iter()
+        .find(|d| d.buffer == b && d.plane == plane)
+        .unwrap()
 }
 
 /// The first plane at or beyond `depth` (view-space depth from the eye).
 fn plane_at(planes: &Planes, depth: f32) -> u32 {
-    (((depth - planes.first_depth) / planes.spacing).ceil().max(0.0)) as u32
+    (((depth - planes.first_depth) / planes.spacing)
+        .ceil()
+        .max(0.0)) as u32
 }
 
 /// Lateral (x, y) view-space position of pixel (x, y) on a plane at `depth`.
@@ -69,9 +85,16 @@ fn tf_from(text: &str) -> TransferFunctions {
 #[test]
 fn equals_ea_baseline_without_refraction_or_lighting() {
     with_context(|ctx| {
-        let vol = procedural::sphere(32, 0.35, 1.0).unwrap();
+        // A smooth blob: both integrators then resolve it; their sample points differ (steps
+        // along each ray vs. the planes), so sharp features would differ by discretisation.
+        let vol = f32_volume(32, |p| (-Vec3::from(p).length_squared() / 0.05).exp());
         let tf = tf_from("colour = [[0.0, 1.0, 0.6, 0.3], [1.0, 0.3, 0.6, 1.0]]\nopacity = [[0.0, 0.0], [1.0, 0.25]]\n");
-        let cam = Camera { azimuth: 25.0, elevation: 15.0, distance: 2.2, fov_y: 35.0 };
+        let cam = Camera {
+            azimuth: 25.0,
+            elevation: 15.0,
+            distance: 2.2,
+            fov_y: 35.0,
+        };
         let mut opts = RenderOptions {
             width: 48,
             height: 48,
@@ -79,7 +102,11 @@ fn equals_ea_baseline_without_refraction_or_lighting() {
             termination_alpha: 0.999,
             ..Default::default()
         };
-        opts.sweep = SweepOptions { unlit: true, specular: 0.0, ..Default::default() };
+        opts.sweep = SweepOptions {
+            unlit: true,
+            specular: 0.0,
+            ..Default::default()
+        };
         let mut r = Renderer::new(ctx, &vol, &tf).unwrap();
         let ea = r.render(Model::Ea, &cam, &opts).unwrap();
         let sw = r.render(Model::Refract, &cam, &opts).unwrap();
@@ -108,21 +135,34 @@ fn slab_volume() -> Volume {
 
 /// Piecewise-linear approximation of x -> g(x) on [0, 1] with 65 points.
 fn sampled<const N: usize>(g: impl Fn(f32) -> [f32; N]) -> Piecewise<N> {
-    Piecewise::new((0..=64).map(|i| (i as f32 / 64.0, g(i as f32 / 64.0))).collect())
+    Piecewise::new(
+        (0..=64)
+            .map(|i| (i as f32 / 64.0, g(i as f32 / 64.0)))
+            .collect(),
+    )
 }
 
 #[test]
 fn light_through_a_slab_follows_beer_lambert_and_the_medium_filter() {
     with_context(|ctx| {
         let vol = slab_volume();
-        let cam = Camera { azimuth: 0.0, elevation: 0.0, distance: 2.5, fov_y: 20.0 };
+        let cam = Camera {
+            azimuth: 0.0,
+            elevation: 0.0,
+            distance: 2.5,
+            fov_y: 20.0,
+        };
         let sigma = 0.08f32; // extinction per voxel at s = 1
         let m0 = [0.9f32, 0.75, 0.97];
-        let mut absorbing = TransferFunctions::default();
         // sigma(s) = s * sigma: the ramps then add exactly the thickness they take away.
-        absorbing.opacity = sampled(|s| [1.0 - (-sigma * s).exp()]);
-        let mut tinted = TransferFunctions::default();
-        tinted.medium = sampled(|s| m0.map(|m| m.powf(s)));
+        let absorbing = TransferFunctions {
+            opacity: sampled(|s| [1.0 - (-sigma * s).exp()]),
+            ..Default::default()
+        };
+        let tinted = TransferFunctions {
+            medium: sampled(|s| m0.map(|m| m.powf(s))),
+            ..Default::default()
+        };
         let half = Vec3::splat(0.5);
         let planes = Planes::for_box(&cam, half, 1.0 / 16.0).unwrap();
         // The camera looks down -z: the slab's far face (world z = -0.25) is at depth
@@ -132,7 +172,11 @@ fn light_through_a_slab_follows_beer_lambert_and_the_medium_filter() {
             ("absorbing", &absorbing, [(-sigma * 8.0).exp(); 3]),
             ("tinted", &tinted, m0.map(|m| m.powf(8.0))),
         ] {
-            let mut opts = RenderOptions { width: 32, height: 32, ..Default::default() };
+            let mut opts = RenderOptions {
+                width: 32,
+                height: 32,
+                ..Default::default()
+            };
             opts.sweep = SweepOptions {
                 light: headlight(&cam, 0.0),
                 dumps: vec![(StateBuffer::LightColour, behind)],
@@ -143,8 +187,18 @@ fn light_through_a_slab_follows_beer_lambert_and_the_medium_filter() {
             let l = d.pixels[(16 * 32 + 16) as usize];
             for k in 0..3 {
                 let rel = (l[k] - expected[k]).abs() / expected[k];
-                println!("{name} channel {k}: light {:.5}, expected {:.5} ({:.2} %)", l[k], expected[k], rel * 100.0);
-                assert!(rel <= 0.01, "{name} channel {k}: {} vs {}", l[k], expected[k]);
+                println!(
+                    "{name} channel {k}: light {:.5}, expected {:.5} ({:.2} %)",
+                    l[k],
+                    expected[k],
+                    rel * 100.0
+                );
+                assert!(
+                    rel <= 0.01,
+                    "{name} channel {k}: {} vs {}",
+                    l[k],
+                    expected[k]
+                );
             }
         }
     });
@@ -161,9 +215,16 @@ fn ball_lens_focus(ctx: &Context, n_index: f32, diameter: f32) -> (f32, f32) {
     let vox = 1.0 / n as f32;
     let r = diameter / 2.0;
     let vol = ball(n, r);
-    let mut tf = TransferFunctions::default();
-    tf.eta = Piecewise::new(vec![(0.0, [1.0]), (1.0, [n_index])]);
-    let cam = Camera { azimuth: 0.0, elevation: 0.0, distance: 2.0, fov_y: 16.0 };
+    let tf = TransferFunctions {
+        eta: Piecewise::new(vec![(0.0, [1.0]), (1.0, [n_index])]),
+        ..Default::default()
+    };
+    let cam = Camera {
+        azimuth: 0.0,
+        elevation: 0.0,
+        distance: 2.0,
+        fov_y: 16.0,
+    };
     let (w, h) = (128u32, 128u32);
     let planes = Planes::for_box(&cam, Vec3::splat(0.5), vox).unwrap();
     // Past the smeared interface (one-voxel ramp, central differences one voxel apart).
@@ -172,8 +233,17 @@ fn ball_lens_focus(ctx: &Context, n_index: f32, diameter: f32) -> (f32, f32) {
     let peaks: Vec<u32> = (behind..planes.count).collect();
     let mut dumps = vec![(StateBuffer::LightDirection, behind)];
     dumps.extend(peaks.iter().map(|&p| (StateBuffer::LightColour, p)));
-    let mut opts = RenderOptions { width: w, height: h, ..Default::default() };
-    opts.sweep = SweepOptions { light: headlight(&cam, 0.0), max_gain: 8.0, dumps, ..Default::default() };
+    let mut opts = RenderOptions {
+        width: w,
+        height: h,
+        ..Default::default()
+    };
+    opts.sweep = SweepOptions {
+        light: headlight(&cam, 0.0),
+        max_gain: 8.0,
+        dumps,
+        ..Default::default()
+    };
     let f = sweep(ctx, &vol, &tf, &cam, &opts);
     let d = dump(&f, StateBuffer::LightDirection, behind);
     let (mut sum, mut count) = (0.0f64, 0);
@@ -186,7 +256,10 @@ fn ball_lens_focus(ctx: &Context, n_index: f32, diameter: f32) -> (f32, f32) {
             }
             let ld = d.pixels[(y * w + x) as usize];
             let radial_slope = (ld[0] * px + ld[1] * py) / (rho * ld[2]);
-            assert!(radial_slope < 0.0, "a near-axis ray diverges after the lens");
+            assert!(
+                radial_slope < 0.0,
+                "a near-axis ray diverges after the lens"
+            );
             sum += (depth - cam.distance - rho / radial_slope) as f64;
             count += 1;
         }
@@ -197,7 +270,9 @@ fn ball_lens_focus(ctx: &Context, n_index: f32, diameter: f32) -> (f32, f32) {
     for &p in &peaks {
         let l = dump(&f, StateBuffer::LightColour, p);
         let c = |x: u32, y: u32| l.pixels[(y * w + x) as usize][0];
-        let v = (c(w / 2 - 1, h / 2 - 1) + c(w / 2, h / 2 - 1) + c(w / 2 - 1, h / 2) + c(w / 2, h / 2)) / 4.0;
+        let v =
+            (c(w / 2 - 1, h / 2 - 1) + c(w / 2, h / 2 - 1) + c(w / 2 - 1, h / 2) + c(w / 2, h / 2))
+                / 4.0;
         if v > best.1 {
             best = (planes.depth(p) - cam.distance, v);
         }
@@ -227,15 +302,27 @@ fn weak_lens_conserves_light_power() {
     with_context(|ctx| {
         let n = 48u32;
         let vol = ball(n, 0.25);
-        let mut tf = TransferFunctions::default();
-        tf.eta = Piecewise::new(vec![(0.0, [1.0]), (1.0, [1.05])]);
-        let cam = Camera { azimuth: 0.0, elevation: 0.0, distance: 2.0, fov_y: 30.0 };
+        let tf = TransferFunctions {
+            eta: Piecewise::new(vec![(0.0, [1.0]), (1.0, [1.05])]),
+            ..Default::default()
+        };
+        let cam = Camera {
+            azimuth: 0.0,
+            elevation: 0.0,
+            distance: 2.0,
+            fov_y: 30.0,
+        };
         let (w, h) = (96u32, 96u32);
         // Sample distance 0.5: at 1 the loss is 2.0 % (measured), at 0.5 about 0.5 %.
         let sd = 0.5f32;
         let planes = Planes::for_box(&cam, Vec3::splat(0.5), sd / n as f32).unwrap();
         let behind = plane_at(&planes, cam.distance + 0.25 + 3.0 / n as f32);
-        let mut opts = RenderOptions { width: w, height: h, sample_distance: sd, ..Default::default() };
+        let mut opts = RenderOptions {
+            width: w,
+            height: h,
+            sample_distance: sd,
+            ..Default::default()
+        };
         opts.sweep = SweepOptions {
             light: headlight(&cam, 0.0),
             dumps: vec![(StateBuffer::LightColour, behind)],
@@ -248,7 +335,8 @@ fn weak_lens_conserves_light_power() {
         let depth = planes.depth(behind);
         let t = (cam.fov_y.to_radians() * 0.5).tan();
         let pixel_area = (2.0 * depth * t / h as f32).powi(2);
-        let change: f64 = d.pixels.iter().map(|p| (p[0] - 1.0) as f64).sum::<f64>() * pixel_area as f64;
+        let change: f64 =
+            d.pixels.iter().map(|p| (p[0] - 1.0) as f64).sum::<f64>() * pixel_area as f64;
         let aperture = std::f64::consts::PI * 0.25f64.powi(2);
         let rel = change / aperture;
         let max_l = d.pixels.iter().map(|p| p[0]).fold(0.0f32, f32::max);
@@ -264,9 +352,16 @@ fn weak_lens_conserves_light_power() {
 fn shadow(ctx: &Context, angle: f32, softness: f32) -> (f32, f32, f32) {
     let n = 48u32;
     let vol = ball(n, 0.15);
-    let mut tf = TransferFunctions::default();
-    tf.opacity = Piecewise::new(vec![(0.0, [0.0]), (0.5, [1.0])]);
-    let cam = Camera { azimuth: 0.0, elevation: 0.0, distance: 2.0, fov_y: 30.0 };
+    let tf = TransferFunctions {
+        opacity: Piecewise::new(vec![(0.0, [0.0]), (0.5, [1.0])]),
+        ..Default::default()
+    };
+    let cam = Camera {
+        azimuth: 0.0,
+        elevation: 0.0,
+        distance: 2.0,
+        fov_y: 30.0,
+    };
     let (w, h) = (128u32, 64u32);
     let planes = Planes::for_box(&cam, Vec3::splat(0.5), 1.0 / n as f32).unwrap();
     let gap = 0.3; // shadow plane this far behind the ball's centre
@@ -275,9 +370,17 @@ fn shadow(ctx: &Context, angle: f32, softness: f32) -> (f32, f32, f32) {
     // Light travels along +depth tilted towards +x: it comes from the -x side.
     let a = angle.to_radians();
     let towards = Vec3::new(-a.sin(), 0.0, a.cos()); // world == view axes for this camera
-    let mut opts = RenderOptions { width: w, height: h, ..Default::default() };
+    let mut opts = RenderOptions {
+        width: w,
+        height: h,
+        ..Default::default()
+    };
     opts.sweep = SweepOptions {
-        light: Light { towards, colour: [1.0; 3], softness },
+        light: Light {
+            towards,
+            colour: [1.0; 3],
+            softness,
+        },
         dumps: vec![(StateBuffer::LightColour, p)],
         ..Default::default()
     };
@@ -298,8 +401,18 @@ fn shadow(ctx: &Context, angle: f32, softness: f32) -> (f32, f32, f32) {
     // Penumbra on the right edge: from 90 % to 10 % darkness.
     let peak = profile.iter().map(|p| p.1).fold(0.0f32, f32::max);
     let right: Vec<_> = profile.iter().filter(|p| p.0 > centre).collect();
-    let x90 = right.iter().rev().find(|p| p.1 >= 0.9 * peak).map(|p| p.0).unwrap_or(centre);
-    let x10 = right.iter().rev().find(|p| p.1 >= 0.1 * peak).map(|p| p.0).unwrap_or(centre);
+    let x90 = right
+        .iter()
+        .rev()
+        .find(|p| p.1 >= 0.9 * peak)
+        .map(|p| p.0)
+        .unwrap_or(centre);
+    let x10 = right
+        .iter()
+        .rev()
+        .find(|p| p.1 >= 0.1 * peak)
+        .map(|p| p.0)
+        .unwrap_or(centre);
     (centre, x10 - x90, gap)
 }
 
@@ -310,10 +423,19 @@ fn shadows_fall_along_the_light_and_soften_with_softness() {
         let (centre, _, gap) = shadow(ctx, angle, 0.0);
         let expected = gap * angle.to_radians().tan();
         println!("shadow centre {centre:.4}, expected {expected:.4} (light {angle} deg off axis)");
-        assert!((centre - expected).abs() <= 1.5 / 48.0, "shadow at {centre}, expected {expected}");
-        let widths: Vec<f32> = [0.0f32, 0.5, 1.5].iter().map(|&s| shadow(ctx, angle, s).1).collect();
+        assert!(
+            (centre - expected).abs() <= 1.5 / 48.0,
+            "shadow at {centre}, expected {expected}"
+        );
+        let widths: Vec<f32> = [0.0f32, 0.5, 1.5]
+            .iter()
+            .map(|&s| shadow(ctx, angle, s).1)
+            .collect();
         println!("penumbra widths for softness 0, 0.5, 1.5: {widths:?}");
-        assert!(widths[0] < widths[1] && widths[1] < widths[2], "penumbra not widening: {widths:?}");
+        assert!(
+            widths[0] < widths[1] && widths[1] < widths[2],
+            "penumbra not widening: {widths:?}"
+        );
     });
 }
 
@@ -327,19 +449,34 @@ fn total_internal_reflection_keeps_rays_inside_a_dense_block() {
             let inside = (-p[0]).min(0.3 - p[2].abs());
             0.5 + inside / vox
         });
-        let mut tf = TransferFunctions::default();
-        tf.eta = Piecewise::new(vec![(0.0, [1.0]), (1.0, [1.5])]);
-        // Rays enter the front face at ~50 degrees, refract to ~31 degrees and meet the side
-        // face x = 0 at ~59 degrees, beyond the critical angle asin(1/1.5) = 41.8 degrees.
-        let cam = Camera { azimuth: -50.0, elevation: 0.0, distance: 2.0, fov_y: 30.0 };
-        let (w, h) = (96u32, 8u32);
+        let tf = TransferFunctions {
+            eta: Piecewise::new(vec![(0.0, [1.0]), (1.0, [1.5])]),
+            ..Default::default()
+        };
+        // Rays enter the front face at ~45 degrees, refract to ~28 degrees and meet the side
+        // face x = 0 at ~62 degrees, beyond the critical angle asin(1/1.5) = 41.8 degrees.
+        let cam = Camera {
+            azimuth: -45.0,
+            elevation: 0.0,
+            distance: 2.0,
+            fov_y: 20.0,
+        };
+        let (w, h) = (64u32, 64u32);
         let spacing = 0.5 / n as f32;
         let planes = Planes::for_box(&cam, Vec3::splat(0.5), spacing).unwrap();
         let every: Vec<u32> = (0..planes.count).step_by(4).collect();
-        let mut opts = RenderOptions { width: w, height: h, sample_distance: 0.5, ..Default::default() };
+        let mut opts = RenderOptions {
+            width: w,
+            height: h,
+            sample_distance: 0.5,
+            ..Default::default()
+        };
         opts.sweep = SweepOptions {
             light: headlight(&cam, 0.0),
-            dumps: every.iter().map(|&p| (StateBuffer::ViewPosition, p)).collect(),
+            dumps: every
+                .iter()
+                .map(|&p| (StateBuffer::ViewPosition, p))
+                .collect(),
             ..Default::default()
         };
         let f = sweep(ctx, &vol, &tf, &cam, &opts);
@@ -348,14 +485,21 @@ fn total_internal_reflection_keeps_rays_inside_a_dense_block() {
         let row = h / 2;
         let (mut hit_face, mut escaped) = (0, 0);
         for x in 0..w {
-            let mut inside_block = false;
+            // Only rays that enter through the front face z = 0.3 (not the box's side at
+            // x = -0.5, whose rays meet x = 0 below the critical angle and rightly leave).
+            let mut entered = false;
             let mut reached_face = false;
+            let mut prev: Option<Vec3> = None;
             for &p in &every {
-                let q = world(dump(&f, StateBuffer::ViewPosition, p).pixels[(row * w + x) as usize]);
-                if q.z.abs() < 0.27 && q.x < -0.03 {
-                    inside_block = true;
+                let q =
+                    world(dump(&f, StateBuffer::ViewPosition, p).pixels[(row * w + x) as usize]);
+                if let Some(pq) = prev {
+                    if !entered && pq.z > 0.3 && q.z < 0.3 && q.x > -0.45 && q.x < -0.02 {
+                        entered = true;
+                    }
                 }
-                if inside_block && q.z.abs() < 0.27 {
+                prev = Some(q);
+                if entered && q.z.abs() < 0.27 {
                     if q.x > -2.0 / n as f32 {
                         reached_face = true;
                     }
@@ -368,8 +512,14 @@ fn total_internal_reflection_keeps_rays_inside_a_dense_block() {
             hit_face += reached_face as u32;
         }
         println!("rays reaching the side face: {hit_face}, escaping through it: {escaped}");
-        assert!(hit_face >= 5, "too few rays reach the side face for the test to mean anything");
-        assert_eq!(escaped, 0, "{escaped} rays left the block through the side face");
+        assert!(
+            hit_face >= 5,
+            "too few rays reach the side face for the test to mean anything"
+        );
+        assert_eq!(
+            escaped, 0,
+            "{escaped} rays left the block through the side face"
+        );
     });
 }
 
@@ -379,9 +529,16 @@ fn light_from_behind_is_a_clear_error() {
         let vol = procedural::sphere(16, 0.3, 1.0).unwrap();
         let cam = Camera::default();
         let mut r = Renderer::new(ctx, &vol, &TransferFunctions::default()).unwrap();
-        let mut opts = RenderOptions { width: 16, height: 16, ..Default::default() };
+        let mut opts = RenderOptions {
+            width: 16,
+            height: 16,
+            ..Default::default()
+        };
         opts.sweep.light.towards = -cam.eye();
-        let err = r.render(Model::Refract, &cam, &opts).unwrap_err().to_string();
+        let err = r
+            .render(Model::Refract, &cam, &opts)
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("viewer's side"), "{err}");
     });
 }
@@ -391,15 +548,36 @@ fn clipping_removes_opacity_but_keeps_the_medium() {
     with_context(|ctx| {
         let vol = procedural::slab([16, 16, 16], 1.0).unwrap();
         let tf = tf_from("colour = [[0.0, 1.0, 1.0, 1.0]]\nopacity = [[0.0, 0.2]]\nmedium = [[0.0, 0.9, 0.6, 0.9]]\n");
-        let cam = Camera { azimuth: 0.0, elevation: 0.0, distance: 2.5, fov_y: 20.0 };
-        let mut opts = RenderOptions { width: 32, height: 16, background: [1.0; 4], ..Default::default() };
-        opts.sweep = SweepOptions { specular: 0.0, clip: Some((Vec3::X, 0.0)), light: headlight(&cam, 0.0), ..Default::default() };
+        let cam = Camera {
+            azimuth: 0.0,
+            elevation: 0.0,
+            distance: 2.5,
+            fov_y: 20.0,
+        };
+        let mut opts = RenderOptions {
+            width: 32,
+            height: 16,
+            background: [1.0; 4],
+            ..Default::default()
+        };
+        opts.sweep = SweepOptions {
+            specular: 0.0,
+            clip: Some((Vec3::X, 0.0)),
+            light: headlight(&cam, 0.0),
+            ..Default::default()
+        };
         let f = sweep(ctx, &vol, &tf, &cam, &opts);
         let left = f.pixel(8, 8); // x < 0: kept
         let right = f.pixel(24, 8); // x > 0: clipped
-        assert!(left[1] < 0.5 && right[1] < 0.5, "the medium must still tint both halves: {left:?} {right:?}");
+        assert!(
+            left[1] < 0.5 && right[1] < 0.5,
+            "the medium must still tint both halves: {left:?} {right:?}"
+        );
         // Clipped: background through the medium only, m^16 for 16 voxels of green 0.6.
-        assert!((right[1] - 0.6f32.powf(16.0)).abs() < 0.01, "clipped half {right:?}");
+        assert!(
+            (right[1] - 0.6f32.powf(16.0)).abs() < 0.01,
+            "clipped half {right:?}"
+        );
         // Kept: particles reflect light too, so it differs from the clipped half.
         assert!((left[0] - right[0]).abs() > 0.05, "{left:?} vs {right:?}");
     });
@@ -410,11 +588,18 @@ fn sweep_renders_are_deterministic() {
     with_context(|ctx| {
         let vol = procedural::shell(32, 5).unwrap();
         let tf = TransferFunctions::load("supernova").unwrap();
-        let opts = RenderOptions { width: 40, height: 32, ..Default::default() };
+        let opts = RenderOptions {
+            width: 40,
+            height: 32,
+            ..Default::default()
+        };
         let a = sweep(ctx, &vol, &tf, &Camera::default(), &opts);
         let b = sweep(ctx, &vol, &tf, &Camera::default(), &opts);
         assert!(a.pixels.iter().flatten().all(|c| c.is_finite()));
-        assert_eq!(bytemuck::cast_slice::<_, u8>(&a.pixels), bytemuck::cast_slice::<_, u8>(&b.pixels));
+        assert_eq!(
+            bytemuck::cast_slice::<_, u8>(&a.pixels),
+            bytemuck::cast_slice::<_, u8>(&b.pixels)
+        );
     });
 }
 
@@ -425,7 +610,11 @@ fn sync_validation_catches_a_dropped_plane_barrier() {
     {
         let vol = procedural::sphere(16, 0.3, 1.0).unwrap();
         let mut r = Renderer::new(&ctx, &vol, &TransferFunctions::load("glass").unwrap()).unwrap();
-        let mut opts = RenderOptions { width: 16, height: 16, ..Default::default() };
+        let mut opts = RenderOptions {
+            width: 16,
+            height: 16,
+            ..Default::default()
+        };
         opts.sweep.drop_barrier_before_plane = Some(5);
         r.render(Model::Refract, &Camera::default(), &opts).unwrap();
     }
@@ -449,9 +638,16 @@ fn plano_convex_lens_focuses_at_its_back_focal_distance() {
         let vox = 1.0 / n as f32;
         let r = 0.15f32;
         let eta = 1.5f32;
-        let mut tf = TransferFunctions::default();
-        tf.eta = Piecewise::new(vec![(0.0, [1.0]), (1.0, [eta])]);
-        let cam = Camera { azimuth: 0.0, elevation: 0.0, distance: 2.0, fov_y: 16.0 };
+        let tf = TransferFunctions {
+            eta: Piecewise::new(vec![(0.0, [1.0]), (1.0, [eta])]),
+            ..Default::default()
+        };
+        let cam = Camera {
+            azimuth: 0.0,
+            elevation: 0.0,
+            distance: 2.0,
+            fov_y: 16.0,
+        };
         let (w, h) = (128u32, 128u32);
         for flat_first in [true, false] {
             // Light travels towards world -z. The exit surface's vertex sits at world z = zv.
@@ -475,7 +671,12 @@ fn plano_convex_lens_focuses_at_its_back_focal_distance() {
                 let vertex_depth = cam.distance - zv;
                 let p = plane_at(&planes, vertex_depth + 4.0 * vox);
                 let depth = planes.depth(p);
-                let mut opts = RenderOptions { width: w, height: h, sample_distance: sd, ..Default::default() };
+                let mut opts = RenderOptions {
+                    width: w,
+                    height: h,
+                    sample_distance: sd,
+                    ..Default::default()
+                };
                 opts.sweep = SweepOptions {
                     light: headlight(&cam, 0.0),
                     dumps: vec![(StateBuffer::LightDirection, p)],

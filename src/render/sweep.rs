@@ -24,8 +24,7 @@ use super::{Camera, Frame, RenderOptions, VolumeInfo};
 use crate::shaders;
 use crate::vk::{
     self, Access, Binding, Buffer, ComputePipeline, Context, DescriptorSet, Framebuffer,
-    GraphicsPipeline, Image, ImageDesc, ImageKind, LayerView, Memory, RenderPass, Sampler,
-    Timings,
+    GraphicsPipeline, Image, ImageDesc, ImageKind, LayerView, Memory, RenderPass, Sampler, Timings,
 };
 
 /// The six state buffers, in attachment order.
@@ -397,7 +396,8 @@ impl SweepPass {
         }
         let setup_set = DescriptorSet::new(ctx, &setup_bindings, "sweep setup")?;
 
-        let setup = ComputePipeline::new(ctx, shaders::SWEEP_SETUP_COMP, &setup_set, 0, "sweep setup")?;
+        let setup =
+            ComputePipeline::new(ctx, shaders::SWEEP_SETUP_COMP, &setup_set, 0, "sweep setup")?;
         let sweep = GraphicsPipeline::fullscreen(
             ctx,
             shaders::FULLSCREEN_VERT,
@@ -477,7 +477,11 @@ impl SweepPass {
                 MIN_FORWARD.acos().to_degrees()
             );
         }
-        let planes = Planes::for_box(camera, info.half_extent, opts.sample_distance * info.ref_step)?;
+        let planes = Planes::for_box(
+            camera,
+            info.half_extent,
+            opts.sample_distance * info.ref_step,
+        )?;
         for (b, plane) in &sweep.dumps {
             ensure!(
                 *plane < planes.count,
@@ -496,7 +500,10 @@ impl SweepPass {
             * Mat4::from_scale(0.5 / info.half_extent)
             * view_to_world;
         let light_view = Vec3::new(travel.dot(right), travel.dot(up), travel.dot(forward));
-        let (clip_n, clip_o) = sweep.clip.map(|(n, o)| (n.normalize(), o)).unwrap_or((Vec3::ZERO, 0.0));
+        let (clip_n, clip_o) = sweep
+            .clip
+            .map(|(n, o)| (n.normalize(), o))
+            .unwrap_or((Vec3::ZERO, 0.0));
         let p = SweepParams {
             view_to_tex: view_to_tex.to_cols_array(),
             view_to_world: view_to_world.to_cols_array(),
@@ -506,8 +513,18 @@ impl SweepPass {
                 self.width as f32,
                 self.height as f32,
             ],
-            planes: [planes.first_depth, planes.spacing, planes.count as f32, info.ref_step],
-            light_dir: [light_view.x, light_view.y, light_view.z, sweep.light.softness],
+            planes: [
+                planes.first_depth,
+                planes.spacing,
+                planes.count as f32,
+                info.ref_step,
+            ],
+            light_dir: [
+                light_view.x,
+                light_view.y,
+                light_view.z,
+                sweep.light.softness,
+            ],
             light_colour: [
                 sweep.light.colour[0],
                 sweep.light.colour[1],
@@ -572,7 +589,11 @@ impl SweepPass {
                 // one barrier batch per plane.
                 if sweep.drop_barrier_before_plane == Some(i) {
                     for s in &self.states {
-                        rec.assume_without_barrier(&s.image, read..read + 1, Access::SampledGeneral);
+                        rec.assume_without_barrier(
+                            &s.image,
+                            read..read + 1,
+                            Access::SampledGeneral,
+                        );
                     }
                 } else {
                     let items: Vec<_> = self
@@ -584,7 +605,11 @@ impl SweepPass {
                 }
                 let attachments: Vec<(&Image, u32)> =
                     self.states.iter().map(|s| (&s.image, write)).collect();
-                rec.begin_render_pass(&self.render_pass, &self.framebuffers[write as usize], &attachments)?;
+                rec.begin_render_pass(
+                    &self.render_pass,
+                    &self.framebuffers[write as usize],
+                    &attachments,
+                )?;
                 let push = PlanePush {
                     plane: i,
                     read_layer: read,
@@ -610,7 +635,12 @@ impl SweepPass {
                 .collect();
             rec.transition_many(&all);
             rec.transition_all(&self.output, Access::ComputeStorage);
-            rec.dispatch(&self.composite, &self.composite_set, &last.to_le_bytes(), groups)?;
+            rec.dispatch(
+                &self.composite,
+                &self.composite_set,
+                &last.to_le_bytes(),
+                groups,
+            )?;
             rec.end_scope();
             rec.copy_image_to_buffer(&self.output, 0, &self.readback);
             Ok(())
