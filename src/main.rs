@@ -52,12 +52,15 @@ enum Command {
 
 #[derive(Clone, Copy, ValueEnum)]
 enum SceneArg {
-    /// Noisy spherical shell with a dense core, after the thesis' supernova (Fig. 6.1).
+    /// Noisy spherical shell with a dense core over a ground plane, after the thesis'
+    /// supernova (Fig. 6.1).
     Shell,
     /// Solid sphere of value 1, radius 0.35.
     Sphere,
     /// Solid box of value 1.
     Box,
+    /// Glass sphere (value 0.5) above an opaque floor (value 1).
+    GlassFloor,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -79,8 +82,9 @@ struct RenderArgs {
     /// Volume resolution (voxels per side) of the procedural scene.
     #[arg(long, default_value_t = 128)]
     volume_size: u32,
-    /// Transfer functions: a preset (ct-bone, glass, wine-glass, supernova, sphere-white) or
-    /// a TOML file. Default: supernova for the shell, sphere-white otherwise.
+    /// Transfer functions: a preset (ct-bone, glass, wine-glass, supernova, sphere-white,
+    /// glass-floor) or a TOML file. Default: supernova for the shell, glass-floor for
+    /// glass-floor, sphere-white otherwise.
     #[arg(long, value_name = "PRESET|FILE")]
     tf: Option<String>,
     /// Rendering model.
@@ -116,7 +120,7 @@ struct RenderArgs {
     background: String,
     /// World-space direction towards the light, "x,y,z" (refract). It must lie in the
     /// viewer's hemisphere: the sweep runs front to back, so light cannot come from behind
-    /// the volume. Default: from the upper left of the camera.
+    /// the volume. Default: from above, tilted towards the camera.
     #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
     light: Option<String>,
     /// Light colour, linear "r,g,b" (refract).
@@ -144,6 +148,11 @@ struct RenderArgs {
     /// Folder for --dump files (default: the output image's folder).
     #[arg(long)]
     dump_dir: Option<PathBuf>,
+    /// Also render the EA baseline with the same volume, view, image size and sample
+    /// distance in the same run, and print its GPU time and the ratio to this model's
+    /// (the comparison the thesis' cost discussion needs; compare ratios on lavapipe).
+    #[arg(long)]
+    with_baseline: bool,
 }
 
 fn main() -> ExitCode {
@@ -244,11 +253,24 @@ fn info(desc: &ContextDesc) -> Result<ExitCode> {
     finish(ctx)
 }
 
+/// GPU time of a frame's rendering passes, without the preintegration table build (done
+/// only when transfer functions change).
+fn main_pass_ms(frame: &refrakt::render::Frame) -> f64 {
+    frame
+        .timings
+        .scopes
+        .iter()
+        .filter(|(name, _)| name != "preintegration")
+        .map(|(_, ms)| ms)
+        .sum()
+}
+
 fn scene_name(scene: SceneArg) -> &'static str {
     match scene {
         SceneArg::Shell => "shell",
         SceneArg::Sphere => "sphere",
         SceneArg::Box => "box",
+        SceneArg::GlassFloor => "glass-floor",
     }
 }
 
@@ -320,8 +342,16 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
     let (_, forward, right, up) = camera.frame();
     let towards = match &args.light {
         Some(l) => glam::Vec3::from(parse_floats::<3>("--light", l)?),
-        // A key light from the upper left of the camera.
-        None => (-forward + 0.6 * up - 0.4 * right).normalize(),
+        // Light from above, tilted towards the camera so the sweep can carry it; when the
+        // camera looks up too steeply for that, a key light from the camera's upper left.
+        None => {
+            let above = (glam::Vec3::Y - 0.5 * forward).normalize();
+            if above.dot(-forward) >= 0.3 {
+                above
+            } else {
+                (-forward + 0.6 * up - 0.4 * right).normalize()
+            }
+        }
     };
     let mut opts = opts;
     opts.sweep = SweepOptions {
@@ -364,6 +394,7 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
     let tf_name = args.tf.clone().unwrap_or_else(|| {
         match args.scene {
             SceneArg::Shell => "supernova",
+            SceneArg::GlassFloor => "glass-floor",
             _ => "sphere-white",
         }
         .to_string()
@@ -371,9 +402,10 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
     let tf = TransferFunctions::load(&tf_name)?;
     let n = args.volume_size;
     let volume: Volume = match args.scene {
-        SceneArg::Shell => procedural::shell(n, 7)?,
+        SceneArg::Shell => procedural::shell_on_floor(n, 7)?,
         SceneArg::Sphere => procedural::sphere(n, 0.35, 1.0)?,
         SceneArg::Box => procedural::boxed(n, [0.3, 0.25, 0.2], 1.0)?,
+        SceneArg::GlassFloor => procedural::sphere_on_floor(n)?,
     };
     let model = match args.model {
         ModelArg::Ea => Model::Ea,
@@ -420,6 +452,19 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
         );
         if let Some(ms) = frame.timings.get("sweep") {
             println!("  {:.3} ms per plane", ms / planes as f64);
+        }
+    }
+    if args.with_baseline {
+        let main_ms = main_pass_ms(&frame);
+        let ea = renderer.render(Model::Ea, &camera, &opts)?;
+        let ea_ms = main_pass_ms(&ea);
+        println!("baseline: ea raymarch {ea_ms:.3} ms");
+        if ea_ms > 0.0 {
+            println!(
+                "ratio {} / ea: {:.2} (same volume, view, image and sample distance)",
+                model.name(),
+                main_ms / ea_ms
+            );
         }
     }
     for d in &frame.dumps {

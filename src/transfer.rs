@@ -107,6 +107,7 @@ pub const PRESETS: &[(&str, &str)] = &[
         "sphere-white",
         include_str!("../assets/tf/sphere-white.toml"),
     ),
+    ("glass-floor", include_str!("../assets/tf/glass-floor.toml")),
 ];
 
 impl TransferFunctions {

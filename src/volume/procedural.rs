@@ -108,9 +108,23 @@ fn fbm(p: [f32; 3], seed: u32) -> f32 {
 }
 
 /// A noisy spherical shell with a dense core, after the thesis' supernova data set
-/// (Fig. 6.3): values rise towards a turbulent shell at radius ~0.35 and a small core.
+/// (Fig. 6.1): values rise towards a turbulent shell at radius ~0.3 and a small core.
 pub fn shell(n: u32, seed: u32) -> Result<Volume> {
+    from_fn(n, |p| shell_value(p, seed))
+}
+
+/// The shell (values scaled into [0, 0.8]) above a ground plane of value 1, as the thesis
+/// adds one to Fig. 6.1 to show the shadow refracted by the shell.
+pub fn shell_on_floor(n: u32, seed: u32) -> Result<Volume> {
+    let voxel = 1.0 / n as f32;
     from_fn(n, |p| {
+        let floor = inside(-0.42 - p[1], voxel);
+        (0.8 * shell_value([p[0], p[1] + 0.04, p[2]], seed)).max(floor)
+    })
+}
+
+fn shell_value(p: [f32; 3], seed: u32) -> f32 {
+    {
         let r = length(p);
         let turb = fbm(p.map(|c| c * 9.0 + 11.0), seed);
         let radius = 0.30 + 0.08 * (turb - 0.5);
@@ -118,5 +132,18 @@ pub fn shell(n: u32, seed: u32) -> Result<Volume> {
         let core = (-(r / 0.07).powi(2)).exp();
         let filaments = fbm(p.map(|c| c * 17.0 - 5.0), seed + 17);
         (shell * (0.55 + 0.45 * filaments) + 0.9 * core).min(1.0)
+    }
+}
+
+/// A glass sphere (value 0.5) resting above an opaque floor (value 1) along the bottom of
+/// the volume: the scene for refraction, caustics and shadows on a surface (thesis Fig. 6.9).
+pub fn sphere_on_floor(n: u32) -> Result<Volume> {
+    let voxel = 1.0 / n as f32;
+    from_fn(n, |p| {
+        let c = [0.0, 0.02, 0.0];
+        let d = [p[0] - c[0], p[1] - c[1], p[2] - c[2]];
+        let sphere = 0.5 * inside(0.24 - length(d), voxel);
+        let floor = inside(-0.38 - p[1], voxel);
+        sphere.max(floor)
     })
 }
