@@ -707,3 +707,25 @@ fn plano_convex_lens_focuses_at_its_back_focal_distance() {
         }
     });
 }
+
+#[test]
+fn ea_after_a_sweep_matches_a_fresh_ea_render() {
+    with_context(|ctx| {
+        let vol = procedural::shell(24, 2).unwrap();
+        let tf = TransferFunctions::load("supernova").unwrap();
+        let opts = RenderOptions {
+            width: 32,
+            height: 24,
+            ..Default::default()
+        };
+        let cam = Camera::default();
+        let fresh = Renderer::new(ctx, &vol, &tf)
+            .unwrap()
+            .render(Model::Ea, &cam, &opts)
+            .unwrap();
+        let mut r = Renderer::new(ctx, &vol, &tf).unwrap();
+        r.render(Model::Refract, &cam, &opts).unwrap();
+        let after = r.render(Model::Ea, &cam, &opts).unwrap();
+        assert_eq!(fresh.pixels, after.pixels);
+    });
+}
