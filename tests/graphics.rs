@@ -68,11 +68,13 @@ fn render_pass_ping_pong_between_layers() {
         let colour = [0.25f32, 0.5, 0.75, 1.0];
         ctx.execute(|rec| {
             rec.begin_render_pass(&pass, &fb0, &[(&image, 0)])?;
-            rec.draw_fullscreen(&fill, &set, bytemuck::cast_slice(&colour))?;
+            rec.bind_graphics(&fill, &set, w, h);
+            rec.draw_fullscreen(&fill, bytemuck::cast_slice(&colour))?;
             rec.end_render_pass();
             rec.transition(&image, 0..1, Access::Sampled);
             rec.begin_render_pass(&pass, &fb1, &[(&image, 1)])?;
-            rec.draw_fullscreen(&scale, &set, bytemuck::cast_slice(&[2.0f32; 4]))?;
+            rec.bind_graphics(&scale, &set, w, h);
+            rec.draw_fullscreen(&scale, bytemuck::cast_slice(&[2.0f32; 4]))?;
             rec.end_render_pass();
             Ok(())
         })
@@ -192,10 +194,13 @@ fn ping_pong(planes: u32, drop_barrier_at: Option<u32>) -> (f32, Vec<String>) {
             // names both layers, so both must hold defined, visible data from the start.
             for (layer, fb) in (0u32..).zip(&fbs) {
                 rec.begin_render_pass(&pass, fb, &[(&image, layer)])?;
-                rec.draw_fullscreen(&fill, &set, bytemuck::cast_slice(&[0.0f32; 4]))?;
+                rec.bind_graphics(&fill, &set, w, h);
+                rec.draw_fullscreen(&fill, bytemuck::cast_slice(&[0.0f32; 4]))?;
                 rec.end_render_pass();
                 rec.transition(&image, layer..layer + 1, Access::SampledGeneral);
             }
+            // Bound once; between planes only push constants change, as in the sweep.
+            rec.bind_graphics(&count, &set, w, h);
             for i in 0..planes {
                 let (write, read) = (i % 2, 1 - i % 2);
                 if drop_barrier_at == Some(i) {
@@ -204,7 +209,7 @@ fn ping_pong(planes: u32, drop_barrier_at: Option<u32>) -> (f32, Vec<String>) {
                     rec.transition(&image, read..read + 1, Access::SampledGeneral);
                 }
                 rec.begin_render_pass(&pass, &fbs[write as usize], &[(&image, write)])?;
-                rec.draw_fullscreen(&count, &set, bytemuck::bytes_of(&read))?;
+                rec.draw_fullscreen(&count, bytemuck::bytes_of(&read))?;
                 rec.end_render_pass();
             }
             Ok(())

@@ -581,6 +581,8 @@ impl SweepPass {
             rec.end_scope();
 
             rec.begin_scope("sweep");
+            // Bound once: between planes only push constants change.
+            rec.bind_graphics(&self.sweep, &self.sweep_set, self.width, self.height);
             for i in 0..planes.count {
                 let write = i % 2;
                 let read = 1 - write;
@@ -616,7 +618,7 @@ impl SweepPass {
                     depth: planes.depth(i),
                     pad: 0,
                 };
-                rec.draw_fullscreen(&self.sweep, &self.sweep_set, bytemuck::bytes_of(&push))?;
+                rec.draw_fullscreen(&self.sweep, bytemuck::bytes_of(&push))?;
                 rec.end_render_pass();
                 for (b, plane, buf) in &dump_buffers {
                     if *plane == i {

@@ -269,52 +269,26 @@ impl Recorder<'_> {
                 offset: vk::Offset2D::default(),
                 extent: framebuffer.extent,
             });
-        let e = framebuffer.extent;
         // SAFETY: recording; pass and framebuffer are compatible (checked at creation).
         unsafe {
             self.device()
                 .cmd_begin_render_pass(self.cmd, &info, vk::SubpassContents::INLINE);
-            self.device().cmd_set_viewport(
-                self.cmd,
-                0,
-                &[vk::Viewport {
-                    x: 0.0,
-                    y: 0.0,
-                    width: e.width as f32,
-                    height: e.height as f32,
-                    min_depth: 0.0,
-                    max_depth: 1.0,
-                }],
-            );
-            self.device().cmd_set_scissor(
-                self.cmd,
-                0,
-                &[vk::Rect2D {
-                    offset: vk::Offset2D::default(),
-                    extent: e,
-                }],
-            );
         }
         Ok(())
     }
 
-    /// Draw one full-screen triangle with `pipeline`.
-    pub fn draw_fullscreen(
+    /// Bind a full-screen graphics pipeline, its descriptor set and a viewport/scissor of
+    /// `width` × `height`. Bindings persist across render passes of this command buffer, so
+    /// a sequence of draws (the plane sweep) binds once and then only pushes constants.
+    pub fn bind_graphics(
         &mut self,
         pipeline: &GraphicsPipeline,
         set: &DescriptorSet,
-        push: &[u8],
-    ) -> Result<()> {
-        if push.len() as u32 != pipeline.push_size {
-            bail!(
-                "pipeline '{}' takes {} bytes of push constants, got {}",
-                pipeline.name,
-                pipeline.push_size,
-                push.len()
-            );
-        }
+        width: u32,
+        height: u32,
+    ) {
         let d = self.device();
-        // SAFETY: recording inside a compatible render pass.
+        // SAFETY: recording; pipeline, layout and set are alive and compatible.
         unsafe {
             d.cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::GRAPHICS, pipeline.raw);
             d.cmd_bind_descriptor_sets(
@@ -325,6 +299,43 @@ impl Recorder<'_> {
                 &[set.raw],
                 &[],
             );
+            d.cmd_set_viewport(
+                self.cmd,
+                0,
+                &[vk::Viewport {
+                    x: 0.0,
+                    y: 0.0,
+                    width: width as f32,
+                    height: height as f32,
+                    min_depth: 0.0,
+                    max_depth: 1.0,
+                }],
+            );
+            d.cmd_set_scissor(
+                self.cmd,
+                0,
+                &[vk::Rect2D {
+                    offset: vk::Offset2D::default(),
+                    extent: vk::Extent2D { width, height },
+                }],
+            );
+        }
+    }
+
+    /// Push constants for `pipeline` (bound with [`Self::bind_graphics`]) and draw one
+    /// full-screen triangle inside the current render pass.
+    pub fn draw_fullscreen(&mut self, pipeline: &GraphicsPipeline, push: &[u8]) -> Result<()> {
+        if push.len() as u32 != pipeline.push_size {
+            bail!(
+                "pipeline '{}' takes {} bytes of push constants, got {}",
+                pipeline.name,
+                pipeline.push_size,
+                push.len()
+            );
+        }
+        let d = self.device();
+        // SAFETY: recording inside a render pass compatible with the bound pipeline.
+        unsafe {
             if !push.is_empty() {
                 d.cmd_push_constants(
                     self.cmd,
