@@ -202,6 +202,36 @@ pub struct Renderer {
     sweep: Option<sweep::SweepPass>,
 }
 
+/// Passes own images of the output size; keep one until the size changes.
+trait SizedPass {
+    fn size(&self) -> (u32, u32);
+}
+
+impl SizedPass for ea::EaPass {
+    fn size(&self) -> (u32, u32) {
+        ea::EaPass::size(self)
+    }
+}
+
+impl SizedPass for sweep::SweepPass {
+    fn size(&self) -> (u32, u32) {
+        sweep::SweepPass::size(self)
+    }
+}
+
+fn sized_pass<'a, P: SizedPass>(
+    slot: &'a mut Option<P>,
+    opts: &RenderOptions,
+    make: impl FnOnce(u32, u32) -> Result<P>,
+) -> Result<&'a mut P> {
+    let size = (opts.width, opts.height);
+    if slot.as_ref().map(|p| p.size()) != Some(size) {
+        *slot = None;
+        *slot = Some(make(size.0, size.1)?);
+    }
+    Ok(slot.as_mut().expect("just filled"))
+}
+
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct VolumeInfo {
     pub half_extent: Vec3,
@@ -288,18 +318,17 @@ impl Renderer {
         match model {
             Model::Ea => {
                 let mut timings = self.update_preintegration()?;
-                let pass = match &mut self.ea {
-                    Some(p) if p.size() == (opts.width, opts.height) => p,
-                    slot => slot.insert(ea::EaPass::new(
+                let pass = sized_pass(&mut self.ea, opts, |w, h| {
+                    ea::EaPass::new(
                         &self.ctx,
                         &self.volume_tex,
                         &self.tf_image,
                         self.preint.image(),
                         &self.linear,
-                        opts.width,
-                        opts.height,
-                    )?),
-                };
+                        w,
+                        h,
+                    )
+                })?;
                 let mut frame = pass.render(
                     &self.ctx,
                     self.volume_info,
@@ -315,18 +344,17 @@ impl Renderer {
             }
             Model::Refract => {
                 let mut timings = self.update_preintegration()?;
-                let pass = match &mut self.sweep {
-                    Some(p) if p.size() == (opts.width, opts.height) => p,
-                    slot => slot.insert(sweep::SweepPass::new(
+                let pass = sized_pass(&mut self.sweep, opts, |w, h| {
+                    sweep::SweepPass::new(
                         &self.ctx,
                         &self.volume_tex,
                         &self.tf_image,
                         self.preint.image(),
                         &self.linear,
-                        opts.width,
-                        opts.height,
-                    )?),
-                };
+                        w,
+                        h,
+                    )
+                })?;
                 let (mut frame, dumps, stats) = pass.render(
                     &self.ctx,
                     self.volume_info,

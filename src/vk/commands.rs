@@ -10,6 +10,7 @@ use std::ops::Range;
 use anyhow::{bail, Context as _, Result};
 use ash::vk;
 
+use super::pipeline::PUSH_STAGES;
 use super::resources::color_range;
 use super::{
     Access, Buffer, ComputePipeline, Context, DescriptorSet, Framebuffer, GraphicsPipeline, Image,
@@ -204,14 +205,6 @@ impl Recorder<'_> {
         push: &[u8],
         groups: [u32; 3],
     ) -> Result<()> {
-        if push.len() as u32 != pipeline.push_size {
-            bail!(
-                "pipeline '{}' takes {} bytes of push constants, got {}",
-                pipeline.name,
-                pipeline.push_size,
-                push.len()
-            );
-        }
         let d = self.device();
         // SAFETY: recording; pipeline, layout and set are alive and compatible.
         unsafe {
@@ -224,19 +217,13 @@ impl Recorder<'_> {
                 &[set.raw],
                 &[],
             );
-            if !push.is_empty() {
-                d.cmd_push_constants(
-                    self.cmd,
-                    pipeline.layout,
-                    vk::ShaderStageFlags::COMPUTE
-                        | vk::ShaderStageFlags::FRAGMENT
-                        | vk::ShaderStageFlags::VERTEX,
-                    0,
-                    push,
-                );
-            }
-            d.cmd_dispatch(self.cmd, groups[0], groups[1], groups[2]);
         }
+        self.push_constants(pipeline.layout, pipeline.push_size, &pipeline.name, push)?;
+        // SAFETY: recording with a compute pipeline bound.
+        unsafe {
+            self.device()
+                .cmd_dispatch(self.cmd, groups[0], groups[1], groups[2])
+        };
         Ok(())
     }
 }
@@ -325,29 +312,31 @@ impl Recorder<'_> {
     /// Push constants for `pipeline` (bound with [`Self::bind_graphics`]) and draw one
     /// full-screen triangle inside the current render pass.
     pub fn draw_fullscreen(&mut self, pipeline: &GraphicsPipeline, push: &[u8]) -> Result<()> {
-        if push.len() as u32 != pipeline.push_size {
+        self.push_constants(pipeline.layout, pipeline.push_size, &pipeline.name, push)?;
+        // SAFETY: recording inside a render pass compatible with the bound pipeline.
+        unsafe { self.device().cmd_draw(self.cmd, 3, 1, 0, 0) };
+        Ok(())
+    }
+
+    fn push_constants(
+        &mut self,
+        layout: vk::PipelineLayout,
+        size: u32,
+        name: &str,
+        push: &[u8],
+    ) -> Result<()> {
+        if push.len() as u32 != size {
             bail!(
-                "pipeline '{}' takes {} bytes of push constants, got {}",
-                pipeline.name,
-                pipeline.push_size,
+                "pipeline '{name}' takes {size} bytes of push constants, got {}",
                 push.len()
             );
         }
-        let d = self.device();
-        // SAFETY: recording inside a render pass compatible with the bound pipeline.
-        unsafe {
-            if !push.is_empty() {
-                d.cmd_push_constants(
-                    self.cmd,
-                    pipeline.layout,
-                    vk::ShaderStageFlags::COMPUTE
-                        | vk::ShaderStageFlags::FRAGMENT
-                        | vk::ShaderStageFlags::VERTEX,
-                    0,
-                    push,
-                );
-            }
-            d.cmd_draw(self.cmd, 3, 1, 0, 0);
+        if !push.is_empty() {
+            // SAFETY: recording; the range matches the layout's (checked above).
+            unsafe {
+                self.device()
+                    .cmd_push_constants(self.cmd, layout, PUSH_STAGES, 0, push)
+            };
         }
         Ok(())
     }

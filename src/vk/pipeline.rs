@@ -230,6 +230,13 @@ impl ComputePipeline {
     }
 }
 
+/// Every pipeline layout declares one push-constant range visible to all stages refrakt uses.
+pub(crate) const PUSH_STAGES: vk::ShaderStageFlags = vk::ShaderStageFlags::from_raw(
+    vk::ShaderStageFlags::COMPUTE.as_raw()
+        | vk::ShaderStageFlags::FRAGMENT.as_raw()
+        | vk::ShaderStageFlags::VERTEX.as_raw(),
+);
+
 pub(crate) fn pipeline_layout(
     ctx: &Context,
     set: &DescriptorSet,
@@ -241,9 +248,7 @@ pub(crate) fn pipeline_layout(
         "push constants of {push_size} bytes exceed the device limit of {max_push}"
     );
     let ranges = [vk::PushConstantRange {
-        stage_flags: vk::ShaderStageFlags::COMPUTE
-            | vk::ShaderStageFlags::FRAGMENT
-            | vk::ShaderStageFlags::VERTEX,
+        stage_flags: PUSH_STAGES,
         offset: 0,
         size: push_size,
     }];
