@@ -36,7 +36,7 @@ struct GpuArgs {
     #[arg(long, global = true, value_name = "NAME|INDEX")]
     device: Option<String>,
     /// Enable the Khronos validation layer with synchronization validation; the command
-    /// fails if the layer reports any warning or error.
+    /// exits with status 3 if the layer reports any warning or error.
     #[arg(long, global = true)]
     validate: bool,
 }
@@ -183,7 +183,7 @@ fn finish(ctx: Context) -> Result<ExitCode> {
     let n = log.count();
     if n > 0 {
         eprintln!("validation: {n} message(s) reported (see above)");
-        return Ok(ExitCode::from(2));
+        return Ok(ExitCode::from(3));
     }
     Ok(ExitCode::SUCCESS)
 }
