@@ -9,6 +9,7 @@ pub mod shaders {
     include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
 }
 
+pub mod environment;
 pub mod output;
 pub mod render;
 pub mod transfer;

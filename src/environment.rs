@@ -1,0 +1,358 @@
+//! Environment maps behind the volume (thesis sect. 4.4, 5.3): equirectangular images and
+//! their summed-area table on the GPU, so the composite can average the map over the
+//! footprint of a pixel's refracted rays.
+//!
+//! Coordinates: column x covers longitude φ = 2π (x + 0.5) / width − π (−π at the left
+//! edge, the seam at ±π), row y covers latitude θ = π/2 − π (y + 0.5) / height (+π/2, the
+//! zenith, at the top). Directions: y up; φ = atan2(d.x, −d.z), so −z looks at the map's
+//! centre column.
+
+use std::path::Path;
+
+use anyhow::{bail, ensure, Context as _, Result};
+use bytemuck::{Pod, Zeroable};
+
+use crate::shaders;
+use crate::vk::{
+    self, Access, Binding, ComputePipeline, Context, DescriptorSet, Image, ImageDesc, ImageKind,
+};
+
+/// An equirectangular map in linear RGB (alpha 1), row-major, top row (zenith) first.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EnvironmentMap {
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<[f32; 4]>,
+}
+
+impl EnvironmentMap {
+    /// A map checked for shape (2:1) and finite, non-negative values.
+    pub fn new(width: u32, height: u32, pixels: Vec<[f32; 4]>, origin: &str) -> Result<Self> {
+        ensure!(
+            width >= 2 && height >= 1 && width == 2 * height,
+            "{origin}: an equirectangular map must be twice as wide as high, this one is \
+             {width}x{height}"
+        );
+        ensure!(
+            pixels.len() == (width as usize) * (height as usize),
+            "{origin}: {} pixels for {width}x{height}",
+            pixels.len()
+        );
+        if let Some(i) = pixels
+            .iter()
+            .position(|p| p.iter().any(|c| !c.is_finite() || *c < 0.0))
+        {
+            bail!(
+                "{origin}: pixel ({}, {}) is {:?}, not a finite non-negative colour",
+                i as u32 % width,
+                i as u32 / width,
+                pixels[i]
+            );
+        }
+        Ok(Self {
+            width,
+            height,
+            pixels,
+        })
+    }
+
+    /// A constant colour.
+    pub fn constant(width: u32, colour: [f32; 3]) -> Result<Self> {
+        let height = (width / 2).max(1);
+        let px = [colour[0], colour[1], colour[2], 1.0];
+        Self::new(
+            height * 2,
+            height,
+            vec![px; (height * 2 * height) as usize],
+            "constant map",
+        )
+    }
+
+    /// The default when no map is given, so nothing must be downloaded: a sky gradient with
+    /// a sun and a checkered ground, `width` × `width / 2`.
+    pub fn procedural(width: u32) -> Result<Self> {
+        let height = (width / 2).max(1);
+        let width = height * 2;
+        let sun = [0.35f32, 0.55, -0.76];
+        let sun_len = (sun[0] * sun[0] + sun[1] * sun[1] + sun[2] * sun[2]).sqrt();
+        let mut pixels = Vec::with_capacity((width * height) as usize);
+        for y in 0..height {
+            for x in 0..width {
+                let (phi, theta) = pixel_angles(width, height, x as f32 + 0.5, y as f32 + 0.5);
+                let d = direction(phi, theta);
+                let px = if theta >= 0.0 {
+                    let t = theta / std::f32::consts::FRAC_PI_2;
+                    let horizon = [0.75, 0.8, 0.9];
+                    let zenith = [0.15, 0.3, 0.7];
+                    let cos_sun = (d[0] * sun[0] + d[1] * sun[1] + d[2] * sun[2]) / sun_len;
+                    let glow =
+                        if cos_sun > 0.9995 { 40.0 } else { 0.0 } + 0.6 * cos_sun.max(0.0).powi(64);
+                    std::array::from_fn(|i| horizon[i] + (zenith[i] - horizon[i]) * t.sqrt() + glow)
+                } else {
+                    // Ground plane at distance 1 below: checks of 0.25 units.
+                    let s = -1.0 / d[1];
+                    let (gx, gz) = ((d[0] * s / 0.25).floor(), (d[2] * s / 0.25).floor());
+                    let check = if (gx + gz).rem_euclid(2.0) < 1.0 {
+                        0.6
+                    } else {
+                        0.12
+                    };
+                    let fade = (-theta).sin().powf(0.3);
+                    [check * fade + 0.3 * (1.0 - fade); 3]
+                };
+                pixels.push([px[0], px[1], px[2], 1.0]);
+            }
+        }
+        Self::new(width, height, pixels, "procedural map")
+    }
+
+    /// Load an equirectangular map: OpenEXR (.exr) and Radiance (.hdr) as linear, PNG/JPEG
+    /// as sRGB. Errors name the file.
+    pub fn load(path: &Path) -> Result<Self> {
+        let origin = path.display().to_string();
+        ensure!(path.is_file(), "environment map {origin}: no such file");
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .unwrap_or_default();
+        match ext.as_str() {
+            "exr" => {
+                let img = exr::prelude::read_first_rgba_layer_from_file(
+                    path,
+                    |res, _| (res.width(), vec![[0f32; 4]; res.width() * res.height()]),
+                    |(w, px): &mut (usize, Vec<[f32; 4]>),
+                     pos,
+                     (r, g, b, _a): (f32, f32, f32, f32)| {
+                        px[pos.y() * *w + pos.x()] = [r, g, b, 1.0];
+                    },
+                )
+                .map_err(|e| {
+                    anyhow::anyhow!("environment map {origin}: not a readable EXR: {e}")
+                })?;
+                let size = img.layer_data.size;
+                let (_, pixels) = img.layer_data.channel_data.pixels;
+                Self::new(size.width() as u32, size.height() as u32, pixels, &origin)
+            }
+            "hdr" | "png" | "jpg" | "jpeg" => {
+                let img = image::open(path)
+                    .with_context(|| format!("environment map {origin}: not a readable image"))?;
+                let linear = ext == "hdr";
+                let rgb = img.to_rgb32f();
+                let (w, h) = rgb.dimensions();
+                let pixels = rgb
+                    .pixels()
+                    .map(|p| {
+                        let c = if linear { p.0 } else { p.0.map(srgb_to_linear) };
+                        [c[0], c[1], c[2], 1.0]
+                    })
+                    .collect();
+                Self::new(w, h, pixels, &origin)
+            }
+            other => bail!(
+                "environment map {origin}: unknown extension '.{other}'; use .exr, .hdr, .png \
+                 or .jpg"
+            ),
+        }
+    }
+
+    /// Mean colour (f64 accumulation).
+    pub fn mean(&self) -> [f32; 4] {
+        let mut acc = [0f64; 4];
+        for p in &self.pixels {
+            for i in 0..4 {
+                acc[i] += p[i] as f64;
+            }
+        }
+        acc.map(|a| (a / self.pixels.len() as f64) as f32)
+    }
+
+    /// Upload as an RGBA32F 2D image (for sampling and for building the SAT).
+    pub fn upload(&self, ctx: &Context) -> Result<Image> {
+        let image = Image::new(
+            ctx,
+            ImageDesc {
+                kind: ImageKind::D2,
+                format: vk::Format::R32G32B32A32_SFLOAT,
+                extent: [self.width, self.height, 1],
+                layers: 1,
+                usage: vk::usage::SAMPLED | vk::usage::STORAGE | vk::usage::TRANSFER_DST,
+            },
+            "environment map",
+        )?;
+        ctx.upload_image(&image, 0, bytemuck::cast_slice(&self.pixels))?;
+        Ok(image)
+    }
+}
+
+fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// (longitude, latitude) of a continuous pixel position.
+pub fn pixel_angles(width: u32, height: u32, x: f32, y: f32) -> (f32, f32) {
+    use std::f32::consts::{FRAC_PI_2, PI};
+    (
+        2.0 * PI * x / width as f32 - PI,
+        FRAC_PI_2 - PI * y / height as f32,
+    )
+}
+
+/// Unit direction of (longitude, latitude).
+pub fn direction(phi: f32, theta: f32) -> [f32; 3] {
+    [
+        theta.cos() * phi.sin(),
+        theta.sin(),
+        -theta.cos() * phi.cos(),
+    ]
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct SatPush {
+    mean: [f32; 4],
+    pass: u32,
+    pad: [u32; 3],
+}
+
+/// The summed-area table of a map on the GPU (`glsl/sat.comp`): RGBA32F, the same size as
+/// the map, S(x, y) = Σ over [0, x] × [0, y] of (map − mean). Box averages are then
+/// (corner combination) / area + mean.
+pub struct SummedAreaTable {
+    pub table: Image,
+    pub mean: [f32; 4],
+    pub width: u32,
+    pub height: u32,
+}
+
+impl SummedAreaTable {
+    /// Build from a map already uploaded with [`EnvironmentMap::upload`].
+    pub fn build(
+        ctx: &Context,
+        map: &EnvironmentMap,
+        map_image: &Image,
+    ) -> Result<(Self, vk::Timings)> {
+        let table = Image::new(
+            ctx,
+            ImageDesc {
+                kind: ImageKind::D2,
+                format: vk::Format::R32G32B32A32_SFLOAT,
+                extent: [map.width, map.height, 1],
+                layers: 1,
+                usage: vk::usage::SAMPLED | vk::usage::STORAGE | vk::usage::TRANSFER_SRC,
+            },
+            "environment SAT",
+        )?;
+        let set = DescriptorSet::new(
+            ctx,
+            &[
+                Binding::StorageImage(map_image),
+                Binding::StorageImage(&table),
+            ],
+            "environment SAT",
+        )?;
+        let pipeline = ComputePipeline::new(
+            ctx,
+            shaders::SAT_COMP,
+            &set,
+            std::mem::size_of::<SatPush>() as u32,
+            "environment SAT",
+        )?;
+        let mean = map.mean();
+        let timings = ctx.execute(|rec| {
+            rec.begin_scope("environment SAT");
+            rec.transition_all(map_image, Access::ComputeStorage);
+            rec.transition_all(&table, Access::ComputeStorage);
+            let rows = SatPush {
+                mean,
+                pass: 0,
+                pad: [0; 3],
+            };
+            rec.dispatch(
+                &pipeline,
+                &set,
+                bytemuck::bytes_of(&rows),
+                [map.height.div_ceil(64), 1, 1],
+            )?;
+            // Columns read what the row pass wrote.
+            rec.transition_all(&table, Access::ComputeStorage);
+            let cols = SatPush {
+                mean,
+                pass: 1,
+                pad: [0; 3],
+            };
+            rec.dispatch(
+                &pipeline,
+                &set,
+                bytemuck::bytes_of(&cols),
+                [map.width.div_ceil(64), 1, 1],
+            )?;
+            rec.transition_all(&table, Access::Sampled);
+            rec.end_scope();
+            Ok(())
+        })?;
+        Ok((
+            Self {
+                table,
+                mean,
+                width: map.width,
+                height: map.height,
+            },
+            timings,
+        ))
+    }
+
+    /// Read the table back.
+    pub fn read(&self, ctx: &Context) -> Result<SatReadback> {
+        let bytes = ctx.read_image(&self.table, 0)?;
+        Ok(SatReadback {
+            table: bytemuck::cast_slice(&bytes).to_vec(),
+            width: self.width,
+            height: self.height,
+            mean: self.mean,
+        })
+    }
+}
+
+/// A summed-area table read back to the host (tests, diagnostics).
+pub struct SatReadback {
+    pub table: Vec<[f32; 4]>,
+    pub width: u32,
+    pub height: u32,
+    pub mean: [f32; 4],
+}
+
+impl SatReadback {
+    /// Average of the map over the pixel box [x0, x1) × [y0, y1). A box with x0 > x1 wraps
+    /// across the ±180° seam and is split in two; the composite shader will apply the
+    /// same rule.
+    pub fn box_average(&self, x0: u32, x1: u32, y0: u32, y1: u32) -> [f64; 4] {
+        // S over [0, x) × [0, y): zero on the empty edges.
+        let s = |x: u32, y: u32| -> [f64; 4] {
+            if x == 0 || y == 0 {
+                [0.0; 4]
+            } else {
+                self.table[((y - 1) * self.width + (x - 1)) as usize].map(|v| v as f64)
+            }
+        };
+        let sum = |a: u32, b: u32| -> [f64; 4] {
+            let (p, q, r, t) = (s(b, y1), s(a, y1), s(b, y0), s(a, y0));
+            std::array::from_fn(|i| p[i] - q[i] - r[i] + t[i])
+        };
+        let rows = (y1 - y0) as f64;
+        let (total, area) = if x0 <= x1 {
+            (sum(x0, x1), (x1 - x0) as f64 * rows)
+        } else {
+            let (a, b) = (sum(x0, self.width), sum(0, x1));
+            (
+                std::array::from_fn(|i| a[i] + b[i]),
+                ((self.width - x0) + x1) as f64 * rows,
+            )
+        };
+        std::array::from_fn(|i| total[i] / area + self.mean[i] as f64)
+    }
+}
