@@ -1,21 +1,59 @@
 #version 460
-// Composite pass: the background seen through the volume's remaining transmittance and
-// medium filter (Oddy-Willis, as in the EA baseline). The environment map (issue 5) will
-// replace the constant background using the final viewing-ray directions.
+// Composite (thesis sect. 4.4, 5.3): the environment behind the volume, seen through its
+// remaining transmittance and medium (Oddy-Willis): C + (1 - A) M env. A pixel whose
+// viewing ray left the volume bent averages the map over the footprint of its own and
+// three neighbours' final directions with the summed-area table; a ray that was never bent
+// sees the map sharply. Without an environment, the constant background.
 #extension GL_GOOGLE_include_directive : require
 #include "sweep_common.glsl"
 #include "sweep_buffers.glsl"
+#include "environment.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(push_constant) uniform Push { uint layer; } pc;
 layout(set = 0, binding = 16, rgba32f) uniform writeonly image2D frame;
+layout(set = 0, binding = 17) uniform sampler2D env_map;
+layout(set = 0, binding = 18) uniform sampler2D env_sat;
+layout(set = 0, binding = 19) uniform EnvParams {
+    vec4 info;   // x = 1 when a map is used, y = rotation about world up (radians),
+                 // z = 1 for the SAT footprint, 0 for a single bilinear lookup
+    vec4 mean;   // the SAT's mean offset
+} E;
+
+vec3 world_dir(ivec2 p) {
+    ivec2 c = clamp(p, ivec2(0), ivec2(P.camera.zw) - 1);
+    vec3 v = READ_PIXEL(view_direction, pc.layer, c).xyz;
+    vec3 w = mat3(P.view_to_world) * v;
+    float r = E.info.y;
+    // Rotating the map by r about y = rotating the direction by -r.
+    return vec3(cos(r) * w.x - sin(r) * w.z, w.y, sin(r) * w.x + cos(r) * w.z);
+}
 
 void main() {
     ivec2 id = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(id, ivec2(P.camera.zw)))) return;
     vec4 CA = READ_PIXEL(colour_opacity, pc.layer, id);
     vec3 M = READ_PIXEL(medium, pc.layer, id).rgb;
-    vec3 rgb = CA.rgb + (1.0 - CA.a) * M * P.background.rgb;
-    float a = CA.a + (1.0 - CA.a) * P.background.a;
+    vec3 env = P.background.rgb;
+    float env_a = P.background.a;
+    if (E.info.x > 0.5) {
+        vec3 d = world_dir(id);
+        vec2 uv = (vec2(id) + 0.5) / P.camera.zw;
+        vec3 camera_ray = mat3(P.view_to_world) * normalize(plane_point(uv, 1.0));
+        float r = E.info.y;
+        camera_ray = vec3(cos(r) * camera_ray.x - sin(r) * camera_ray.z, camera_ray.y,
+                          sin(r) * camera_ray.x + cos(r) * camera_ray.z);
+        bool bent = dot(normalize(d), camera_ray) < 1.0 - 1e-6;
+        if (bent && E.info.z > 0.5) {
+            vec3 ds[4] = vec3[4](d, world_dir(id + ivec2(1, 0)), world_dir(id + ivec2(0, 1)),
+                                 world_dir(id + ivec2(1, 1)));
+            env = env_footprint(env_map, env_sat, E.mean.rgb, ds);
+        } else {
+            env = env_bilinear(env_map, env_texel(env_angles(d), textureSize(env_map, 0)));
+        }
+        env_a = 1.0;
+    }
+    vec3 rgb = CA.rgb + (1.0 - CA.a) * M * env;
+    float a = CA.a + (1.0 - CA.a) * env_a;
     imageStore(frame, id, vec4(rgb, a));
 }

@@ -75,32 +75,47 @@ impl EnvironmentMap {
         let width = height * 2;
         let sun = [0.35f32, 0.55, -0.76];
         let sun_len = (sun[0] * sun[0] + sun[1] * sun[1] + sun[2] * sun[2]).sqrt();
+        let shade = |x: f32, y: f32| -> [f32; 3] {
+            let (phi, theta) = pixel_angles(width, height, x, y);
+            let d = direction(phi, theta);
+            if theta >= 0.0 {
+                let t = theta / std::f32::consts::FRAC_PI_2;
+                let horizon = [0.75, 0.8, 0.9];
+                let zenith = [0.15, 0.3, 0.7];
+                let cos_sun = (d[0] * sun[0] + d[1] * sun[1] + d[2] * sun[2]) / sun_len;
+                let glow =
+                    if cos_sun > 0.9995 { 40.0 } else { 0.0 } + 0.6 * cos_sun.max(0.0).powi(64);
+                std::array::from_fn(|i| horizon[i] + (zenith[i] - horizon[i]) * t.sqrt() + glow)
+            } else {
+                // Ground plane at distance 1 below: checks of 0.25 units.
+                let s = -1.0 / d[1];
+                let (gx, gz) = ((d[0] * s / 0.25).floor(), (d[2] * s / 0.25).floor());
+                let check = if (gx + gz).rem_euclid(2.0) < 1.0 {
+                    0.6
+                } else {
+                    0.12
+                };
+                let fade = (-theta).sin().powf(0.3);
+                [check * fade + 0.3 * (1.0 - fade); 3]
+            }
+        };
+        // 4 x 4 samples per texel, so the distant checks do not alias into the map itself.
         let mut pixels = Vec::with_capacity((width * height) as usize);
         for y in 0..height {
             for x in 0..width {
-                let (phi, theta) = pixel_angles(width, height, x as f32 + 0.5, y as f32 + 0.5);
-                let d = direction(phi, theta);
-                let px = if theta >= 0.0 {
-                    let t = theta / std::f32::consts::FRAC_PI_2;
-                    let horizon = [0.75, 0.8, 0.9];
-                    let zenith = [0.15, 0.3, 0.7];
-                    let cos_sun = (d[0] * sun[0] + d[1] * sun[1] + d[2] * sun[2]) / sun_len;
-                    let glow =
-                        if cos_sun > 0.9995 { 40.0 } else { 0.0 } + 0.6 * cos_sun.max(0.0).powi(64);
-                    std::array::from_fn(|i| horizon[i] + (zenith[i] - horizon[i]) * t.sqrt() + glow)
-                } else {
-                    // Ground plane at distance 1 below: checks of 0.25 units.
-                    let s = -1.0 / d[1];
-                    let (gx, gz) = ((d[0] * s / 0.25).floor(), (d[2] * s / 0.25).floor());
-                    let check = if (gx + gz).rem_euclid(2.0) < 1.0 {
-                        0.6
-                    } else {
-                        0.12
-                    };
-                    let fade = (-theta).sin().powf(0.3);
-                    [check * fade + 0.3 * (1.0 - fade); 3]
-                };
-                pixels.push([px[0], px[1], px[2], 1.0]);
+                let mut acc = [0.0f32; 3];
+                for sy in 0..4 {
+                    for sx in 0..4 {
+                        let c = shade(
+                            x as f32 + (sx as f32 + 0.5) / 4.0,
+                            y as f32 + (sy as f32 + 0.5) / 4.0,
+                        );
+                        for i in 0..3 {
+                            acc[i] += c[i] / 16.0;
+                        }
+                    }
+                }
+                pixels.push([acc[0], acc[1], acc[2], 1.0]);
             }
         }
         Self::new(width, height, pixels, "procedural map")

@@ -6,6 +6,7 @@ use std::process::ExitCode;
 use anyhow::{bail, Context as _, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
+use refrakt::environment::EnvironmentMap;
 use refrakt::output;
 use refrakt::render::{Camera, Light, Model, RenderOptions, Renderer, StateBuffer, SweepOptions};
 use refrakt::transfer::TransferFunctions;
@@ -61,6 +62,13 @@ enum SceneArg {
     Box,
     /// Glass sphere (value 0.5) above an opaque floor (value 1).
     GlassFloor,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum ToneArg {
+    Aces,
+    Reinhard,
+    None,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -148,6 +156,21 @@ struct RenderArgs {
     /// Folder for --dump files (default: the output image's folder).
     #[arg(long)]
     dump_dir: Option<PathBuf>,
+    /// Environment map behind the volume (refract): an equirectangular .exr or .hdr
+    /// (linear), .png or .jpg (sRGB), twice as wide as high; "sky" for the built-in sky,
+    /// sun and checkered ground; "none" for the flat --background.
+    #[arg(long, default_value = "sky", value_name = "FILE|sky|none")]
+    env: String,
+    /// Rotation of the environment map about the vertical axis, degrees.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    env_rotation: f32,
+    /// Exposure in stops applied before tone mapping (PNG output only).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    exposure: f32,
+    /// Tone mapping for PNG output: aces (filmic), reinhard, or none (clamp). EXR output is
+    /// always the linear HDR image.
+    #[arg(long, value_enum, default_value = "aces")]
+    tonemap: ToneArg,
     /// Also render the EA baseline with the same volume, view, image size and sample
     /// distance in the same run, and print its GPU time and the ratio to this model's
     /// (the comparison the thesis' cost discussion needs; compare ratios on lavapipe).
@@ -253,14 +276,14 @@ fn info(desc: &ContextDesc) -> Result<ExitCode> {
     finish(ctx)
 }
 
-/// GPU time of a frame's rendering passes, without the preintegration table build (done
-/// only when transfer functions change).
+/// GPU time of a frame's rendering passes, without the one-off builds (preintegration
+/// table, environment SAT) that happen only when their inputs change.
 fn main_pass_ms(frame: &refrakt::render::Frame) -> f64 {
     frame
         .timings
         .scopes
         .iter()
-        .filter(|(name, _)| name != "preintegration")
+        .filter(|(name, _)| name != "preintegration" && name != "environment SAT")
         .map(|(_, ms)| ms)
         .sum()
 }
@@ -375,8 +398,28 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
         },
         ..Default::default()
     };
+    opts.sweep.env_rotation = args.env_rotation;
     opts.validate()?;
     output::format_for(&args.output)?;
+    if !args.exposure.is_finite() {
+        bail!(
+            "--exposure {} must be a finite number of stops",
+            args.exposure
+        );
+    }
+    let tone = output::ToneMap {
+        exposure: args.exposure,
+        operator: match args.tonemap {
+            ToneArg::Aces => output::ToneOperator::Aces,
+            ToneArg::Reinhard => output::ToneOperator::Reinhard,
+            ToneArg::None => output::ToneOperator::None,
+        },
+    };
+    let env = match args.env.as_str() {
+        "none" => None,
+        "sky" => Some(EnvironmentMap::procedural(1024)?),
+        file => Some(EnvironmentMap::load(std::path::Path::new(file))?),
+    };
     let dump_dir = match &args.dump_dir {
         Some(d) => d.clone(),
         None => args
@@ -419,8 +462,16 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
         vk::device_type_name(ctx.info().device_type)
     );
     let mut renderer = Renderer::new(&ctx, &volume, &tf)?;
-    let frame = renderer.render(model, &camera, &opts)?;
-    output::write(&frame, &args.output)?;
+    let env_timings = if model == Model::Refract {
+        renderer.set_environment(env.as_ref())?
+    } else {
+        Default::default()
+    };
+    let mut frame = renderer.render(model, &camera, &opts)?;
+    let mut all = env_timings;
+    all.extend(std::mem::take(&mut frame.timings));
+    frame.timings = all;
+    output::write(&frame, &args.output, &tone)?;
     println!(
         "rendered {}x{} of the {} scene ({}x{}x{}, transfer functions {}), model {}{}, sample distance {}, up to {} steps per ray",
         opts.width,

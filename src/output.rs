@@ -57,28 +57,72 @@ pub fn linear_to_srgb(c: f32) -> f32 {
     }
 }
 
-/// 8-bit sRGB RGBA bytes of a frame (alpha stays linear, as PNG expects).
-pub fn to_srgb8(frame: &Frame) -> Vec<u8> {
+/// How linear HDR colour becomes displayable [0, 1] for 8-bit output (EXR is written
+/// linear, before any of this).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ToneMap {
+    /// Exposure in stops: colours are scaled by 2^exposure first.
+    pub exposure: f32,
+    pub operator: ToneOperator,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ToneOperator {
+    /// Clamp to [0, 1]: exact for colours already in range.
+    None,
+    /// x / (1 + x) per channel (Reinhard et al. 2002, simple form).
+    Reinhard,
+    /// Narkowicz's fit of the ACES filmic curve: (x(2.51x + 0.03)) / (x(2.43x + 0.59) + 0.14).
+    Aces,
+}
+
+impl Default for ToneMap {
+    fn default() -> Self {
+        Self {
+            exposure: 0.0,
+            operator: ToneOperator::Aces,
+        }
+    }
+}
+
+impl ToneMap {
+    pub fn apply(&self, c: f32) -> f32 {
+        let x = c.max(0.0) * self.exposure.exp2();
+        match self.operator {
+            ToneOperator::None => x.min(1.0),
+            ToneOperator::Reinhard => x / (1.0 + x),
+            ToneOperator::Aces => {
+                ((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0)
+            }
+        }
+    }
+}
+
+/// 8-bit sRGB RGBA bytes of a frame after tone mapping (alpha stays linear, as PNG
+/// expects).
+pub fn to_srgb8(frame: &Frame, tone: &ToneMap) -> Vec<u8> {
+    let encode = |c: f32| (linear_to_srgb(tone.apply(c)) * 255.0).round() as u8;
     frame
         .pixels
         .iter()
         .flat_map(|p| {
             [
-                (linear_to_srgb(p[0]) * 255.0).round() as u8,
-                (linear_to_srgb(p[1]) * 255.0).round() as u8,
-                (linear_to_srgb(p[2]) * 255.0).round() as u8,
+                encode(p[0]),
+                encode(p[1]),
+                encode(p[2]),
                 (p[3].clamp(0.0, 1.0) * 255.0).round() as u8,
             ]
         })
         .collect()
 }
 
-pub fn write(frame: &Frame, path: &Path) -> Result<()> {
+/// Write a frame: PNG tone mapped and sRGB encoded, EXR linear HDR.
+pub fn write(frame: &Frame, path: &Path, tone: &ToneMap) -> Result<()> {
     match format_for(path)? {
         ImageFormat::Png => {
             image::save_buffer(
                 path,
-                &to_srgb8(frame),
+                &to_srgb8(frame, tone),
                 frame.width,
                 frame.height,
                 image::ExtendedColorType::Rgba8,

@@ -66,6 +66,7 @@ fn render_writes_png_and_exr_with_timings() {
         let out = String::from_utf8_lossy(&o.stdout);
         assert!(o.status.success(), "{}", stderr(&o));
         for pass in [
+            "environment SAT",
             "sweep setup",
             "sweep ",
             "composite",
@@ -163,6 +164,33 @@ fn bad_sweep_options_are_clear_errors() {
     );
     assert_clean_failure(&["render", "--softness", "-1", "-o", "x.png"], "softness");
     assert_clean_failure(&["render", "--clip", "0,0,1", "-o", "x.png"], "--clip");
+}
+
+#[test]
+fn bad_environment_maps_are_clear_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let corrupt = dir.path().join("corrupt.hdr");
+    std::fs::write(&corrupt, b"#?RADIANCE but not really").unwrap();
+    let square = dir.path().join("square.png");
+    image::RgbImage::from_pixel(4, 4, image::Rgb([9, 9, 9]))
+        .save(&square)
+        .unwrap();
+    assert_clean_failure(
+        &["render", "--env", "/no/such/map.exr", "-o", "x.png"],
+        "no such file",
+    );
+    assert_clean_failure(
+        &["render", "--env", corrupt.to_str().unwrap(), "-o", "x.png"],
+        "corrupt.hdr",
+    );
+    assert_clean_failure(
+        &["render", "--env", square.to_str().unwrap(), "-o", "x.png"],
+        "twice as wide as high",
+    );
+    assert_clean_failure(
+        &["render", "--exposure", "inf", "-o", "x.png"],
+        "--exposure",
+    );
 }
 
 fn image_size(path: &Path) -> (usize, usize) {

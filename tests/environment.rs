@@ -143,3 +143,187 @@ fn bad_environment_files_are_clear_errors() {
     std::fs::write(&txt, b"x").unwrap();
     assert!(err(&txt).contains("unknown extension"));
 }
+
+mod composite {
+    use super::common::with_context;
+    use glam::Vec3;
+    use refrakt::environment::EnvironmentMap;
+    use refrakt::render::{Camera, Model, RenderOptions, Renderer, SweepOptions};
+    use refrakt::transfer::{Piecewise, TransferFunctions};
+    use refrakt::volume::{Volume, Voxels};
+
+    fn f32_volume(n: u32, f: impl Fn(Vec3) -> f32) -> Volume {
+        let mut v = Vec::new();
+        for z in 0..n {
+            for y in 0..n {
+                for x in 0..n {
+                    let p = Vec3::new(x as f32, y as f32, z as f32) / n as f32
+                        + Vec3::splat(0.5 / n as f32 - 0.5);
+                    v.push(f(p).clamp(0.0, 1.0));
+                }
+            }
+        }
+        let mut vol = Volume::new([n; 3], [1.0; 3], Voxels::F32(v)).unwrap();
+        vol.range = Some((0.0, 1.0));
+        vol
+    }
+
+    fn face_on() -> Camera {
+        Camera {
+            azimuth: 0.0,
+            elevation: 0.0,
+            distance: 2.5,
+            fov_y: 20.0,
+        }
+    }
+
+    #[test]
+    fn constant_map_behind_empty_and_tinted_volumes() {
+        with_context(|ctx| {
+            let colour = [0.3f32, 0.6, 0.9];
+            let map = EnvironmentMap::constant(64, colour).unwrap();
+            // Empty volume: the map's colour exactly, in the linear frame and after 8-bit
+            // encoding without tone mapping.
+            let empty = f32_volume(16, |_| 0.0);
+            let mut r = Renderer::new(ctx, &empty, &TransferFunctions::default()).unwrap();
+            r.set_environment(Some(&map)).unwrap();
+            let opts = RenderOptions {
+                width: 24,
+                height: 16,
+                ..Default::default()
+            };
+            let f = r.render(Model::Refract, &face_on(), &opts).unwrap();
+            for p in &f.pixels {
+                for k in 0..3 {
+                    assert!((p[k] - colour[k]).abs() < 1e-6, "{p:?}");
+                }
+            }
+            let none = refrakt::output::ToneMap {
+                exposure: 0.0,
+                operator: refrakt::output::ToneOperator::None,
+            };
+            let bytes = refrakt::output::to_srgb8(&f, &none);
+            let expect =
+                colour.map(|c| (refrakt::output::linear_to_srgb(c) * 255.0).round() as i32);
+            for k in 0..3 {
+                assert!((bytes[k] as i32 - expect[k]).abs() <= 1);
+            }
+            // A non-absorbing medium, 8 voxels thick along the view (one-voxel ramps inside
+            // the volume), medium m^s so the ramps add what they take away: tinted by m^8.
+            let m = [0.95f32, 0.8, 0.9];
+            let tf = TransferFunctions {
+                medium: Piecewise::new(
+                    (0..=64)
+                        .map(|i| {
+                            let s = i as f32 / 64.0;
+                            (s, m.map(|c| c.powf(s)))
+                        })
+                        .collect(),
+                ),
+                ..Default::default()
+            };
+            let slab = f32_volume(16, |p| {
+                let z = (p.z + 0.5) * 16.0;
+                (z - 3.5).clamp(0.0, 1.0).min((12.5 - z).clamp(0.0, 1.0))
+            });
+            let mut r = Renderer::new(ctx, &slab, &tf).unwrap();
+            r.set_environment(Some(&map)).unwrap();
+            let opts = RenderOptions {
+                width: 24,
+                height: 16,
+                sweep: SweepOptions {
+                    specular: 0.0,
+                    ..Default::default()
+                },
+                ..Default::default()
+            };
+            let f = r.render(Model::Refract, &face_on(), &opts).unwrap();
+            let p = f.pixel(12, 8);
+            for k in 0..3 {
+                let expected = colour[k] * m[k].powf(8.0);
+                assert!(
+                    (p[k] - expected).abs() <= 1.0 / 255.0,
+                    "channel {k}: {} vs {expected}",
+                    p[k]
+                );
+            }
+        });
+    }
+
+    /// Behind a refracting sphere, neighbouring rays leave in very different directions;
+    /// averaging the map over their footprint removes the noise a single lookup shows.
+    /// Pixels whose rays were not bent are the same either way.
+    #[test]
+    fn footprint_filtering_smooths_refracted_environment() {
+        with_context(|ctx| {
+            let n = 48u32;
+            let vox = 1.0 / n as f32;
+            let vol = f32_volume(n, |p| 0.5 + (0.3 - p.length()) / vox);
+            let tf = TransferFunctions {
+                eta: Piecewise::new(vec![(0.0, [1.0]), (1.0, [1.6])]),
+                ..Default::default()
+            };
+            let map = EnvironmentMap::procedural(512).unwrap();
+            let cam = Camera {
+                azimuth: 20.0,
+                elevation: 10.0,
+                distance: 2.2,
+                fov_y: 35.0,
+            };
+            let (w, h) = (64u32, 64u32);
+            let mut r = Renderer::new(ctx, &vol, &tf).unwrap();
+            r.set_environment(Some(&map)).unwrap();
+            let render = |r: &mut Renderer, footprint: bool| {
+                let opts = RenderOptions {
+                    width: w,
+                    height: h,
+                    sweep: SweepOptions {
+                        specular: 0.0,
+                        env_footprint: footprint,
+                        ..Default::default()
+                    },
+                    ..Default::default()
+                };
+                r.render(Model::Refract, &cam, &opts).unwrap()
+            };
+            let (sat, single) = (render(&mut r, true), render(&mut r, false));
+            let lum = |p: [f32; 4]| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+            // Mean |Laplacian| over the sphere's centre region (refracted) and a corner (not).
+            let laplacian = |f: &refrakt::render::Frame, x0: u32, x1: u32, y0: u32, y1: u32| {
+                let mut acc = 0.0f64;
+                for y in y0..y1 {
+                    for x in x0..x1 {
+                        let c = lum(f.pixel(x, y));
+                        let l = lum(f.pixel(x - 1, y))
+                            + lum(f.pixel(x + 1, y))
+                            + lum(f.pixel(x, y - 1))
+                            + lum(f.pixel(x, y + 1))
+                            - 4.0 * c;
+                        acc += l.abs() as f64;
+                    }
+                }
+                acc / ((x1 - x0) * (y1 - y0)) as f64
+            };
+            let (in_sat, in_single) = (
+                laplacian(&sat, 24, 40, 24, 40),
+                laplacian(&single, 24, 40, 24, 40),
+            );
+            println!(
+                "mean |Laplacian| inside the sphere: SAT {in_sat:.4}, single lookup {in_single:.4}"
+            );
+            assert!(
+                in_sat < 0.8 * in_single,
+                "SAT {in_sat} vs single {in_single}"
+            );
+            for y in 1..8 {
+                for x in 1..8 {
+                    assert_eq!(
+                        sat.pixel(x, y),
+                        single.pixel(x, y),
+                        "unbent pixel ({x}, {y}) differs"
+                    );
+                }
+            }
+        });
+    }
+}

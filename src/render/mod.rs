@@ -9,6 +9,7 @@ pub mod sweep;
 use anyhow::{bail, ensure, Result};
 use glam::Vec3;
 
+use crate::environment::{EnvironmentMap, SummedAreaTable};
 use crate::transfer::TransferFunctions;
 use crate::vk::{Context, Filter, Image, Sampler, Timings};
 use crate::volume::Volume;
@@ -200,6 +201,37 @@ pub struct Renderer {
     preint: PreintegrationTable,
     ea: Option<ea::EaPass>,
     sweep: Option<sweep::SweepPass>,
+    env: Environment,
+}
+
+/// The environment map on the GPU with its summed-area table. A 2 × 1 black map stands in
+/// when there is none, so the composite's descriptor set is always complete.
+struct Environment {
+    map: EnvironmentMap,
+    image: Image,
+    sat: SummedAreaTable,
+    enabled: bool,
+}
+
+impl Environment {
+    fn new(ctx: &Context, map: Option<&EnvironmentMap>) -> Result<(Self, Timings)> {
+        let enabled = map.is_some();
+        let map = match map {
+            Some(m) => m.clone(),
+            None => EnvironmentMap::constant(2, [0.0; 3])?,
+        };
+        let image = map.upload(ctx)?;
+        let (sat, timings) = SummedAreaTable::build(ctx, &map, &image)?;
+        Ok((
+            Self {
+                map,
+                image,
+                sat,
+                enabled,
+            },
+            timings,
+        ))
+    }
 }
 
 /// Passes own images of the output size; keep one until the size changes.
@@ -245,6 +277,7 @@ impl Renderer {
         let tf_image = tf.upload(ctx)?;
         let linear = Sampler::new(ctx, Filter::Linear, "linear clamp")?;
         let preint = PreintegrationTable::new(ctx)?;
+        let (env, _) = Environment::new(ctx, None)?;
         let e = volume.normalised_extent();
         Ok(Self {
             ctx: ctx.clone(),
@@ -261,7 +294,26 @@ impl Renderer {
             preint,
             ea: None,
             sweep: None,
+            env,
         })
+    }
+
+    /// Put an environment map behind the volume (`None`: the constant background). The
+    /// summed-area table is rebuilt only when the map differs; returns the GPU time of that
+    /// build ("environment SAT"), empty when nothing changed.
+    pub fn set_environment(&mut self, map: Option<&EnvironmentMap>) -> Result<Timings> {
+        let unchanged = match map {
+            Some(m) => self.env.enabled && self.env.map == *m,
+            None => !self.env.enabled,
+        };
+        if unchanged {
+            return Ok(Timings::default());
+        }
+        // The composite's descriptor set names the old images.
+        self.sweep = None;
+        let (env, timings) = Environment::new(&self.ctx, map)?;
+        self.env = env;
+        Ok(timings)
     }
 
     pub fn context(&self) -> &Context {
@@ -344,6 +396,12 @@ impl Renderer {
             }
             Model::Refract => {
                 let mut timings = self.update_preintegration()?;
+                let env = sweep::EnvInputs {
+                    map: &self.env.image,
+                    sat: &self.env.sat.table,
+                    mean: self.env.sat.mean,
+                    enabled: self.env.enabled,
+                };
                 let pass = sized_pass(&mut self.sweep, opts, |w, h| {
                     sweep::SweepPass::new(
                         &self.ctx,
@@ -351,6 +409,7 @@ impl Renderer {
                         &self.tf_image,
                         self.preint.image(),
                         &self.linear,
+                        &env,
                         w,
                         h,
                     )
@@ -363,6 +422,7 @@ impl Renderer {
                     opts,
                     &opts.sweep,
                     [&self.volume_tex, &self.tf_image, self.preint.image()],
+                    &env,
                 )?;
                 timings.extend(std::mem::take(&mut frame.timings));
                 frame.timings = timings;

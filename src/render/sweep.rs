@@ -129,6 +129,11 @@ pub struct SweepOptions {
     /// Test-only: skip the inter-plane barrier before this plane, to prove synchronization
     /// validation notices.
     pub drop_barrier_before_plane: Option<u32>,
+    /// Rotation of the environment map about the world's up axis, degrees.
+    pub env_rotation: f32,
+    /// Average the environment over each pixel's refracted footprint with the summed-area
+    /// table (thesis Fig. 4.5); false = one bilinear lookup per pixel (for comparison).
+    pub env_footprint: bool,
 }
 
 impl Default for SweepOptions {
@@ -142,6 +147,8 @@ impl Default for SweepOptions {
             unlit: false,
             dumps: Vec::new(),
             drop_barrier_before_plane: None,
+            env_rotation: 0.0,
+            env_footprint: true,
         }
     }
 }
@@ -179,6 +186,11 @@ impl SweepOptions {
             "intensity gain bound {} must be >= 1",
             self.max_gain
         );
+        ensure!(
+            self.env_rotation.is_finite(),
+            "environment rotation {} must be a finite number of degrees",
+            self.env_rotation
+        );
         if let Some((n, o)) = self.clip {
             ensure!(
                 n.is_finite() && n.length() > 1e-6 && o.is_finite(),
@@ -203,6 +215,23 @@ struct SweepParams {
     specular: [f32; 4],
     clip: [f32; 4],
     background: [f32; 4],
+}
+
+/// std140 mirror of `EnvParams` in glsl/sweep_composite.comp.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct EnvParams {
+    info: [f32; 4],
+    mean: [f32; 4],
+}
+
+/// The environment as the composite sees it: the map, its summed-area table and whether
+/// to use them at all (otherwise the constant background).
+pub(crate) struct EnvInputs<'a> {
+    pub map: &'a Image,
+    pub sat: &'a Image,
+    pub mean: [f32; 4],
+    pub enabled: bool,
 }
 
 #[repr(C)]
@@ -298,15 +327,18 @@ pub(super) struct SweepPass {
     composite: ComputePipeline,
     output: Image,
     readback: Buffer,
+    env_params: Buffer,
 }
 
 impl SweepPass {
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         ctx: &Context,
         volume: &Image,
         tf: &Image,
         preint: &Image,
         sampler: &Sampler,
+        env: &EnvInputs,
         width: u32,
         height: u32,
     ) -> Result<Self> {
@@ -387,8 +419,18 @@ impl SweepPass {
             },
             "sweep frame",
         )?;
+        let env_params = Buffer::new(
+            ctx,
+            std::mem::size_of::<EnvParams>() as u64,
+            vk::usage::UNIFORM_BUFFER,
+            Memory::Upload,
+            "environment params",
+        )?;
         let mut composite_bindings = sampled.clone();
         composite_bindings.push(Binding::StorageImage(&output));
+        composite_bindings.push(Binding::Texture(env.map, sampler));
+        composite_bindings.push(Binding::Texture(env.sat, sampler));
+        composite_bindings.push(Binding::Uniform(&env_params));
         let composite_set = DescriptorSet::new(ctx, &composite_bindings, "sweep composite")?;
         let mut setup_bindings: Vec<Binding> = common.to_vec();
         for s in &states {
@@ -436,6 +478,7 @@ impl SweepPass {
             composite,
             output,
             readback,
+            env_params,
         })
     }
 
@@ -464,6 +507,7 @@ impl SweepPass {
         opts: &RenderOptions,
         sweep: &SweepOptions,
         inputs: [&Image; 3],
+        env: &EnvInputs,
     ) -> Result<(Frame, Vec<Dump>, SweepStats)> {
         let (eye, forward, right, up) = camera.frame();
         let travel = -sweep.light.towards.normalize();
@@ -542,6 +586,16 @@ impl SweepPass {
             background: opts.background,
         };
         self.params.write(0, bytemuck::bytes_of(&p))?;
+        let e = EnvParams {
+            info: [
+                if env.enabled { 1.0 } else { 0.0 },
+                sweep.env_rotation.to_radians(),
+                if sweep.env_footprint { 1.0 } else { 0.0 },
+                0.0,
+            ],
+            mean: env.mean,
+        };
+        self.env_params.write(0, bytemuck::bytes_of(&e))?;
 
         let dump_buffers: Vec<(StateBuffer, u32, Buffer)> = sweep
             .dumps
@@ -560,7 +614,7 @@ impl SweepPass {
 
         let groups = [self.width.div_ceil(8), self.height.div_ceil(8), 1];
         let timings: Timings = ctx.execute(|rec| {
-            for img in inputs {
+            for img in inputs.into_iter().chain([env.map, env.sat]) {
                 rec.transition_all(img, Access::Sampled);
             }
             rec.begin_scope("sweep setup");
