@@ -4,12 +4,9 @@
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 
-use super::{Camera, Frame, RenderOptions, VolumeInfo};
+use super::{Camera, Frame, FrameTarget, RenderOptions, VolumeInfo};
 use crate::shaders;
-use crate::vk::{
-    self, Access, Binding, Buffer, ComputePipeline, Context, DescriptorSet, Image, ImageDesc,
-    ImageKind, Memory, Sampler,
-};
+use crate::vk::{Access, Binding, Buffer, ComputePipeline, Context, DescriptorSet, Image, Sampler};
 
 /// std140 mirror of `Params` in glsl/ea.comp.
 #[repr(C)]
@@ -27,8 +24,7 @@ struct Params {
 
 pub(super) struct EaPass {
     params: Buffer,
-    output: Image,
-    readback: Buffer,
+    output: FrameTarget,
     set: DescriptorSet,
     pipeline: ComputePipeline,
     width: u32,
@@ -45,31 +41,8 @@ impl EaPass {
         width: u32,
         height: u32,
     ) -> Result<Self> {
-        let params = Buffer::new(
-            ctx,
-            std::mem::size_of::<Params>() as u64,
-            vk::usage::UNIFORM_BUFFER,
-            Memory::Upload,
-            "ea params",
-        )?;
-        let output = Image::new(
-            ctx,
-            ImageDesc {
-                kind: ImageKind::D2,
-                format: vk::Format::R32G32B32A32_SFLOAT,
-                extent: [width, height, 1],
-                layers: 1,
-                usage: vk::usage::STORAGE | vk::usage::TRANSFER_SRC,
-            },
-            "ea frame",
-        )?;
-        let readback = Buffer::new(
-            ctx,
-            output.layer_bytes()?,
-            vk::usage::BUFFER_TRANSFER_DST,
-            Memory::Readback,
-            "ea readback",
-        )?;
+        let params = Buffer::uniform::<Params>(ctx, "ea params")?;
+        let output = FrameTarget::new(ctx, width, height, "ea frame")?;
         let set = DescriptorSet::new(
             ctx,
             &[
@@ -77,7 +50,7 @@ impl EaPass {
                 Binding::Texture(volume, sampler),
                 Binding::Texture(tf, sampler),
                 Binding::Texture(preint, sampler),
-                Binding::StorageImage(&output),
+                Binding::StorageImage(&output.image),
             ],
             "ea",
         )?;
@@ -85,7 +58,6 @@ impl EaPass {
         Ok(Self {
             params,
             output,
-            readback,
             set,
             pipeline,
             width,
@@ -132,13 +104,11 @@ impl EaPass {
             size: [self.width, self.height, 0, 0],
         };
         self.params.write(0, bytemuck::bytes_of(&p))?;
-        let size = self.output.layer_bytes()?;
-        let readback = &self.readback;
         let timings = ctx.execute(|rec| {
             rec.transition_all(volume, Access::Sampled);
             rec.transition_all(tf, Access::Sampled);
             rec.transition_all(preint, Access::Sampled);
-            rec.transition_all(&self.output, Access::ComputeStorage);
+            rec.transition_all(&self.output.image, Access::ComputeStorage);
             rec.begin_scope("ea raymarch");
             rec.dispatch(
                 &self.pipeline,
@@ -147,11 +117,10 @@ impl EaPass {
                 [self.width.div_ceil(8), self.height.div_ceil(8), 1],
             )?;
             rec.end_scope();
-            rec.copy_image_to_buffer(&self.output, 0, readback);
+            self.output.record_copy(rec);
             Ok(())
         })?;
-        let pixels: Vec<[f32; 4]> =
-            bytemuck::cast_slice(&readback.mapped()?[..size as usize]).to_vec();
+        let pixels = self.output.pixels()?;
         // Longest possible ray through the box, in steps: the box diagonal.
         let max_steps =
             super::steps_for(info.half_extent, info.ref_step, opts.sample_distance) as u32;

@@ -11,7 +11,9 @@ use glam::Vec3;
 
 use crate::environment::{EnvironmentMap, SummedAreaTable};
 use crate::transfer::TransferFunctions;
-use crate::vk::{Context, Filter, Image, Sampler, Timings};
+use crate::vk::{
+    self, Buffer, Context, Filter, Image, ImageDesc, ImageKind, Recorder, Sampler, Timings,
+};
 use crate::volume::Volume;
 
 pub use preintegration::{PreintegrationTable, TABLE_SIZE};
@@ -231,6 +233,45 @@ impl Environment {
             },
             timings,
         ))
+    }
+}
+
+/// The RGBA32F image a pass writes its frame into, and the host buffer it is copied to.
+pub(crate) struct FrameTarget {
+    pub image: Image,
+    readback: Buffer,
+    pixels: usize,
+}
+
+impl FrameTarget {
+    pub fn new(ctx: &Context, width: u32, height: u32, name: &str) -> Result<Self> {
+        let image = Image::new(
+            ctx,
+            ImageDesc {
+                kind: ImageKind::D2,
+                format: vk::Format::R32G32B32A32_SFLOAT,
+                extent: [width, height, 1],
+                layers: 1,
+                usage: vk::usage::STORAGE | vk::usage::TRANSFER_SRC,
+            },
+            name,
+        )?;
+        let readback = Buffer::readback(ctx, image.layer_bytes()?, &format!("{name} readback"))?;
+        Ok(Self {
+            image,
+            readback,
+            pixels: width as usize * height as usize,
+        })
+    }
+
+    /// Record the copy of the finished frame to the host.
+    pub fn record_copy(&self, rec: &mut Recorder) {
+        rec.copy_image_to_buffer(&self.image, 0, &self.readback);
+    }
+
+    /// The frame, once the submission that recorded the copy has completed.
+    pub fn pixels(&self) -> Result<Vec<[f32; 4]>> {
+        self.readback.read_values(self.pixels)
     }
 }
 

@@ -20,11 +20,11 @@ use anyhow::{bail, ensure, Result};
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
-use super::{Camera, Frame, RenderOptions, VolumeInfo};
+use super::{Camera, Frame, FrameTarget, RenderOptions, VolumeInfo};
 use crate::shaders;
 use crate::vk::{
     self, Access, Binding, Buffer, ComputePipeline, Context, DescriptorSet, Framebuffer,
-    GraphicsPipeline, Image, ImageDesc, ImageKind, LayerView, Memory, RenderPass, Sampler, Timings,
+    GraphicsPipeline, Image, ImageDesc, ImageKind, LayerView, RenderPass, Sampler, Timings,
 };
 
 /// The six state buffers, in attachment order.
@@ -325,8 +325,7 @@ pub(super) struct SweepPass {
     setup: ComputePipeline,
     sweep: GraphicsPipeline,
     composite: ComputePipeline,
-    output: Image,
-    readback: Buffer,
+    output: FrameTarget,
     env_params: Buffer,
 }
 
@@ -350,13 +349,7 @@ impl SweepPass {
                 max_attachments
             );
         }
-        let params = Buffer::new(
-            ctx,
-            std::mem::size_of::<SweepParams>() as u64,
-            vk::usage::UNIFORM_BUFFER,
-            Memory::Upload,
-            "sweep params",
-        )?;
+        let params = Buffer::uniform::<SweepParams>(ctx, "sweep params")?;
         let mut states = Vec::new();
         for b in StateBuffer::ALL {
             let image = Image::new(
@@ -408,26 +401,10 @@ impl SweepPass {
             }
         }
         let sweep_set = DescriptorSet::new(ctx, &sampled, "sweep")?;
-        let output = Image::new(
-            ctx,
-            ImageDesc {
-                kind: ImageKind::D2,
-                format: vk::Format::R32G32B32A32_SFLOAT,
-                extent: [width, height, 1],
-                layers: 1,
-                usage: vk::usage::STORAGE | vk::usage::TRANSFER_SRC,
-            },
-            "sweep frame",
-        )?;
-        let env_params = Buffer::new(
-            ctx,
-            std::mem::size_of::<EnvParams>() as u64,
-            vk::usage::UNIFORM_BUFFER,
-            Memory::Upload,
-            "environment params",
-        )?;
+        let output = FrameTarget::new(ctx, width, height, "sweep frame")?;
+        let env_params = Buffer::uniform::<EnvParams>(ctx, "environment params")?;
         let mut composite_bindings = sampled.clone();
-        composite_bindings.push(Binding::StorageImage(&output));
+        composite_bindings.push(Binding::StorageImage(&output.image));
         composite_bindings.push(Binding::Texture(env.map, sampler));
         composite_bindings.push(Binding::Texture(env.sat, sampler));
         composite_bindings.push(Binding::Uniform(&env_params));
@@ -456,13 +433,6 @@ impl SweepPass {
             4,
             "sweep composite",
         )?;
-        let readback = Buffer::new(
-            ctx,
-            output.layer_bytes()?,
-            vk::usage::BUFFER_TRANSFER_DST,
-            Memory::Readback,
-            "sweep readback",
-        )?;
         Ok(Self {
             width,
             height,
@@ -477,7 +447,6 @@ impl SweepPass {
             sweep,
             composite,
             output,
-            readback,
             env_params,
         })
     }
@@ -601,11 +570,9 @@ impl SweepPass {
             .dumps
             .iter()
             .map(|&(b, plane)| {
-                let buf = Buffer::new(
+                let buf = Buffer::readback(
                     ctx,
-                    self.output.layer_bytes()?,
-                    vk::usage::BUFFER_TRANSFER_DST,
-                    Memory::Readback,
+                    self.states[b.index()].image.layer_bytes()?,
                     &format!("dump {}@{plane}", b.name()),
                 )?;
                 Ok((b, plane, buf))
@@ -690,7 +657,7 @@ impl SweepPass {
                 .map(|s| (&s.image, 0..2, Access::SampledGeneral))
                 .collect();
             rec.transition_many(&all);
-            rec.transition_all(&self.output, Access::ComputeStorage);
+            rec.transition_all(&self.output.image, Access::ComputeStorage);
             rec.dispatch(
                 &self.composite,
                 &self.composite_set,
@@ -698,11 +665,11 @@ impl SweepPass {
                 groups,
             )?;
             rec.end_scope();
-            rec.copy_image_to_buffer(&self.output, 0, &self.readback);
+            self.output.record_copy(rec);
             Ok(())
         })?;
-        let size = self.output.layer_bytes()? as usize;
-        let pixels: Vec<[f32; 4]> = bytemuck::cast_slice(&self.readback.mapped()?[..size]).to_vec();
+        let pixels = self.output.pixels()?;
+        let count = self.width as usize * self.height as usize;
         let dumps = dump_buffers
             .iter()
             .map(|(b, plane, buf)| {
@@ -712,7 +679,7 @@ impl SweepPass {
                     depth: planes.depth(*plane),
                     width: self.width,
                     height: self.height,
-                    pixels: bytemuck::cast_slice(&buf.mapped()?[..size]).to_vec(),
+                    pixels: buf.read_values(count)?,
                 })
             })
             .collect::<Result<Vec<_>>>()?;

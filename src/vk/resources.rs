@@ -84,6 +84,39 @@ impl Buffer {
         })
     }
 
+    /// A host-written uniform buffer for one `T` (std140 layout is the caller's business).
+    pub fn uniform<T>(ctx: &Context, name: &str) -> Result<Self> {
+        Self::new(
+            ctx,
+            std::mem::size_of::<T>() as u64,
+            vk::BufferUsageFlags::UNIFORM_BUFFER,
+            Memory::Upload,
+            name,
+        )
+    }
+
+    /// A host-visible buffer that copies land in.
+    pub fn readback(ctx: &Context, size: u64, name: &str) -> Result<Self> {
+        Self::new(
+            ctx,
+            size,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            Memory::Readback,
+            name,
+        )
+    }
+
+    /// The first `count` values of a host-visible buffer, after the GPU work that wrote
+    /// them has been waited for.
+    pub fn read_values<T: bytemuck::Pod>(&self, count: usize) -> Result<Vec<T>> {
+        let bytes = count * std::mem::size_of::<T>();
+        let mapped = self.mapped()?;
+        if bytes > mapped.len() {
+            bail!("reading {bytes} bytes from a {}-byte buffer", mapped.len());
+        }
+        Ok(bytemuck::pod_collect_to_vec(&mapped[..bytes]))
+    }
+
     pub fn size(&self) -> u64 {
         self.size
     }
