@@ -62,6 +62,8 @@ enum SceneArg {
     Box,
     /// Glass sphere (value 0.5) above an opaque floor (value 1).
     GlassFloor,
+    /// A wine glass (value 0.4) holding liquid (value 0.8), after the thesis' Fig. 6.3.
+    WineGlass,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -92,7 +94,7 @@ struct RenderArgs {
     volume_size: u32,
     /// Transfer functions: a preset (ct-bone, glass, wine-glass, supernova, sphere-white,
     /// glass-floor) or a TOML file. Default: supernova for the shell, glass-floor for
-    /// glass-floor, sphere-white otherwise.
+    /// glass-floor, wine-glass for wine-glass, sphere-white otherwise.
     #[arg(long, value_name = "PRESET|FILE")]
     tf: Option<String>,
     /// Rendering model.
@@ -294,6 +296,7 @@ fn scene_name(scene: SceneArg) -> &'static str {
         SceneArg::Sphere => "sphere",
         SceneArg::Box => "box",
         SceneArg::GlassFloor => "glass-floor",
+        SceneArg::WineGlass => "wine-glass",
     }
 }
 
@@ -438,6 +441,7 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
         match args.scene {
             SceneArg::Shell => "supernova",
             SceneArg::GlassFloor => "glass-floor",
+            SceneArg::WineGlass => "wine-glass",
             _ => "sphere-white",
         }
         .to_string()
@@ -449,6 +453,7 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
         SceneArg::Sphere => procedural::sphere(n, 0.35, 1.0)?,
         SceneArg::Box => procedural::boxed(n, [0.3, 0.25, 0.2], 1.0)?,
         SceneArg::GlassFloor => procedural::sphere_on_floor(n)?,
+        SceneArg::WineGlass => procedural::wine_glass(n)?,
     };
     let model = match args.model {
         ModelArg::Ea => Model::Ea,

@@ -147,3 +147,26 @@ pub fn sphere_on_floor(n: u32) -> Result<Volume> {
         sphere.max(floor)
     })
 }
+
+/// A wine glass with liquid, after the thesis' glass data set (Fig. 6.3): glass of value 0.4
+/// (a bowl open at the top, a stem, a foot) holding liquid of value 0.8, for the
+/// `wine-glass` transfer functions.
+pub fn wine_glass(n: u32) -> Result<Volume> {
+    let voxel = 1.0 / n as f32;
+    from_fn(n, |p| {
+        let c = [0.0, 0.1, 0.0];
+        let d = [p[0] - c[0], p[1] - c[1], p[2] - c[2]];
+        let r = length(d);
+        let (r_in, r_out) = (0.24, 0.265);
+        let rim = c[1] + 0.13;
+        let below_rim = rim - p[1];
+        let bowl = inside((r_out - r).min(r - r_in).min(below_rim), voxel);
+        let radial = (p[0] * p[0] + p[2] * p[2]).sqrt();
+        let stem_top = c[1] - r_out + 0.01;
+        let stem = inside((0.025 - radial).min(stem_top - p[1]).min(p[1] + 0.33), voxel);
+        let foot = inside((0.17 - radial).min(0.015 - (p[1] + 0.34).abs()), voxel);
+        let glass = bowl.max(stem).max(foot);
+        let liquid = inside((r_in - r).min(c[1] + 0.02 - p[1]), voxel);
+        (0.4 * glass).max(0.8 * liquid)
+    })
+}
