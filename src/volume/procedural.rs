@@ -163,7 +163,10 @@ pub fn wine_glass(n: u32) -> Result<Volume> {
         let bowl = inside((r_out - r).min(r - r_in).min(below_rim), voxel);
         let radial = (p[0] * p[0] + p[2] * p[2]).sqrt();
         let stem_top = c[1] - r_out + 0.01;
-        let stem = inside((0.025 - radial).min(stem_top - p[1]).min(p[1] + 0.33), voxel);
+        let stem = inside(
+            (0.025 - radial).min(stem_top - p[1]).min(p[1] + 0.33),
+            voxel,
+        );
         let foot = inside((0.17 - radial).min(0.015 - (p[1] + 0.34).abs()), voxel);
         let glass = bowl.max(stem).max(foot);
         let liquid = inside((r_in - r).min(c[1] + 0.02 - p[1]), voxel);
