@@ -11,8 +11,8 @@
 //!
 //! Synchronization: the state images live in GENERAL layout, so the only barriers between
 //! planes are memory dependencies on exactly the layers that change role (the layer just
-//! written becomes sampled, the layer just sampled becomes an attachment), batched into one
-//! vkCmdPipelineBarrier2. GENERAL is what lets one descriptor set name both layers: the
+//! written becomes sampled, the layer just sampled becomes an attachment), one
+//! vkCmdPipelineBarrier2 for each of the two roles, covering all six images. GENERAL is what lets one descriptor set name both layers: the
 //! validation layer checks the layout of every statically used descriptor at every draw
 //! (see docs/NOTES.md).
 
@@ -455,6 +455,18 @@ impl SweepPass {
         (self.width, self.height)
     }
 
+    /// The same layers of all six state images, bound for the same use.
+    fn state_layers(
+        &self,
+        layers: std::ops::Range<u32>,
+        access: Access,
+    ) -> Vec<(&Image, std::ops::Range<u32>, Access)> {
+        self.states
+            .iter()
+            .map(|s| (&s.image, layers.clone(), access))
+            .collect()
+    }
+
     /// State-buffer traffic of one plane (see [`SweepStats::bytes_per_plane`]).
     pub fn bytes_per_plane(&self, soft: bool, specular: bool) -> u64 {
         let pixels = self.width as u64 * self.height as u64;
@@ -585,20 +597,10 @@ impl SweepPass {
                 rec.transition_all(img, Access::Sampled);
             }
             rec.begin_scope("sweep setup");
-            let all: Vec<_> = self
-                .states
-                .iter()
-                .map(|s| (&s.image, 0..2, Access::ComputeStorage))
-                .collect();
-            rec.transition_many(&all);
+            rec.transition_many(&self.state_layers(0..2, Access::ComputeStorage));
             rec.dispatch(&self.setup, &self.setup_set, &[], groups)?;
             // Both layers become sampled: every draw's set names both (see module docs).
-            let all: Vec<_> = self
-                .states
-                .iter()
-                .map(|s| (&s.image, 0..2, Access::SampledGeneral))
-                .collect();
-            rec.transition_many(&all);
+            rec.transition_many(&self.state_layers(0..2, Access::SampledGeneral));
             rec.end_scope();
 
             rec.begin_scope("sweep");
@@ -607,9 +609,9 @@ impl SweepPass {
             for i in 0..planes.count {
                 let write = i % 2;
                 let read = 1 - write;
-                // The layer the previous plane wrote becomes sampled; begin_render_pass then
-                // makes the layer the previous plane sampled an attachment. Both go into
-                // one barrier batch per plane.
+                // The layer the previous plane wrote becomes sampled (one batched barrier
+                // over the six images); begin_render_pass then makes the layer the previous
+                // plane sampled an attachment (a second one). Nothing else is synchronised.
                 if sweep.drop_barrier_before_plane == Some(i) {
                     for s in &self.states {
                         rec.assume_without_barrier(
@@ -619,12 +621,7 @@ impl SweepPass {
                         );
                     }
                 } else {
-                    let items: Vec<_> = self
-                        .states
-                        .iter()
-                        .map(|s| (&s.image, read..read + 1, Access::SampledGeneral))
-                        .collect();
-                    rec.transition_many(&items);
+                    rec.transition_many(&self.state_layers(read..read + 1, Access::SampledGeneral));
                 }
                 let attachments: Vec<(&Image, u32)> =
                     self.states.iter().map(|s| (&s.image, write)).collect();
@@ -651,12 +648,7 @@ impl SweepPass {
 
             rec.begin_scope("composite");
             let last = (planes.count - 1) % 2;
-            let all: Vec<_> = self
-                .states
-                .iter()
-                .map(|s| (&s.image, 0..2, Access::SampledGeneral))
-                .collect();
-            rec.transition_many(&all);
+            rec.transition_many(&self.state_layers(0..2, Access::SampledGeneral));
             rec.transition_all(&self.output.image, Access::ComputeStorage);
             rec.dispatch(
                 &self.composite,

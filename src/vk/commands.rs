@@ -124,8 +124,8 @@ impl Recorder<'_> {
         self.transition_many(&[(image, layers, to)]);
     }
 
-    /// Several transitions in one vkCmdPipelineBarrier2 (one dependency per plane in the
-    /// sweep instead of one per image).
+    /// Several transitions in one vkCmdPipelineBarrier2 (in the sweep: one per role change
+    /// per plane instead of one per image).
     pub fn transition_many(&mut self, items: &[(&Image, Range<u32>, Access)]) {
         let mut barriers = Vec::new();
         for (image, layers, to) in items {
