@@ -282,30 +282,23 @@ impl SummedAreaTable {
             rec.begin_scope("environment SAT");
             rec.transition_all(map_image, Access::ComputeStorage);
             rec.transition_all(&table, Access::ComputeStorage);
-            let rows = SatPush {
-                mean,
-                pass: 0,
-                pad: [0; 3],
-            };
-            rec.dispatch(
-                &pipeline,
-                &set,
-                bytemuck::bytes_of(&rows),
-                [map.height.div_ceil(64), 1, 1],
-            )?;
-            // Columns read what the row pass wrote.
-            rec.transition_all(&table, Access::ComputeStorage);
-            let cols = SatPush {
-                mean,
-                pass: 1,
-                pad: [0; 3],
-            };
-            rec.dispatch(
-                &pipeline,
-                &set,
-                bytemuck::bytes_of(&cols),
-                [map.width.div_ceil(64), 1, 1],
-            )?;
+            // Rows (one invocation per row), then columns reading what the rows wrote.
+            for (pass, lines) in [(0u32, map.height), (1, map.width)] {
+                if pass == 1 {
+                    rec.transition_all(&table, Access::ComputeStorage);
+                }
+                let push = SatPush {
+                    mean,
+                    pass,
+                    pad: [0; 3],
+                };
+                rec.dispatch(
+                    &pipeline,
+                    &set,
+                    bytemuck::bytes_of(&push),
+                    [lines.div_ceil(64), 1, 1],
+                )?;
+            }
             rec.transition_all(&table, Access::Sampled);
             rec.end_scope();
             Ok(())

@@ -208,17 +208,22 @@ impl Recorder<'_> {
         let d = self.device();
         // SAFETY: recording; pipeline, layout and set are alive and compatible.
         unsafe {
-            d.cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::COMPUTE, pipeline.raw);
+            d.cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::COMPUTE, pipeline.core.raw);
             d.cmd_bind_descriptor_sets(
                 self.cmd,
                 vk::PipelineBindPoint::COMPUTE,
-                pipeline.layout,
+                pipeline.core.layout,
                 0,
                 &[set.raw],
                 &[],
             );
         }
-        self.push_constants(pipeline.layout, pipeline.push_size, &pipeline.name, push)?;
+        self.push_constants(
+            pipeline.core.layout,
+            pipeline.core.push_size,
+            &pipeline.core.name,
+            push,
+        )?;
         // SAFETY: recording with a compute pipeline bound.
         unsafe {
             self.device()
@@ -277,11 +282,11 @@ impl Recorder<'_> {
         let d = self.device();
         // SAFETY: recording; pipeline, layout and set are alive and compatible.
         unsafe {
-            d.cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::GRAPHICS, pipeline.raw);
+            d.cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::GRAPHICS, pipeline.core.raw);
             d.cmd_bind_descriptor_sets(
                 self.cmd,
                 vk::PipelineBindPoint::GRAPHICS,
-                pipeline.layout,
+                pipeline.core.layout,
                 0,
                 &[set.raw],
                 &[],
@@ -312,7 +317,12 @@ impl Recorder<'_> {
     /// Push constants for `pipeline` (bound with [`Self::bind_graphics`]) and draw one
     /// full-screen triangle inside the current render pass.
     pub fn draw_fullscreen(&mut self, pipeline: &GraphicsPipeline, push: &[u8]) -> Result<()> {
-        self.push_constants(pipeline.layout, pipeline.push_size, &pipeline.name, push)?;
+        self.push_constants(
+            pipeline.core.layout,
+            pipeline.core.push_size,
+            &pipeline.core.name,
+            push,
+        )?;
         // SAFETY: recording inside a render pass compatible with the bound pipeline.
         unsafe { self.device().cmd_draw(self.cmd, 3, 1, 0, 0) };
         Ok(())

@@ -10,7 +10,7 @@
 use anyhow::{ensure, Context as _, Result};
 use ash::vk;
 
-use super::pipeline::{pipeline_layout, shader_module};
+use super::pipeline::{pipeline_layout, shader_module, PipelineCore};
 use super::{Access, Context, DescriptorSet, LayerView};
 
 pub struct RenderPass {
@@ -140,11 +140,7 @@ impl Drop for Framebuffer {
 /// A graphics pipeline that draws one full-screen triangle (vertex shader generates it
 /// from gl_VertexIndex; no vertex buffers), with dynamic viewport and scissor, no blending.
 pub struct GraphicsPipeline {
-    ctx: Context,
-    pub(crate) raw: vk::Pipeline,
-    pub(crate) layout: vk::PipelineLayout,
-    pub(crate) push_size: u32,
-    pub(crate) name: String,
+    pub(crate) core: PipelineCore,
 }
 
 impl GraphicsPipeline {
@@ -224,30 +220,8 @@ impl GraphicsPipeline {
             device.destroy_shader_module(vs, None);
             device.destroy_shader_module(fs, None);
         }
-        let raw = match result {
-            Ok(p) => p[0],
-            Err((_, e)) => {
-                unsafe { device.destroy_pipeline_layout(layout, None) };
-                return Err(e).with_context(|| format!("creating graphics pipeline '{name}'"));
-            }
-        };
-        ctx.set_name(raw, name);
         Ok(Self {
-            ctx: ctx.clone(),
-            raw,
-            layout,
-            push_size,
-            name: name.to_owned(),
+            core: PipelineCore::finish(ctx, result, layout, push_size, name, "graphics")?,
         })
-    }
-}
-
-impl Drop for GraphicsPipeline {
-    fn drop(&mut self) {
-        // SAFETY: not in use by pending GPU work.
-        unsafe {
-            self.ctx.device().destroy_pipeline(self.raw, None);
-            self.ctx.device().destroy_pipeline_layout(self.layout, None);
-        }
     }
 }

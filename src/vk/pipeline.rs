@@ -181,13 +181,59 @@ pub(crate) fn shader_module(ctx: &Context, spirv: &[u8], name: &str) -> Result<v
     Ok(module)
 }
 
-/// A compute pipeline with one descriptor set and optional push constants.
-pub struct ComputePipeline {
+/// What compute and graphics pipelines share: the handle, its layout (one descriptor set,
+/// one push-constant range) and the name used in errors and debug labels.
+pub(crate) struct PipelineCore {
     ctx: Context,
     pub(crate) raw: vk::Pipeline,
     pub(crate) layout: vk::PipelineLayout,
     pub(crate) push_size: u32,
     pub(crate) name: String,
+}
+
+impl PipelineCore {
+    /// Take the result of vkCreate*Pipelines; on failure free the layout and say which
+    /// pipeline failed.
+    pub(crate) fn finish(
+        ctx: &Context,
+        result: std::result::Result<Vec<vk::Pipeline>, (Vec<vk::Pipeline>, vk::Result)>,
+        layout: vk::PipelineLayout,
+        push_size: u32,
+        name: &str,
+        kind: &str,
+    ) -> Result<Self> {
+        let raw = match result {
+            Ok(p) => p[0],
+            Err((_, e)) => {
+                // SAFETY: the layout was made for this pipeline and nothing else uses it.
+                unsafe { ctx.device().destroy_pipeline_layout(layout, None) };
+                return Err(e).with_context(|| format!("creating {kind} pipeline '{name}'"));
+            }
+        };
+        ctx.set_name(raw, name);
+        Ok(Self {
+            ctx: ctx.clone(),
+            raw,
+            layout,
+            push_size,
+            name: name.to_owned(),
+        })
+    }
+}
+
+impl Drop for PipelineCore {
+    fn drop(&mut self) {
+        // SAFETY: not in use by pending GPU work.
+        unsafe {
+            self.ctx.device().destroy_pipeline(self.raw, None);
+            self.ctx.device().destroy_pipeline_layout(self.layout, None);
+        }
+    }
+}
+
+/// A compute pipeline with one descriptor set and optional push constants.
+pub struct ComputePipeline {
+    pub(crate) core: PipelineCore,
 }
 
 impl ComputePipeline {
@@ -212,20 +258,8 @@ impl ComputePipeline {
         let result =
             unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &[info], None) };
         unsafe { device.destroy_shader_module(module, None) };
-        let raw = match result {
-            Ok(p) => p[0],
-            Err((_, e)) => {
-                unsafe { device.destroy_pipeline_layout(layout, None) };
-                return Err(e).with_context(|| format!("creating compute pipeline '{name}'"));
-            }
-        };
-        ctx.set_name(raw, name);
         Ok(Self {
-            ctx: ctx.clone(),
-            raw,
-            layout,
-            push_size,
-            name: name.to_owned(),
+            core: PipelineCore::finish(ctx, result, layout, push_size, name, "compute")?,
         })
     }
 }
@@ -259,14 +293,4 @@ pub(crate) fn pipeline_layout(
     }
     // SAFETY: valid device and set layout.
     Ok(unsafe { ctx.device().create_pipeline_layout(&info, None) }?)
-}
-
-impl Drop for ComputePipeline {
-    fn drop(&mut self) {
-        // SAFETY: not in use by pending GPU work.
-        unsafe {
-            self.ctx.device().destroy_pipeline(self.raw, None);
-            self.ctx.device().destroy_pipeline_layout(self.layout, None);
-        }
-    }
 }
