@@ -292,6 +292,8 @@ impl Planes {
 pub struct Dump {
     pub buffer: StateBuffer,
     pub plane: u32,
+    /// Depth of `plane`. The pass for plane k advances the viewing rays to plane k+1, so
+    /// the view position buffer holds points one spacing deeper than this.
     pub depth: f32,
     pub width: u32,
     pub height: u32,
