@@ -3,15 +3,15 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use anyhow::{bail, Context as _, Result};
+use anyhow::{bail, ensure, Context as _, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
-use refrakt::environment::EnvironmentMap;
 use refrakt::output;
-use refrakt::render::{Camera, Light, Model, RenderOptions, Renderer, StateBuffer, SweepOptions};
-use refrakt::transfer::TransferFunctions;
+use refrakt::render::{Model, Renderer, StateBuffer};
+use refrakt::scene::{self, EnvSource, Scene, TransferSource, VolumeSource};
 use refrakt::vk::{self, Context, ContextDesc};
-use refrakt::volume::{procedural, Volume};
+use refrakt::volume::formats::RawLayout;
+use refrakt::volume::Volume;
 
 #[derive(Parser)]
 #[command(
@@ -52,21 +52,6 @@ enum Command {
 }
 
 #[derive(Clone, Copy, ValueEnum)]
-enum SceneArg {
-    /// Noisy spherical shell with a dense core over a ground plane, after the thesis'
-    /// supernova (Fig. 6.1).
-    Shell,
-    /// Solid sphere of value 1, radius 0.35.
-    Sphere,
-    /// Solid box of value 1.
-    Box,
-    /// Glass sphere (value 0.5) above an opaque floor (value 1).
-    GlassFloor,
-    /// A wine glass (value 0.4) holding liquid (value 0.8), after the thesis' Fig. 6.3.
-    WineGlass,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
 enum ToneArg {
     Aces,
     Reinhard,
@@ -83,72 +68,104 @@ enum ModelArg {
 
 #[derive(Args)]
 struct RenderArgs {
+    /// What to render: a built-in scene name (see --list-scenes; default
+    /// sphere-on-floor), a scene file (.toml, see README "Scene files"), or a volume file
+    /// (.raw, .nrrd, .nhdr, .nii, .nii.gz, .mhd, .mha, .vti, or a DICOM directory).
+    /// Flags below override the scene's fields.
+    #[arg(value_name = "SCENE")]
+    scene: Option<String>,
+    /// Same as the SCENE argument (kept for scripts).
+    #[arg(long = "scene", value_name = "SCENE", conflicts_with = "scene")]
+    scene_flag: Option<String>,
+    /// List the built-in scenes and exit.
+    #[arg(long)]
+    list_scenes: bool,
     /// Output image; the extension picks the format: .png (8-bit sRGB) or .exr (linear).
     #[arg(short, long, default_value = "refrakt.png")]
     output: PathBuf,
-    /// Procedural scene to render.
-    #[arg(long, value_enum, default_value = "shell")]
-    scene: SceneArg,
-    /// Volume resolution (voxels per side) of the procedural scene.
-    #[arg(long, default_value_t = 128)]
-    volume_size: u32,
-    /// Transfer functions: a preset (ct-bone, glass, wine-glass, supernova, sphere-white,
-    /// glass-floor) or a TOML file. Default: supernova for the shell, glass-floor for
-    /// glass-floor, wine-glass for wine-glass, sphere-white otherwise.
+    /// Folder of fetched data (scripts/fetch-data) and of thesis originals that replace the
+    /// stand-ins (<name>.<ext>, e.g. supernova.nrrd). Default: $REFRAKT_DATA_DIR or
+    /// ~/.cache/refrakt/data.
+    #[arg(long, value_name = "DIR")]
+    data_dir: Option<PathBuf>,
+    /// Voxels per side of a procedural scene [scene default: 128].
+    #[arg(long)]
+    volume_size: Option<u32>,
+    /// Fraction of a thesis stand-in's resolution (e.g. 0.25) [scene default: 1].
+    #[arg(long)]
+    scale: Option<f64>,
+    /// Raw volume files: dimensions "X,Y,Z" (with --type). Files named
+    /// <name>_<X>x<Y>x<Z>_<type>.raw need neither.
+    #[arg(long, value_name = "X,Y,Z")]
+    dims: Option<String>,
+    /// Raw volume files: voxel type u8, u16, i16 or f32 (little endian).
+    #[arg(long = "type", value_name = "TYPE")]
+    voxel_type: Option<String>,
+    /// Voxel spacing "X,Y,Z" (overrides the file's).
+    #[arg(long, value_name = "X,Y,Z")]
+    spacing: Option<String>,
+    /// Value window "LO,HI" mapped to [0,1] for signed or float data (e.g. CT Hounsfield
+    /// units -1000,2000); default: the data's minimum and maximum. See docs/FORMATS.md.
+    #[arg(long, value_name = "LO,HI", allow_hyphen_values = true)]
+    window: Option<String>,
+    /// Transfer functions: a preset (see README) or a TOML file [scene default].
     #[arg(long, value_name = "PRESET|FILE")]
     tf: Option<String>,
-    /// Rendering model.
-    #[arg(long, value_enum, default_value = "refract")]
-    model: ModelArg,
+    /// Rendering model [default: refract].
+    #[arg(long, value_enum)]
+    model: Option<ModelArg>,
     /// Sample the transfer function at each step instead of using the preintegration table.
     #[arg(long)]
     no_preintegration: bool,
-    /// Image width in pixels.
-    #[arg(long, default_value_t = 512)]
-    width: u32,
-    /// Image height in pixels.
-    #[arg(long, default_value_t = 512)]
-    height: u32,
+    /// Image width in pixels [default: 512; thesis stand-ins 768].
+    #[arg(long)]
+    width: Option<u32>,
+    /// Image height in pixels [default: 512; thesis stand-ins 768].
+    #[arg(long)]
+    height: Option<u32>,
     /// Distance between samples in units of the smallest voxel side (1 = one sample per
-    /// voxel, as in the thesis' chapter 6).
-    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
-    sample_distance: f32,
-    /// Camera azimuth in degrees around the vertical axis.
-    #[arg(long, default_value_t = 30.0, allow_negative_numbers = true)]
-    azimuth: f32,
-    /// Camera elevation in degrees.
-    #[arg(long, default_value_t = 20.0, allow_negative_numbers = true)]
-    elevation: f32,
-    /// Camera distance from the volume centre (the volume's longest side is 1).
-    #[arg(long, default_value_t = 2.2, allow_negative_numbers = true)]
-    distance: f32,
-    /// Vertical field of view in degrees.
-    #[arg(long, default_value_t = 35.0, allow_negative_numbers = true)]
-    fov: f32,
-    /// Background colour behind the volume, linear "r,g,b" or "r,g,b,a".
-    #[arg(long, default_value = "0.08,0.08,0.1,1", allow_hyphen_values = true)]
-    background: String,
+    /// voxel, as in the thesis' chapter 6) [default: 1].
+    #[arg(long, allow_negative_numbers = true)]
+    sample_distance: Option<f32>,
+    /// Camera azimuth in degrees around the vertical axis [scene default].
+    #[arg(long, allow_negative_numbers = true)]
+    azimuth: Option<f32>,
+    /// Camera elevation in degrees [scene default].
+    #[arg(long, allow_negative_numbers = true)]
+    elevation: Option<f32>,
+    /// Camera distance from the volume centre (the volume's longest side is 1) [scene
+    /// default].
+    #[arg(long, allow_negative_numbers = true)]
+    distance: Option<f32>,
+    /// Vertical field of view in degrees [default: 35].
+    #[arg(long, allow_negative_numbers = true)]
+    fov: Option<f32>,
+    /// Background colour behind the volume, linear "r,g,b" or "r,g,b,a" (seen with
+    /// --env none) [default: 0.08,0.08,0.1,1].
+    #[arg(long, allow_hyphen_values = true)]
+    background: Option<String>,
     /// World-space direction towards the light, "x,y,z" (refract). It must lie in the
     /// viewer's hemisphere: the sweep runs front to back, so light cannot come from behind
     /// the volume. Default: from above, tilted towards the camera.
     #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
     light: Option<String>,
-    /// Light colour, linear "r,g,b" (refract).
-    #[arg(long, default_value = "1,1,1")]
-    light_colour: String,
+    /// Light colour, linear "r,g,b" (refract) [default: 1,1,1].
+    #[arg(long)]
+    light_colour: Option<String>,
     /// Light softness: radius, in voxels, of the elliptical filter applied to the light at
-    /// every plane; 0 = hard shadows and sharp caustics (refract).
-    #[arg(long, default_value_t = 0.5, allow_negative_numbers = true)]
-    softness: f32,
-    /// GGX roughness of the specular highlights (refract).
-    #[arg(long, default_value_t = 0.3, allow_negative_numbers = true)]
-    roughness: f32,
-    /// Specular strength; 0 turns highlights off (refract).
-    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
-    specular: f32,
+    /// every plane; 0 = hard shadows and sharp caustics (refract) [default: 0.5].
+    #[arg(long, allow_negative_numbers = true)]
+    softness: Option<f32>,
+    /// GGX roughness of the specular highlights (refract) [default: 0.3].
+    #[arg(long, allow_negative_numbers = true)]
+    roughness: Option<f32>,
+    /// Specular strength; 0 turns highlights off (refract) [default: 1].
+    #[arg(long, allow_negative_numbers = true)]
+    specular: Option<f32>,
     /// Clipping plane "nx,ny,nz,offset" in world space: opacity is zero where
-    /// n·p > offset, the medium and refraction stay (refract, thesis Fig. 6.6).
-    #[arg(long, value_name = "NX,NY,NZ,D", allow_hyphen_values = true)]
+    /// n·p > offset, the medium and refraction stay (refract, thesis Fig. 6.6); "none"
+    /// removes a scene's plane.
+    #[arg(long, value_name = "NX,NY,NZ,D|none", allow_hyphen_values = true)]
     clip: Option<String>,
     /// Write state buffers after given planes as EXR: "BUFFER@PLANE[,...]" with BUFFER one
     /// of light-colour, light-direction, view-position, view-direction, colour-opacity,
@@ -160,19 +177,19 @@ struct RenderArgs {
     dump_dir: Option<PathBuf>,
     /// Environment map behind the volume (refract): an equirectangular .exr or .hdr
     /// (linear), .png or .jpg (sRGB), twice as wide as high; "sky" for the built-in sky,
-    /// sun and checkered ground; "none" for the flat --background.
-    #[arg(long, default_value = "sky", value_name = "FILE|sky|none")]
-    env: String,
-    /// Rotation of the environment map about the vertical axis, degrees.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-    env_rotation: f32,
-    /// Exposure in stops applied before tone mapping (PNG output only).
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-    exposure: f32,
+    /// sun and checkered ground; "none" for the flat --background [default: sky].
+    #[arg(long, value_name = "FILE|sky|none")]
+    env: Option<String>,
+    /// Rotation of the environment map about the vertical axis, degrees [default: 0].
+    #[arg(long, allow_negative_numbers = true)]
+    env_rotation: Option<f32>,
+    /// Exposure in stops applied before tone mapping (PNG output only) [default: 0].
+    #[arg(long, allow_negative_numbers = true)]
+    exposure: Option<f32>,
     /// Tone mapping for PNG output: aces (filmic), reinhard, or none (clamp). EXR output is
-    /// always the linear HDR image.
-    #[arg(long, value_enum, default_value = "aces")]
-    tonemap: ToneArg,
+    /// always the linear HDR image [default: aces].
+    #[arg(long, value_enum)]
+    tonemap: Option<ToneArg>,
     /// Also render the EA baseline with the same volume, view, image size and sample
     /// distance in the same run, and print its GPU time and the ratio to this model's
     /// (the comparison the thesis' cost discussion needs; compare ratios on lavapipe).
@@ -290,16 +307,6 @@ fn main_pass_ms(frame: &refrakt::render::Frame) -> f64 {
         .sum()
 }
 
-fn scene_name(scene: SceneArg) -> &'static str {
-    match scene {
-        SceneArg::Shell => "shell",
-        SceneArg::Sphere => "sphere",
-        SceneArg::Box => "box",
-        SceneArg::GlassFloor => "glass-floor",
-        SceneArg::WineGlass => "wine-glass",
-    }
-}
-
 fn parse_floats<const N: usize>(flag: &str, s: &str) -> Result<[f32; N]> {
     let parts: Vec<&str> = s.split(',').map(str::trim).collect();
     if parts.len() != N {
@@ -347,82 +354,166 @@ fn parse_background(s: &str) -> Result<[f32; 4]> {
     Ok(out)
 }
 
-fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
-    // Everything that can be checked without the GPU is checked first, so bad input fails
-    // at once with a clear message.
-    let opts = RenderOptions {
-        width: args.width,
-        height: args.height,
-        sample_distance: args.sample_distance,
-        preintegrated: !args.no_preintegration,
-        background: parse_background(&args.background)?,
-        ..Default::default()
-    };
-    let camera = Camera {
-        azimuth: args.azimuth,
-        elevation: args.elevation,
-        distance: args.distance,
-        fov_y: args.fov,
-    };
-    camera.validate()?;
-    let (_, forward, right, up) = camera.frame();
-    let towards = match &args.light {
-        Some(l) => glam::Vec3::from(parse_floats::<3>("--light", l)?),
-        // Light from above, tilted towards the camera so the sweep can carry it; when the
-        // camera looks up too steeply for that, a key light from the camera's upper left.
-        None => {
-            let above = (glam::Vec3::Y - 0.5 * forward).normalize();
-            if above.dot(-forward) >= 0.3 {
-                above
-            } else {
-                (-forward + 0.6 * up - 0.4 * right).normalize()
-            }
+/// The scene the arguments name, with every given flag applied over it.
+fn scene_from_args(args: &RenderArgs) -> Result<Scene> {
+    let name = args
+        .scene
+        .as_deref()
+        .or(args.scene_flag.as_deref())
+        .unwrap_or("sphere-on-floor");
+    let mut s = Scene::resolve(name)?;
+    if let Some(n) = args.volume_size {
+        match &mut s.volume {
+            VolumeSource::Procedural { size, .. } => *size = n,
+            _ => bail!("--volume-size applies to procedural scenes; '{name}' is not one"),
         }
-    };
-    let mut opts = opts;
-    opts.sweep = SweepOptions {
-        light: Light {
-            towards,
-            colour: parse_floats::<3>("--light-colour", &args.light_colour)?,
-            softness: args.softness,
-        },
-        roughness: args.roughness,
-        specular: args.specular,
-        clip: match &args.clip {
-            Some(c) => {
-                let v = parse_floats::<4>("--clip", c)?;
-                Some((glam::Vec3::new(v[0], v[1], v[2]), v[3]))
-            }
-            None => None,
-        },
-        dumps: match &args.dump {
-            Some(d) => parse_dumps(d)?,
-            None => Vec::new(),
-        },
-        ..Default::default()
-    };
-    opts.sweep.env_rotation = args.env_rotation;
-    opts.validate()?;
-    output::format_for(&args.output)?;
-    if !args.exposure.is_finite() {
-        bail!(
-            "--exposure {} must be a finite number of stops",
-            args.exposure
-        );
     }
-    let tone = output::ToneMap {
-        exposure: args.exposure,
-        operator: match args.tonemap {
+    if let Some(f) = args.scale {
+        match &mut s.volume {
+            VolumeSource::Standin { scale, .. } => *scale = f,
+            _ => bail!("--scale applies to the thesis stand-ins; '{name}' is not one"),
+        }
+    }
+    let window = match &args.window {
+        Some(w) => {
+            let [lo, hi] = parse_floats::<2>("--window", w)?;
+            ensure!(lo < hi, "--window '{w}': low must be below high");
+            Some((lo, hi))
+        }
+        None => None,
+    };
+    let raw = match (&args.dims, &args.voxel_type) {
+        (Some(d), Some(t)) => {
+            let d = parse_floats::<3>("--dims", d)?;
+            ensure!(
+                d.iter()
+                    .all(|&x| x >= 1.0 && x.fract() == 0.0 && x <= u32::MAX as f32),
+                "--dims: expected three positive whole numbers"
+            );
+            Some(RawLayout {
+                dims: d.map(|x| x as u32),
+                kind: scene::parse_scalar_kind(t).context("--type")?,
+                spacing: None,
+            })
+        }
+        (None, None) => None,
+        _ => bail!("--dims and --type go together (raw files)"),
+    };
+    if raw.is_some() || window.is_some() {
+        match &mut s.volume {
+            VolumeSource::File {
+                raw: r, window: w, ..
+            } => {
+                if raw.is_some() {
+                    *r = raw;
+                }
+                if window.is_some() {
+                    *w = window;
+                }
+            }
+            VolumeSource::Fetched { window: w, .. } if raw.is_none() => *w = window,
+            _ => bail!("--dims/--type/--window apply to volume files; '{name}' is not one"),
+        }
+    }
+    if let Some(sp) = &args.spacing {
+        s.spacing = Some(parse_floats::<3>("--spacing", sp)?);
+    }
+    if let Some(tf) = &args.tf {
+        s.transfer = TransferSource::Named(tf.clone());
+    }
+    if let Some(m) = args.model {
+        s.model = match m {
+            ModelArg::Ea => Model::Ea,
+            ModelArg::Refract => Model::Refract,
+        };
+    }
+    if args.no_preintegration {
+        s.preintegrated = false;
+    }
+    macro_rules! set {
+        ($field:expr, $arg:expr) => {
+            if let Some(v) = $arg {
+                $field = v;
+            }
+        };
+    }
+    set!(s.width, args.width);
+    set!(s.height, args.height);
+    set!(s.sample_distance, args.sample_distance);
+    set!(s.camera.azimuth, args.azimuth);
+    set!(s.camera.elevation, args.elevation);
+    set!(s.camera.distance, args.distance);
+    set!(s.camera.fov_y, args.fov);
+    set!(s.softness, args.softness);
+    set!(s.roughness, args.roughness);
+    set!(s.specular, args.specular);
+    set!(s.env_rotation, args.env_rotation);
+    if let Some(e) = args.exposure {
+        ensure!(
+            e.is_finite(),
+            "--exposure {e} must be a finite number of stops"
+        );
+        s.exposure = e;
+    }
+    if let Some(b) = &args.background {
+        s.background = parse_background(b)?;
+    }
+    if let Some(l) = &args.light {
+        s.light_towards = Some(glam::Vec3::from(parse_floats::<3>("--light", l)?));
+    }
+    if let Some(c) = &args.light_colour {
+        s.light_colour = parse_floats::<3>("--light-colour", c)?;
+    }
+    if let Some(c) = &args.clip {
+        s.clip = if c == "none" {
+            None
+        } else {
+            let v = parse_floats::<4>("--clip", c)?;
+            Some((glam::Vec3::new(v[0], v[1], v[2]), v[3]))
+        };
+    }
+    if let Some(e) = &args.env {
+        s.environment = match e.as_str() {
+            "sky" => EnvSource::Sky,
+            "none" => EnvSource::None,
+            f => EnvSource::File(PathBuf::from(f)),
+        };
+    }
+    if let Some(t) = args.tonemap {
+        s.tonemap = match t {
             ToneArg::Aces => output::ToneOperator::Aces,
             ToneArg::Reinhard => output::ToneOperator::Reinhard,
             ToneArg::None => output::ToneOperator::None,
-        },
+        };
+    }
+    Ok(s)
+}
+
+fn list_scenes() -> Result<ExitCode> {
+    println!("Built-in scenes (refrakt render NAME):");
+    for (n, d) in scene::builtin_names() {
+        println!("  {n:<16} {d}");
+    }
+    println!("\nA scene file (.toml) or a volume file works too; see README.md.");
+    Ok(ExitCode::SUCCESS)
+}
+
+fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
+    if args.list_scenes {
+        return list_scenes();
+    }
+    // Everything that can be checked without the GPU is checked first, so bad input fails
+    // at once with a clear message.
+    let scene = scene_from_args(args)?;
+    let mut opts = scene.render_options()?;
+    opts.sweep.dumps = match &args.dump {
+        Some(d) => parse_dumps(d)?,
+        None => Vec::new(),
     };
-    let env = match args.env.as_str() {
-        "none" => None,
-        "sky" => Some(EnvironmentMap::procedural(1024)?),
-        file => Some(EnvironmentMap::load(std::path::Path::new(file))?),
-    };
+    let camera = scene.camera;
+    let model = scene.model;
+    output::format_for(&args.output)?;
+    let tone = scene.tone_map()?;
     let dump_dir = match &args.dump_dir {
         Some(d) => d.clone(),
         None => args
@@ -437,28 +528,10 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
             dump_dir.display()
         );
     }
-    let tf_name = args.tf.clone().unwrap_or_else(|| {
-        match args.scene {
-            SceneArg::Shell => "supernova",
-            SceneArg::GlassFloor => "glass-floor",
-            SceneArg::WineGlass => "wine-glass",
-            _ => "sphere-white",
-        }
-        .to_string()
-    });
-    let tf = TransferFunctions::load(&tf_name)?;
-    let n = args.volume_size;
-    let volume: Volume = match args.scene {
-        SceneArg::Shell => procedural::shell_on_floor(n, 7)?,
-        SceneArg::Sphere => procedural::sphere(n, 0.35, 1.0)?,
-        SceneArg::Box => procedural::boxed(n, [0.3, 0.25, 0.2], 1.0)?,
-        SceneArg::GlassFloor => procedural::sphere_on_floor(n)?,
-        SceneArg::WineGlass => procedural::wine_glass(n)?,
-    };
-    let model = match args.model {
-        ModelArg::Ea => Model::Ea,
-        ModelArg::Refract => Model::Refract,
-    };
+    let tf = scene.transfer_functions()?;
+    let env = scene.environment_map()?;
+    let data_dir = args.data_dir.clone().unwrap_or_else(scene::data_dir);
+    let volume: Volume = scene.load_volume(&data_dir)?;
 
     let ctx = Context::new(desc)?;
     println!(
@@ -481,7 +554,7 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
         "rendered {}x{} of the {} scene ({}x{}x{}, transfer functions {}), model {}{}, sample distance {}, up to {} steps per ray",
         opts.width,
         opts.height,
-        scene_name(args.scene),
+        scene.name,
         volume.dims[0],
         volume.dims[1],
         volume.dims[2],

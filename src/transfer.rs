@@ -108,6 +108,15 @@ pub const PRESETS: &[(&str, &str)] = &[
         include_str!("../assets/tf/sphere-white.toml"),
     ),
     ("glass-floor", include_str!("../assets/tf/glass-floor.toml")),
+    ("piggy-bank", include_str!("../assets/tf/piggy-bank.toml")),
+    ("glass-scene", include_str!("../assets/tf/glass-scene.toml")),
+    ("hand", include_str!("../assets/tf/hand.toml")),
+    ("head", include_str!("../assets/tf/head.toml")),
+    ("water", include_str!("../assets/tf/water.toml")),
+    ("ship", include_str!("../assets/tf/ship.toml")),
+    ("kiwi", include_str!("../assets/tf/kiwi.toml")),
+    ("lung-ct", include_str!("../assets/tf/lung-ct.toml")),
+    ("mri-head", include_str!("../assets/tf/mri-head.toml")),
 ];
 
 impl TransferFunctions {

@@ -95,7 +95,7 @@ fn value_noise(p: [f32; 3], seed: u32) -> f32 {
     acc
 }
 
-fn fbm(p: [f32; 3], seed: u32) -> f32 {
+pub(super) fn fbm(p: [f32; 3], seed: u32) -> f32 {
     let mut sum = 0.0;
     let mut amp = 0.5;
     let mut freq = 1.0;
@@ -123,7 +123,7 @@ pub fn shell_on_floor(n: u32, seed: u32) -> Result<Volume> {
     })
 }
 
-fn shell_value(p: [f32; 3], seed: u32) -> f32 {
+pub(super) fn shell_value(p: [f32; 3], seed: u32) -> f32 {
     {
         let r = length(p);
         let turb = fbm(p.map(|c| c * 9.0 + 11.0), seed);

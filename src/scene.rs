@@ -1,0 +1,827 @@
+//! Scenes: everything a render needs (volume, spacing, transfer functions, camera, light,
+//! environment, viewport, sample distance, clipping, exposure) in one TOML file, or one of
+//! the built-in scenes (procedural test scenes, the thesis stand-ins, the fetched real
+//! scans), or a bare volume file rendered with a default preset and camera.
+//!
+//! The command line overrides any field after the scene is resolved; relative paths in a
+//! scene file are relative to the file. See README.md ("Scene files") for the format.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, ensure, Context as _, Result};
+use glam::Vec3;
+use serde::Deserialize;
+
+use crate::environment::EnvironmentMap;
+use crate::output::{ToneMap, ToneOperator};
+use crate::render::{Camera, Light, Model, RenderOptions, SweepOptions};
+use crate::transfer::TransferFunctions;
+use crate::volume::{procedural, standins, Volume};
+
+/// Where the volume comes from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum VolumeSource {
+    /// A procedural test volume of `size`³ voxels.
+    Procedural { kind: String, size: u32 },
+    /// A thesis stand-in (or the original from `--data-dir`) at `scale` of its resolution.
+    Standin { name: String, scale: f64 },
+    /// A volume file in any supported format (src/volume/formats).
+    File {
+        path: PathBuf,
+        raw: Option<crate::volume::formats::RawLayout>,
+        window: Option<(f32, f32)>,
+    },
+    /// A file fetched by `scripts/fetch-data`, looked up in the data directory.
+    Fetched {
+        file: String,
+        window: Option<(f32, f32)>,
+    },
+}
+
+/// Environment behind the volume.
+#[derive(Clone, Debug, PartialEq)]
+pub enum EnvSource {
+    Sky,
+    None,
+    File(PathBuf),
+}
+
+/// A fully resolved scene. Build the GPU inputs with the methods below.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// Name shown in the output (built-in name or file name).
+    pub name: String,
+    pub volume: VolumeSource,
+    /// Voxel spacing override (x, y, z); `None` keeps the volume's own.
+    pub spacing: Option<[f32; 3]>,
+    /// A preset name or a TF file path (resolved), or inline functions.
+    pub transfer: TransferSource,
+    pub camera: Camera,
+    /// `None`: the default key light for the camera (see [`default_light`]).
+    pub light_towards: Option<Vec3>,
+    pub light_colour: [f32; 3],
+    pub softness: f32,
+    pub environment: EnvSource,
+    pub env_rotation: f32,
+    pub model: Model,
+    pub width: u32,
+    pub height: u32,
+    pub sample_distance: f32,
+    pub preintegrated: bool,
+    pub background: [f32; 4],
+    pub roughness: f32,
+    pub specular: f32,
+    pub clip: Option<(Vec3, f32)>,
+    pub exposure: f32,
+    pub tonemap: ToneOperator,
+}
+
+#[derive(Clone, Debug)]
+pub enum TransferSource {
+    Named(String),
+    Inline(Box<TransferFunctions>),
+}
+
+impl Default for Scene {
+    fn default() -> Self {
+        Self {
+            name: "sphere-on-floor".into(),
+            volume: VolumeSource::Procedural {
+                kind: "sphere-on-floor".into(),
+                size: 128,
+            },
+            spacing: None,
+            transfer: TransferSource::Named("glass-floor".into()),
+            camera: Camera::default(),
+            light_towards: None,
+            light_colour: [1.0; 3],
+            softness: 0.5,
+            environment: EnvSource::Sky,
+            env_rotation: 0.0,
+            model: Model::Refract,
+            width: 512,
+            height: 512,
+            sample_distance: 1.0,
+            preintegrated: true,
+            background: [0.08, 0.08, 0.1, 1.0],
+            roughness: 0.3,
+            specular: 1.0,
+            clip: None,
+            exposure: 0.0,
+            tonemap: ToneOperator::Aces,
+        }
+    }
+}
+
+/// Procedural scenes: name, description, transfer-function preset.
+pub const PROCEDURAL: &[(&str, &str, &str)] = &[
+    (
+        "sphere-on-floor",
+        "glass sphere over a floor, one directional light (Eikonal Rendering's Fig. 7 validation scene; the quick demo)",
+        "glass-floor",
+    ),
+    (
+        "shell",
+        "noisy spherical shell with a dense core over a ground plane (small supernova)",
+        "supernova",
+    ),
+    ("sphere", "solid sphere of value 1, radius 0.35", "sphere-white"),
+    ("box", "solid box of value 1", "sphere-white"),
+    (
+        "glass-floor",
+        "same as sphere-on-floor (kept for scripts)",
+        "glass-floor",
+    ),
+    (
+        "wine-glass",
+        "a wine glass holding wine, after thesis Fig. 6.3",
+        "wine-glass",
+    ),
+];
+
+/// A real scan fetched by `scripts/fetch-data`: name, file in the data directory, value
+/// window, transfer-function preset, description.
+pub type FetchedScene = (
+    &'static str,
+    &'static str,
+    Option<(f32, f32)>,
+    &'static str,
+    &'static str,
+);
+
+pub const FETCHED: &[FetchedScene] = &[
+    (
+        "lung-ct",
+        "lung1_image.nrrd",
+        Some((-1000.0, 1000.0)),
+        "lung-ct",
+        "CT of a lung (pyradiomics 3.1.0 test data, 512x512x48 int16, HU window -1000..1000)",
+    ),
+    (
+        "mri-head",
+        "ch2.nii.gz",
+        None,
+        "mri-head",
+        "MRI head template ch2 (mricron-data, 181x217x181 u8)",
+    ),
+];
+
+/// The directory `scripts/fetch-data` fills: `$REFRAKT_DATA_DIR`, else
+/// `~/.cache/refrakt/data`.
+pub fn data_dir() -> PathBuf {
+    if let Some(d) = std::env::var_os("REFRAKT_DATA_DIR") {
+        return PathBuf::from(d);
+    }
+    std::env::var_os("HOME")
+        .map(|h| PathBuf::from(h).join(".cache/refrakt/data"))
+        .unwrap_or_else(|| PathBuf::from("refrakt-data"))
+}
+
+/// Light from above, tilted towards the camera so the front-to-back sweep can carry it;
+/// when the camera looks up too steeply for that, a key light from its upper left.
+pub fn default_light(camera: &Camera) -> Vec3 {
+    let (_, forward, right, up) = camera.frame();
+    let above = (Vec3::Y - 0.5 * forward).normalize();
+    if above.dot(-forward) >= 0.3 {
+        above
+    } else {
+        (-forward + 0.6 * up - 0.4 * right).normalize()
+    }
+}
+
+/// Every built-in scene name with a one-line description, for `--help` and errors.
+pub fn builtin_names() -> Vec<(String, String)> {
+    let mut v: Vec<(String, String)> = PROCEDURAL
+        .iter()
+        .map(|(n, d, _)| (n.to_string(), d.to_string()))
+        .collect();
+    for d in &standins::DATASETS {
+        v.push((
+            d.name.to_string(),
+            format!(
+                "thesis stand-in {}x{}x{}: {} (Fig. {})",
+                d.dims[0], d.dims[1], d.dims[2], d.description, d.figure
+            ),
+        ));
+    }
+    for (n, _, _, _, d) in FETCHED {
+        v.push((n.to_string(), format!("{d}; needs scripts/fetch-data")));
+    }
+    v
+}
+
+impl Scene {
+    /// A built-in scene by name, a scene file (.toml), or a volume file.
+    pub fn resolve(arg: &str) -> Result<Scene> {
+        if let Some(s) = Self::builtin(arg)? {
+            return Ok(s);
+        }
+        let path = Path::new(arg);
+        if path.extension().is_some_and(|e| e == "toml") {
+            return Self::load(path);
+        }
+        if path.exists() {
+            return Ok(Self::for_volume_file(path));
+        }
+        let names: Vec<String> = builtin_names().into_iter().map(|(n, _)| n).collect();
+        bail!(
+            "scene '{arg}': no such file, and not a built-in scene ({})",
+            names.join(", ")
+        )
+    }
+
+    /// A bare volume file: rendered with a CT-like preset and the default camera.
+    pub fn for_volume_file(path: &Path) -> Scene {
+        Scene {
+            name: path
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+            volume: VolumeSource::File {
+                path: path.to_path_buf(),
+                raw: None,
+                window: None,
+            },
+            transfer: TransferSource::Named("ct-bone".into()),
+            ..Default::default()
+        }
+    }
+
+    pub fn builtin(name: &str) -> Result<Option<Scene>> {
+        let mut s = Scene {
+            name: name.to_string(),
+            ..Default::default()
+        };
+        if let Some((kind, _, tf)) = PROCEDURAL.iter().find(|(n, _, _)| *n == name) {
+            s.volume = VolumeSource::Procedural {
+                kind: kind.to_string(),
+                size: 128,
+            };
+            s.transfer = TransferSource::Named(tf.to_string());
+            return Ok(Some(s));
+        }
+        if let Some((_, file, window, tf, _)) = FETCHED.iter().find(|f| f.0 == name) {
+            s.volume = VolumeSource::Fetched {
+                file: file.to_string(),
+                window: *window,
+            };
+            s.transfer = TransferSource::Named(tf.to_string());
+            match name {
+                "lung-ct" => {
+                    // Slices along z; look at the chest from the front, slightly above.
+                    s.camera = Camera {
+                        azimuth: 20.0,
+                        elevation: 25.0,
+                        distance: 2.0,
+                        fov_y: 35.0,
+                    };
+                }
+                _ => {
+                    s.camera = Camera {
+                        azimuth: 35.0,
+                        elevation: 15.0,
+                        distance: 2.1,
+                        fov_y: 35.0,
+                    };
+                    s.clip = Some((Vec3::new(1.0, 0.0, 0.0), 0.0));
+                }
+            }
+            return Ok(Some(s));
+        }
+        let Some(d) = standins::DATASETS.iter().find(|d| d.name == name) else {
+            return Ok(None);
+        };
+        s.volume = VolumeSource::Standin {
+            name: d.name.to_string(),
+            scale: 1.0,
+        };
+        s.transfer = TransferSource::Named(
+            match d.name {
+                "glass" => "glass-scene",
+                n => n,
+            }
+            .to_string(),
+        );
+        // The thesis' protocol: 768 x 768, sample distance 1.
+        s.width = 768;
+        s.height = 768;
+        let cam = |azimuth, elevation, distance| Camera {
+            azimuth,
+            elevation,
+            distance,
+            fov_y: 35.0,
+        };
+        match d.name {
+            "supernova" => s.camera = cam(30.0, 15.0, 2.1),
+            "piggy-bank" => {
+                s.camera = cam(25.0, 30.0, 1.9);
+                s.softness = 1.5;
+            }
+            "glass" => s.camera = cam(20.0, 12.0, 1.9),
+            "hand" => s.camera = cam(20.0, 55.0, 1.9),
+            "head" => {
+                s.camera = cam(40.0, 10.0, 2.0);
+                // Thesis Fig. 6.6: opacity zero in one half, medium and refraction kept.
+                s.clip = Some((Vec3::new(1.0, 0.0, 0.0), 0.0));
+            }
+            "water" => s.camera = cam(25.0, 28.0, 2.0),
+            "ship" => s.camera = cam(55.0, 20.0, 2.0),
+            "kiwi" => s.camera = cam(15.0, 25.0, 1.8),
+            _ => {}
+        }
+        Ok(Some(s))
+    }
+
+    /// Reads a scene file; unknown keys, wrong types and missing referenced files are
+    /// errors naming the file.
+    pub fn load(path: &Path) -> Result<Scene> {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("scene {}: cannot read it", path.display()))?;
+        Self::parse(&text, path)
+    }
+
+    pub fn parse(text: &str, path: &Path) -> Result<Scene> {
+        let f: SceneFile = toml::from_str(text)
+            .map_err(|e| anyhow::anyhow!("scene {}: {}", path.display(), one_line(&e, text)))?;
+        f.resolve(path)
+            .with_context(|| format!("scene {}", path.display()))
+    }
+
+    /// The volume, generated, loaded from the cache, or read from its file. `data_dir`
+    /// holds the fetched scans and, for stand-ins, the thesis originals if the user has
+    /// them (`<name>.<ext>` in any supported format).
+    pub fn load_volume(&self, data_dir: &Path) -> Result<Volume> {
+        let mut vol = match &self.volume {
+            VolumeSource::Procedural { kind, size } => procedural_volume(kind, *size)?,
+            VolumeSource::Standin { name, scale } => {
+                if let Some(orig) = original_in(data_dir, name) {
+                    log::info!("{name}: using the original {}", orig.display());
+                    load_file(&orig, None, None)?
+                } else {
+                    let d = standins::dataset(name)?;
+                    let dims = standins::scaled_dims(d.dims, *scale)?;
+                    standins::load_or_generate(name, dims, &standins::cache_dir())?.0
+                }
+            }
+            VolumeSource::File { path, raw, window } => load_file(path, raw.clone(), *window)?,
+            VolumeSource::Fetched { file, window } => {
+                let path = data_dir.join(file);
+                ensure!(
+                    path.exists(),
+                    "{}: not found; run scripts/fetch-data (or set REFRAKT_DATA_DIR / --data-dir to where it put the data)",
+                    path.display()
+                );
+                load_file(&path, None, *window)?
+            }
+        };
+        if let Some(s) = self.spacing {
+            vol.spacing = s;
+            vol.validate()?;
+        }
+        Ok(vol)
+    }
+
+    pub fn transfer_functions(&self) -> Result<TransferFunctions> {
+        match &self.transfer {
+            TransferSource::Named(n) => TransferFunctions::load(n),
+            TransferSource::Inline(tf) => Ok((**tf).clone()),
+        }
+    }
+
+    pub fn environment_map(&self) -> Result<Option<EnvironmentMap>> {
+        Ok(match &self.environment {
+            EnvSource::None => None,
+            EnvSource::Sky => Some(EnvironmentMap::procedural(1024)?),
+            EnvSource::File(p) => Some(EnvironmentMap::load(p)?),
+        })
+    }
+
+    pub fn light(&self) -> Light {
+        Light {
+            towards: self
+                .light_towards
+                .unwrap_or_else(|| default_light(&self.camera)),
+            colour: self.light_colour,
+            softness: self.softness,
+        }
+    }
+
+    /// Render options for this scene (validated).
+    pub fn render_options(&self) -> Result<RenderOptions> {
+        self.camera.validate()?;
+        let opts = RenderOptions {
+            width: self.width,
+            height: self.height,
+            sample_distance: self.sample_distance,
+            preintegrated: self.preintegrated,
+            background: self.background,
+            sweep: SweepOptions {
+                light: self.light(),
+                roughness: self.roughness,
+                specular: self.specular,
+                clip: self.clip,
+                env_rotation: self.env_rotation,
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        opts.validate()?;
+        Ok(opts)
+    }
+
+    pub fn tone_map(&self) -> Result<ToneMap> {
+        ensure!(
+            self.exposure.is_finite(),
+            "exposure {} must be a finite number of stops",
+            self.exposure
+        );
+        Ok(ToneMap {
+            exposure: self.exposure,
+            operator: self.tonemap,
+        })
+    }
+}
+
+/// The parser's message with the line it points at, on one line.
+fn one_line(e: &toml::de::Error, text: &str) -> String {
+    let msg = e.message().trim().replace('\n', " ");
+    match e.span() {
+        Some(span) => {
+            let line = text[..span.start.min(text.len())].matches('\n').count() + 1;
+            let src = text.lines().nth(line - 1).unwrap_or("").trim();
+            format!("line {line} `{src}`: {msg}")
+        }
+        None => msg,
+    }
+}
+
+/// `<name>.<ext>` in `dir` for any supported volume format, if present.
+fn original_in(dir: &Path, name: &str) -> Option<PathBuf> {
+    let entries = std::fs::read_dir(dir).ok()?;
+    let mut found: Vec<PathBuf> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.file_name()
+                .and_then(|n| n.to_str())
+                .is_some_and(|n| n.split('.').next() == Some(name) && n.contains('.'))
+                && crate::volume::formats::is_volume_file(p)
+        })
+        .collect();
+    found.sort();
+    found.into_iter().next()
+}
+
+fn load_file(
+    path: &Path,
+    raw: Option<crate::volume::formats::RawLayout>,
+    window: Option<(f32, f32)>,
+) -> Result<Volume> {
+    let opts = crate::volume::formats::LoadOptions {
+        raw,
+        window,
+        spacing: None,
+    };
+    crate::volume::formats::load_volume(path, &opts)
+}
+
+pub fn procedural_volume(kind: &str, n: u32) -> Result<Volume> {
+    Ok(match kind {
+        "shell" => procedural::shell_on_floor(n, 7)?,
+        "sphere" => procedural::sphere(n, 0.35, 1.0)?,
+        "box" => procedural::boxed(n, [0.3, 0.25, 0.2], 1.0)?,
+        "glass-floor" | "sphere-on-floor" => procedural::sphere_on_floor(n)?,
+        "wine-glass" => procedural::wine_glass(n)?,
+        _ => {
+            let names: Vec<&str> = PROCEDURAL.iter().map(|p| p.0).collect();
+            bail!(
+                "unknown procedural volume '{kind}' (known: {})",
+                names.join(", ")
+            )
+        }
+    })
+}
+
+// ---- the file format -------------------------------------------------------------------
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneFile {
+    name: Option<String>,
+    volume: VolumeTable,
+    transfer: Option<TransferTable>,
+    camera: Option<CameraTable>,
+    light: Option<LightTable>,
+    environment: Option<EnvTable>,
+    render: Option<RenderTable>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct VolumeTable {
+    /// A volume file (relative to the scene file).
+    file: Option<String>,
+    /// A procedural volume, a thesis stand-in, or a fetched scan, by name.
+    builtin: Option<String>,
+    /// Voxels per side of a procedural volume.
+    size: Option<u32>,
+    /// Fraction of a stand-in's resolution.
+    scale: Option<f64>,
+    /// Raw files: dimensions and type.
+    dims: Option<[u32; 3]>,
+    #[serde(rename = "type")]
+    kind: Option<String>,
+    spacing: Option<[f32; 3]>,
+    window: Option<[f32; 2]>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TransferTable {
+    preset: Option<String>,
+    file: Option<String>,
+    colour: Option<toml::Value>,
+    opacity: Option<toml::Value>,
+    medium: Option<toml::Value>,
+    eta: Option<toml::Value>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CameraTable {
+    azimuth: Option<f32>,
+    elevation: Option<f32>,
+    distance: Option<f32>,
+    fov: Option<f32>,
+    eye: Option<[f32; 3]>,
+    target: Option<[f32; 3]>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LightTable {
+    towards: Option<[f32; 3]>,
+    colour: Option<[f32; 3]>,
+    softness: Option<f32>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct EnvTable {
+    map: Option<String>,
+    rotation: Option<f32>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RenderTable {
+    model: Option<String>,
+    width: Option<u32>,
+    height: Option<u32>,
+    sample_distance: Option<f32>,
+    preintegrated: Option<bool>,
+    background: Option<[f32; 4]>,
+    roughness: Option<f32>,
+    specular: Option<f32>,
+    clip: Option<[f32; 4]>,
+    exposure: Option<f32>,
+    tonemap: Option<String>,
+}
+
+pub fn parse_model(s: &str) -> Result<Model> {
+    match s {
+        "refract" => Ok(Model::Refract),
+        "ea" => Ok(Model::Ea),
+        _ => bail!("model '{s}' is not one of refract, ea"),
+    }
+}
+
+pub fn parse_tonemap(s: &str) -> Result<ToneOperator> {
+    match s {
+        "aces" => Ok(ToneOperator::Aces),
+        "reinhard" => Ok(ToneOperator::Reinhard),
+        "none" => Ok(ToneOperator::None),
+        _ => bail!("tone map '{s}' is not one of aces, reinhard, none"),
+    }
+}
+
+/// Parses "u8|u16|i16|f32" (and the open-scivis spellings).
+pub fn parse_scalar_kind(s: &str) -> Result<crate::volume::formats::ScalarKind> {
+    use crate::volume::formats::ScalarKind;
+    Ok(match s {
+        "u8" | "uint8" => ScalarKind::U8,
+        "u16" | "uint16" => ScalarKind::U16,
+        "i16" | "int16" => ScalarKind::I16,
+        "f32" | "float32" => ScalarKind::F32,
+        _ => bail!("voxel type '{s}' is not one of u8, u16, i16, f32"),
+    })
+}
+
+impl SceneFile {
+    fn resolve(self, path: &Path) -> Result<Scene> {
+        let base = path.parent().unwrap_or(Path::new("."));
+        let rel = |p: &str| -> Result<PathBuf> {
+            let q = base.join(p);
+            ensure!(q.exists(), "{}: referenced file not found", q.display());
+            Ok(q)
+        };
+        let v = &self.volume;
+        let mut s = match (&v.file, &v.builtin) {
+            (Some(_), Some(_)) => bail!("[volume]: give either file or builtin, not both"),
+            (None, None) => bail!("[volume]: needs file = \"...\" or builtin = \"...\""),
+            (None, Some(b)) => {
+                let mut s = Scene::builtin(b)?.with_context(|| {
+                    let names: Vec<String> = builtin_names().into_iter().map(|(n, _)| n).collect();
+                    format!("[volume] builtin '{b}' is not one of {}", names.join(", "))
+                })?;
+                match &mut s.volume {
+                    VolumeSource::Procedural { size, .. } => {
+                        if let Some(n) = v.size {
+                            *size = n;
+                        }
+                        ensure!(v.scale.is_none(), "[volume] scale is for thesis stand-ins");
+                    }
+                    VolumeSource::Standin { scale, .. } => {
+                        if let Some(f) = v.scale {
+                            *scale = f;
+                        }
+                        ensure!(
+                            v.size.is_none(),
+                            "[volume] size is for procedural volumes; stand-ins take scale"
+                        );
+                    }
+                    _ => ensure!(
+                        v.size.is_none() && v.scale.is_none(),
+                        "[volume] size/scale apply to procedural volumes and stand-ins only"
+                    ),
+                }
+                s
+            }
+            (Some(f), None) => {
+                let file = rel(f)?;
+                let raw = match (v.dims, &v.kind) {
+                    (Some(dims), Some(k)) => Some(crate::volume::formats::RawLayout {
+                        dims,
+                        kind: parse_scalar_kind(k)?,
+                        spacing: v.spacing,
+                    }),
+                    (None, None) => None,
+                    _ => bail!("[volume] raw files need both dims and type"),
+                };
+                let mut s = Scene::for_volume_file(&file);
+                s.volume = VolumeSource::File {
+                    path: file,
+                    raw,
+                    window: None,
+                };
+                s
+            }
+        };
+        if let Some(w) = v.window {
+            ensure!(
+                w[0].is_finite() && w[1].is_finite() && w[0] < w[1],
+                "[volume] window {w:?} must be two finite numbers, low < high"
+            );
+            match &mut s.volume {
+                VolumeSource::File { window, .. } | VolumeSource::Fetched { window, .. } => {
+                    *window = Some((w[0], w[1]))
+                }
+                _ => bail!("[volume] window applies to volume files only"),
+            }
+        }
+        s.spacing = v.spacing;
+        if let Some(n) = self.name {
+            s.name = n;
+        } else if let Some(stem) = path.file_stem() {
+            s.name = stem.to_string_lossy().into_owned();
+        }
+        if let Some(t) = self.transfer {
+            let inline =
+                t.colour.is_some() || t.opacity.is_some() || t.medium.is_some() || t.eta.is_some();
+            let count = t.preset.is_some() as u32 + t.file.is_some() as u32 + inline as u32;
+            ensure!(
+                count <= 1,
+                "[transfer]: give one of preset, file, or inline functions"
+            );
+            if let Some(p) = t.preset {
+                TransferFunctions::load(&p)
+                    .map_err(|_| anyhow::anyhow!("[transfer] preset '{p}' does not exist"))?;
+                s.transfer = TransferSource::Named(p);
+            } else if let Some(f) = t.file {
+                let p = rel(&f)?;
+                s.transfer = TransferSource::Named(p.to_string_lossy().into_owned());
+            } else if inline {
+                let mut table = toml::Table::new();
+                for (k, v) in [
+                    ("colour", t.colour),
+                    ("opacity", t.opacity),
+                    ("medium", t.medium),
+                    ("eta", t.eta),
+                ] {
+                    if let Some(v) = v {
+                        table.insert(k.into(), v);
+                    }
+                }
+                let tf = TransferFunctions::parse(&table.to_string(), "[transfer]")?;
+                s.transfer = TransferSource::Inline(Box::new(tf));
+            }
+        }
+        if let Some(c) = self.camera {
+            if let Some(eye) = c.eye {
+                ensure!(
+                    c.azimuth.is_none() && c.elevation.is_none() && c.distance.is_none(),
+                    "[camera]: give eye (and target) or azimuth/elevation/distance, not both"
+                );
+                let target = Vec3::from(c.target.unwrap_or([0.0; 3]));
+                ensure!(
+                    target == Vec3::ZERO,
+                    "[camera] target {target}: the camera orbits the volume centre; only [0, 0, 0] is supported"
+                );
+                let e = Vec3::from(eye) - target;
+                let d = e.length();
+                ensure!(
+                    d > 0.0 && d.is_finite(),
+                    "[camera] eye must differ from target"
+                );
+                s.camera.distance = d;
+                s.camera.elevation = (e.y / d).asin().to_degrees();
+                s.camera.azimuth = e.x.atan2(e.z).to_degrees();
+            } else {
+                ensure!(c.target.is_none(), "[camera] target needs eye");
+            }
+            if let Some(a) = c.azimuth {
+                s.camera.azimuth = a;
+            }
+            if let Some(a) = c.elevation {
+                s.camera.elevation = a;
+            }
+            if let Some(a) = c.distance {
+                s.camera.distance = a;
+            }
+            if let Some(a) = c.fov {
+                s.camera.fov_y = a;
+            }
+        }
+        if let Some(l) = self.light {
+            if let Some(t) = l.towards {
+                s.light_towards = Some(Vec3::from(t));
+            }
+            if let Some(c) = l.colour {
+                s.light_colour = c;
+            }
+            if let Some(x) = l.softness {
+                s.softness = x;
+            }
+        }
+        if let Some(e) = self.environment {
+            if let Some(m) = e.map {
+                s.environment = match m.as_str() {
+                    "sky" => EnvSource::Sky,
+                    "none" => EnvSource::None,
+                    f => EnvSource::File(rel(f)?),
+                };
+            }
+            if let Some(r) = e.rotation {
+                s.env_rotation = r;
+            }
+        }
+        if let Some(r) = self.render {
+            if let Some(m) = r.model {
+                s.model = parse_model(&m).context("[render]")?;
+            }
+            if let Some(x) = r.width {
+                s.width = x;
+            }
+            if let Some(x) = r.height {
+                s.height = x;
+            }
+            if let Some(x) = r.sample_distance {
+                s.sample_distance = x;
+            }
+            if let Some(x) = r.preintegrated {
+                s.preintegrated = x;
+            }
+            if let Some(x) = r.background {
+                s.background = x;
+            }
+            if let Some(x) = r.roughness {
+                s.roughness = x;
+            }
+            if let Some(x) = r.specular {
+                s.specular = x;
+            }
+            if let Some(c) = r.clip {
+                s.clip = Some((Vec3::new(c[0], c[1], c[2]), c[3]));
+            }
+            if let Some(x) = r.exposure {
+                s.exposure = x;
+            }
+            if let Some(t) = r.tonemap {
+                s.tonemap = parse_tonemap(&t).context("[render]")?;
+            }
+        }
+        // Everything checkable without the GPU, now, with the scene's name on it.
+        s.render_options()?;
+        s.tone_map()?;
+        Ok(s)
+    }
+}

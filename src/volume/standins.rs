@@ -1,0 +1,571 @@
+//! Deterministic stand-ins for the eight data sets of the thesis' timing tables (Tables 6.1
+//! and 6.2). The originals (a supernova simulation, CT and MRI scans, modelled scenes) are
+//! not obtainable here, so each is replaced by a procedural volume **at the original's exact
+//! resolution** with the structures its figure shows, so that the plane count and the
+//! per-plane work of the benchmark match the thesis row by row. They are stand-ins: the
+//! timings depend on resolution and viewport, not on the voxel values, but the images are
+//! only "after" the thesis figures.
+//!
+//! Generation is seeded (integer hashing, no platform RNG), multi-threaded over z slabs,
+//! and cached on disk as `<name>_<X>x<Y>x<Z>_uint8.raw` (open-scivis naming) so that the
+//! 472 M voxels of the glass are paid for once.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context as _, Result};
+use glam::Vec3;
+
+use super::procedural::{fbm, shell_value};
+use super::{Volume, Voxels};
+
+/// Bumped whenever a generator changes, so stale cache files are not reused.
+const GENERATOR_VERSION: u32 = 1;
+
+/// One row of the thesis' timing tables.
+#[derive(Clone, Copy, Debug)]
+pub struct Dataset {
+    /// Name used on the command line and in file names.
+    pub name: &'static str,
+    /// Name in the thesis' table.
+    pub title: &'static str,
+    /// Resolution as in the table.
+    pub dims: [u32; 3],
+    /// Which table and GPU: "6.1" (GTX 1070) or "6.2" (GTX 980).
+    pub table: &'static str,
+    pub thesis_gpu: &'static str,
+    /// Mean render time over 100 frames at 768², sample distance 1, as printed.
+    pub thesis_ms: f64,
+    pub thesis_fps: f64,
+    /// The figure the stand-in and its scene preset follow.
+    pub figure: &'static str,
+    pub description: &'static str,
+}
+
+pub const DATASETS: [Dataset; 8] = [
+    Dataset {
+        name: "supernova",
+        title: "Supernova",
+        dims: [432, 432, 432],
+        table: "6.1",
+        thesis_gpu: "NVIDIA GeForce GTX 1070",
+        thesis_ms: 108.53,
+        thesis_fps: 9.21,
+        figure: "6.1",
+        description: "turbulent shells with a dense core over a ground plane, purple outer medium",
+    },
+    Dataset {
+        name: "piggy-bank",
+        title: "Piggy bank",
+        dims: [512, 512, 134],
+        table: "6.1",
+        thesis_gpu: "NVIDIA GeForce GTX 1070",
+        thesis_ms: 157.04,
+        thesis_fps: 6.37,
+        figure: "6.2",
+        description: "a curved ceramic shell (white, reflective) with a coin inside, yellow medium",
+    },
+    Dataset {
+        name: "glass",
+        title: "Glass",
+        dims: [768, 768, 800],
+        table: "6.1",
+        thesis_gpu: "NVIDIA GeForce GTX 1070",
+        thesis_ms: 217.20,
+        thesis_fps: 4.60,
+        figure: "6.3",
+        description: "a stemmed glass holding liquid (solid of revolution), floor and back wall",
+    },
+    Dataset {
+        name: "hand",
+        title: "Hand",
+        dims: [244, 124, 257],
+        table: "6.1",
+        thesis_gpu: "NVIDIA GeForce GTX 1070",
+        thesis_ms: 52.77,
+        thesis_fps: 18.95,
+        figure: "6.8",
+        description: "bones, vessels and soft tissue of a hand, each with its own refractive index",
+    },
+    Dataset {
+        name: "head",
+        title: "Head",
+        dims: [512, 512, 333],
+        table: "6.1",
+        thesis_gpu: "NVIDIA GeForce GTX 1070",
+        thesis_ms: 205.12,
+        thesis_fps: 4.88,
+        figure: "6.6",
+        description: "skull, brain and soft tissue with air-filled sinuses and airway",
+    },
+    Dataset {
+        name: "water",
+        title: "Water",
+        dims: [256, 256, 128],
+        table: "6.2",
+        thesis_gpu: "NVIDIA GeForce GTX 980",
+        thesis_ms: 327.31,
+        thesis_fps: 3.05,
+        figure: "6.4",
+        description: "water with a wavy surface over a floor, blue-green medium",
+    },
+    Dataset {
+        name: "ship",
+        title: "Ship",
+        dims: [256, 256, 385],
+        table: "6.2",
+        thesis_gpu: "NVIDIA GeForce GTX 980",
+        thesis_ms: 443.69,
+        thesis_fps: 2.25,
+        figure: "6.5",
+        description: "a ship model inside a refractive blue block (total internal reflection)",
+    },
+    Dataset {
+        name: "kiwi",
+        title: "Kiwi",
+        dims: [256, 256, 128],
+        table: "6.2",
+        thesis_gpu: "NVIDIA GeForce GTX 980",
+        thesis_ms: 155.15,
+        thesis_fps: 6.45,
+        figure: "6.7",
+        description: "a kiwifruit slice: skin, flesh, a ring of seeds, a pale core",
+    },
+];
+
+pub fn dataset(name: &str) -> Result<&'static Dataset> {
+    DATASETS.iter().find(|d| d.name == name).with_context(|| {
+        let names: Vec<&str> = DATASETS.iter().map(|d| d.name).collect();
+        format!(
+            "unknown thesis data set '{name}' (known: {})",
+            names.join(", ")
+        )
+    })
+}
+
+/// The resolution at `scale` (benchmark `--scale`): every axis scaled and rounded, at
+/// least 2 voxels.
+pub fn scaled_dims(dims: [u32; 3], scale: f64) -> Result<[u32; 3]> {
+    if !(scale.is_finite() && scale > 0.0 && scale <= 4.0) {
+        bail!("scale {scale} must be a number in (0, 4]");
+    }
+    Ok(dims.map(|d| ((d as f64 * scale).round() as u32).max(2)))
+}
+
+/// Where generated stand-ins are cached: `$REFRAKT_CACHE_DIR`, else
+/// `$XDG_CACHE_HOME/refrakt`, else `~/.cache/refrakt`; stand-ins go to `standins/` in it.
+pub fn cache_dir() -> PathBuf {
+    let base = if let Some(d) = std::env::var_os("REFRAKT_CACHE_DIR") {
+        PathBuf::from(d)
+    } else if let Some(d) = std::env::var_os("XDG_CACHE_HOME") {
+        PathBuf::from(d).join("refrakt")
+    } else if let Some(h) = std::env::var_os("HOME") {
+        PathBuf::from(h).join(".cache/refrakt")
+    } else {
+        std::env::temp_dir().join("refrakt-cache")
+    };
+    base.join("standins")
+}
+
+/// The cache file of a stand-in at `dims`.
+pub fn cache_file(dir: &Path, name: &str, dims: [u32; 3]) -> PathBuf {
+    dir.join(format!(
+        "{name}_{}x{}x{}_uint8.v{GENERATOR_VERSION}.raw",
+        dims[0], dims[1], dims[2]
+    ))
+}
+
+/// The stand-in `name` at `dims`, from the cache in `dir` when it is there, otherwise
+/// generated and written to it (atomically, so an interrupted run leaves no partial file).
+/// Returns the volume and whether it came from the cache.
+pub fn load_or_generate(name: &str, dims: [u32; 3], dir: &Path) -> Result<(Volume, bool)> {
+    dataset(name)?;
+    let file = cache_file(dir, name, dims);
+    let n = dims.iter().map(|&d| d as usize).product::<usize>();
+    if let Ok(bytes) = std::fs::read(&file) {
+        if bytes.len() == n {
+            return Ok((Volume::new(dims, [1.0; 3], Voxels::U8(bytes))?, true));
+        }
+        log::warn!(
+            "{}: {} bytes, expected {n}; regenerating",
+            file.display(),
+            bytes.len()
+        );
+    }
+    let vol = generate(name, dims)?;
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("creating the stand-in cache {}", dir.display()))?;
+    let tmp = file.with_extension("partial");
+    let Voxels::U8(bytes) = &vol.voxels else {
+        unreachable!("stand-ins are u8")
+    };
+    std::fs::write(&tmp, bytes).with_context(|| format!("writing {}", tmp.display()))?;
+    std::fs::rename(&tmp, &file).with_context(|| format!("writing {}", file.display()))?;
+    Ok((vol, false))
+}
+
+/// Generates the stand-in `name` at `dims` (no cache).
+pub fn generate(name: &str, dims: [u32; 3]) -> Result<Volume> {
+    let f: &(dyn Fn(Vec3, f32) -> f32 + Sync) = match name {
+        "supernova" => &supernova,
+        "piggy-bank" => &piggy_bank,
+        "glass" => &glass,
+        "hand" => &hand,
+        "head" => &head,
+        "water" => &water,
+        "ship" => &ship,
+        "kiwi" => &kiwi,
+        _ => {
+            dataset(name)?;
+            unreachable!()
+        }
+    };
+    Volume::new(dims, [1.0; 3], Voxels::U8(fill(dims, f)?))
+}
+
+/// Evaluates `f(p, voxel)` at every voxel centre, p in box coordinates (the longest side
+/// spans [-0.5, 0.5], the volume is centred on the origin, y up), `voxel` the side of one
+/// voxel in those units; quantised to u8. Threads take whole z slices.
+pub fn fill(dims: [u32; 3], f: &(dyn Fn(Vec3, f32) -> f32 + Sync)) -> Result<Vec<u8>> {
+    let n = dims
+        .iter()
+        .try_fold(1usize, |a, &d| a.checked_mul(d as usize))
+        .context("volume dimensions overflow")?;
+    let longest = dims.iter().cloned().max().unwrap_or(1) as f32;
+    let voxel = 1.0 / longest;
+    let half = Vec3::new(dims[0] as f32, dims[1] as f32, dims[2] as f32) * (0.5 * voxel);
+    let slice = dims[0] as usize * dims[1] as usize;
+    let mut out = vec![0u8; n];
+    let threads = std::thread::available_parallelism()
+        .map(|t| t.get())
+        .unwrap_or(1)
+        .min(dims[2] as usize)
+        .max(1);
+    let per = (dims[2] as usize).div_ceil(threads);
+    std::thread::scope(|s| {
+        for (t, chunk) in out.chunks_mut(per * slice).enumerate() {
+            s.spawn(move || {
+                for (i, v) in chunk.iter_mut().enumerate() {
+                    let z = t * per + i / slice;
+                    let y = (i % slice) / dims[0] as usize;
+                    let x = i % dims[0] as usize;
+                    let p =
+                        Vec3::new(x as f32 + 0.5, y as f32 + 0.5, z as f32 + 0.5) * voxel - half;
+                    *v = (f(p, voxel).clamp(0.0, 1.0) * 255.0).round() as u8;
+                }
+            });
+        }
+    });
+    Ok(out)
+}
+
+/// Smooth inside indicator of a signed distance (positive inside): a ramp about one voxel
+/// wide, so that trilinear reconstruction keeps the surface where the distance is 0 and
+/// refraction through it is not noisy (docs/NOTES.md, refraction geometry).
+fn inside(d: f32, voxel: f32) -> f32 {
+    0.5 + 0.5 * (d / voxel).tanh()
+}
+
+/// Signed distance (positive inside) of an ellipsoid, approximate away from the surface.
+fn ellipsoid(p: Vec3, c: Vec3, r: Vec3) -> f32 {
+    let q = (p - c) / r;
+    (1.0 - q.length()) * r.min_element()
+}
+
+/// Signed distance (positive inside) of a capsule from a to b with radius r.
+fn capsule(p: Vec3, a: Vec3, b: Vec3, r: f32) -> f32 {
+    let ab = b - a;
+    let t = ((p - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0);
+    r - (p - (a + t * ab)).length()
+}
+
+fn noise(p: Vec3, scale: f32, seed: u32) -> f32 {
+    fbm((p * scale).to_array(), seed)
+}
+
+// Values of the stand-ins are chosen for their transfer-function presets (assets/tf/):
+// the comments there say which value is which material.
+
+fn supernova(p: Vec3, voxel: f32) -> f32 {
+    let floor = inside(-0.42 - p.y, voxel);
+    let shell = 0.8 * shell_value([p.x, p.y + 0.04, p.z], 7);
+    shell.max(floor)
+}
+
+fn piggy_bank(p: Vec3, voxel: f32) -> f32 {
+    // Box coordinates: x, y in [-0.5, 0.5], z in ±0.13. The body is an ellipsoid lying in
+    // the volume, a ceramic shell 2.5 voxels thick, with a snout, ears, legs and a coin slot.
+    let c = Vec3::ZERO;
+    let r = Vec3::new(0.36, 0.25, 0.11);
+    let body = ellipsoid(p, c, r);
+    let snout = capsule(
+        p,
+        Vec3::new(0.33, 0.0, 0.0),
+        Vec3::new(0.42, 0.0, 0.0),
+        0.07,
+    );
+    let ear = capsule(
+        p,
+        Vec3::new(0.2, 0.2, 0.0),
+        Vec3::new(0.24, 0.3, 0.0),
+        0.035,
+    )
+    .max(capsule(
+        p,
+        Vec3::new(0.1, 0.22, 0.0),
+        Vec3::new(0.1, 0.32, 0.0),
+        0.035,
+    ));
+    let legs = [-0.2f32, 0.15]
+        .iter()
+        .map(|&x| capsule(p, Vec3::new(x, -0.2, 0.0), Vec3::new(x, -0.33, 0.0), 0.05))
+        .fold(f32::NEG_INFINITY, f32::max);
+    let solid = body.max(snout).max(ear).max(legs);
+    let t = 2.5 * voxel;
+    let slot = (0.012 - p.x.abs()).min(0.05 - (p.y - 0.24).abs());
+    let shell = solid.min(t - solid).min(-slot);
+    let coin = (0.05 - (p - Vec3::new(-0.05, -0.19, 0.0)).length()).min(0.012 - p.z.abs());
+    (0.6 * inside(shell, voxel)).max(0.9 * inside(coin, voxel))
+}
+
+/// The glass as a solid of revolution about y, on a floor before a back wall.
+fn glass(p: Vec3, voxel: f32) -> f32 {
+    let radial = (p.x * p.x + p.z * p.z).sqrt();
+    let c = Vec3::new(0.0, 0.08, 0.0);
+    let r = (p - c).length();
+    let (r_in, r_out) = (0.21, 0.23);
+    let rim = c.y + 0.15;
+    let bowl = (r_out - r).min(r - r_in).min(rim - p.y);
+    let stem = (0.02 - radial)
+        .min(c.y - r_out + 0.01 - p.y)
+        .min(p.y + 0.33);
+    let foot = (0.15 - radial).min(0.012 - (p.y + 0.34).abs());
+    let glass = inside(bowl.max(stem).max(foot), voxel);
+    let liquid = inside((r_in - r).min(c.y + 0.03 - p.y), voxel);
+    let floor = inside(-0.36 - p.y, voxel);
+    let wall = inside(-0.42 - p.z, voxel);
+    (0.4 * glass).max(0.8 * liquid).max(floor.max(wall))
+}
+
+fn hand(p: Vec3, voxel: f32) -> f32 {
+    // Box: x ±0.47 (width), y ±0.24 (thickness), z ±0.5 (length, fingers towards -z).
+    let palm_c = Vec3::new(0.0, 0.0, 0.17);
+    let palm = ellipsoid(p, palm_c, Vec3::new(0.3, 0.11, 0.26));
+    let mut tissue = palm;
+    let mut bone = f32::NEG_INFINITY;
+    let mut vessel = f32::NEG_INFINITY;
+    let fingers = [
+        (-0.21, 0.28, 0.06),
+        (-0.07, 0.34, 0.055),
+        (0.07, 0.32, 0.055),
+        (0.2, 0.26, 0.05),
+    ];
+    for (x, len, r) in fingers {
+        let base = Vec3::new(x, 0.0, 0.0);
+        let tip = Vec3::new(x * 1.15, -0.02, -len);
+        tissue = tissue.max(capsule(p, base, tip, r));
+        // Phalanges: three bones with joints.
+        for k in 0..3 {
+            let a = base.lerp(tip, k as f32 / 3.0 + 0.02);
+            let b = base.lerp(tip, (k + 1) as f32 / 3.0 - 0.04);
+            bone = bone.max(capsule(p, a, b, 0.45 * r));
+        }
+        // Metacarpal.
+        bone = bone.max(capsule(
+            p,
+            Vec3::new(x * 0.6, 0.0, 0.36),
+            Vec3::new(x, 0.0, 0.03),
+            0.4 * r,
+        ));
+        // A digital artery on the palm side of each finger.
+        vessel = vessel.max(capsule(
+            p,
+            Vec3::new(x * 0.7, -0.06, 0.3),
+            tip + Vec3::new(0.0, -0.025, 0.03),
+            0.012,
+        ));
+    }
+    let thumb_base = Vec3::new(0.27, 0.0, 0.25);
+    let thumb_tip = Vec3::new(0.44, -0.03, 0.0);
+    tissue = tissue.max(capsule(p, thumb_base, thumb_tip, 0.065));
+    bone = bone.max(capsule(p, thumb_base, thumb_tip, 0.028));
+    // The palmar arch joining the arteries.
+    vessel = vessel.max(capsule(
+        p,
+        Vec3::new(-0.2, -0.07, 0.3),
+        Vec3::new(0.2, -0.07, 0.3),
+        0.014,
+    ));
+    let texture = 0.04 * (noise(p, 24.0, 3) - 0.5);
+    let t = inside(tissue, voxel) * (0.3 + texture);
+    t.max(0.6 * inside(vessel, voxel))
+        .max(0.9 * inside(bone, voxel))
+}
+
+fn head(p: Vec3, voxel: f32) -> f32 {
+    // Box: x, y ±0.5, z ±0.325 (front at +z). Skull, scalp and soft tissue, brain, air
+    // cavities (sinuses, airway) and a jaw.
+    let c = Vec3::new(0.0, 0.05, 0.0);
+    let scalp = ellipsoid(p, c, Vec3::new(0.34, 0.4, 0.3));
+    let skull_out = ellipsoid(p, c, Vec3::new(0.31, 0.37, 0.27));
+    let skull_in = ellipsoid(p, c, Vec3::new(0.28, 0.34, 0.24));
+    let skull = skull_out.min(-skull_in);
+    let jaw = capsule(
+        p,
+        Vec3::new(-0.18, -0.28, 0.1),
+        Vec3::new(0.18, -0.28, 0.1),
+        0.035,
+    )
+    .max(capsule(
+        p,
+        Vec3::new(0.0, -0.3, 0.2),
+        Vec3::new(0.0, -0.28, 0.22),
+        0.04,
+    ));
+    let neck = capsule(
+        p,
+        Vec3::new(0.0, -0.2, -0.03),
+        Vec3::new(0.0, -0.5, -0.05),
+        0.14,
+    );
+    let tissue = scalp.max(neck);
+    let sinus = ellipsoid(p, Vec3::new(-0.08, -0.12, 0.2), Vec3::new(0.06, 0.05, 0.05))
+        .max(ellipsoid(
+            p,
+            Vec3::new(0.08, -0.12, 0.2),
+            Vec3::new(0.06, 0.05, 0.05),
+        ))
+        .max(ellipsoid(
+            p,
+            Vec3::new(0.0, 0.02, 0.24),
+            Vec3::new(0.05, 0.04, 0.025),
+        ));
+    let airway = capsule(
+        p,
+        Vec3::new(0.0, -0.16, 0.12),
+        Vec3::new(0.0, -0.5, 0.0),
+        0.03,
+    );
+    let air = sinus.max(airway);
+    let brain = skull_in - 0.01;
+    let folds = 0.05 * (noise(p, 30.0, 11) - 0.5);
+    let soft = inside(tissue, voxel) * 0.35;
+    let v = soft
+        .max(inside(brain, voxel) * (0.45 + folds))
+        .max(0.9 * inside(skull.max(jaw), voxel));
+    v * (1.0 - inside(air, voxel))
+}
+
+fn water(p: Vec3, voxel: f32) -> f32 {
+    // Box: x, y ±0.5, z ±0.25. Water below a wavy surface, a sandy floor at the bottom.
+    let waves = 0.025 * (p.x * 23.0 + 1.3).sin() * (p.z * 17.0).cos()
+        + 0.012 * (p.x * 41.0 - p.z * 37.0).sin()
+        + 0.02 * (noise(p, 9.0, 5) - 0.5);
+    let surface = 0.12 + waves - p.y;
+    let floor = -0.4 + 0.02 * (noise(p, 14.0, 9) - 0.5) - p.y;
+    (0.5 * inside(surface, voxel)).max(inside(floor, voxel))
+}
+
+fn ship(p: Vec3, voxel: f32) -> f32 {
+    // Box: x, y ±0.33, z ±0.5. A refractive block filling most of it, a ship inside:
+    // hull, deck house, two masts and sails.
+    let block = (0.3 - p.x.abs()).min(0.3 - p.y.abs()).min(0.46 - p.z.abs());
+    let hull_w = 0.1 * (1.0 - (p.z / 0.36).powi(2)).max(0.0).sqrt();
+    let hull = (hull_w - p.x.abs())
+        .min(p.y + 0.12)
+        .min(-0.02 - p.y + 0.1 * (p.z / 0.36).powi(2))
+        .min(0.36 - p.z.abs());
+    let house = (0.05 - p.x.abs())
+        .min(0.06 - (p.y - 0.0).abs())
+        .min(0.08 - (p.z - 0.1).abs());
+    let masts = capsule(
+        p,
+        Vec3::new(0.0, -0.02, -0.12),
+        Vec3::new(0.0, 0.26, -0.12),
+        0.008,
+    )
+    .max(capsule(
+        p,
+        Vec3::new(0.0, -0.02, 0.02),
+        Vec3::new(0.0, 0.22, 0.02),
+        0.008,
+    ));
+    let sails = (0.004 - (p.x - 0.012).abs())
+        .min(0.1 - (p.z + 0.12).abs())
+        .min(0.1 - (p.y - 0.14).abs())
+        .max(
+            (0.004 - (p.x - 0.012).abs())
+                .min(0.08 - (p.z - 0.02).abs())
+                .min(0.08 - (p.y - 0.12).abs()),
+        );
+    let ship = hull.max(house).max(masts).max(sails);
+    (0.3 * inside(block, voxel)).max(0.85 * inside(ship, voxel))
+}
+
+fn kiwi(p: Vec3, voxel: f32) -> f32 {
+    // Box: x, y ±0.5, z ±0.25. A slice of kiwifruit facing ±z: an elliptical disc with
+    // skin, green flesh with radial texture, a ring of dark seeds and a pale core.
+    let q = Vec3::new(p.x / 0.42, p.y / 0.36, 0.0);
+    let rho = q.length();
+    let slice = (1.0 - rho).min(0.12 - p.z.abs()) * 0.36;
+    let angle = q.y.atan2(q.x);
+    let rays = 0.5 + 0.5 * (angle * 36.0).cos();
+    let flesh = 0.4 + 0.05 * rays * (rho - 0.25).clamp(0.0, 1.0);
+    let skin = inside(slice, voxel) - inside(slice - 1.5 * voxel, voxel);
+    // Seeds: small ellipsoids on a ring at rho ≈ 0.38, 40 of them.
+    let k = (angle / std::f32::consts::TAU * 40.0).round();
+    let a = k / 40.0 * std::f32::consts::TAU;
+    let seed_c = Vec3::new(0.42 * 0.38 * a.cos(), 0.36 * 0.38 * a.sin(), 0.0);
+    let seed = 0.012 - ((p - seed_c) * Vec3::new(1.0, 1.0, 0.5)).length();
+    let core = 0.24 - rho;
+    let v = inside(slice, voxel) * if core > 0.0 { 0.6 } else { flesh };
+    v.max(0.75 * skin).max(0.95 * inside(seed, voxel))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_dataset_generates_at_a_small_scale_and_is_deterministic() {
+        for d in &DATASETS {
+            let dims = scaled_dims(d.dims, 0.08).unwrap();
+            let a = generate(d.name, dims).unwrap();
+            let b = generate(d.name, dims).unwrap();
+            assert_eq!(a, b, "{} is not deterministic", d.name);
+            let Voxels::U8(v) = &a.voxels else { panic!() };
+            let filled = v.iter().filter(|&&x| x > 20).count();
+            assert!(
+                filled > v.len() / 50 && filled < v.len(),
+                "{}: {filled} of {} voxels filled",
+                d.name,
+                v.len()
+            );
+        }
+    }
+
+    #[test]
+    fn thread_split_covers_every_voxel() {
+        // Odd sizes so the last thread's chunk is short.
+        let dims = [5, 3, 7];
+        let v = fill(dims, &|p, _| p.z + 0.5).unwrap();
+        let longest = 7.0;
+        for z in 0..7 {
+            let expect = (((z as f32 + 0.5) / longest) * 255.0).round() as u8;
+            assert!(v[z * 15..(z + 1) * 15].iter().all(|&x| x == expect));
+        }
+    }
+
+    #[test]
+    fn cache_round_trip_and_bad_scale() {
+        let dir = tempfile::tempdir().unwrap();
+        let dims = [20, 10, 21];
+        let (a, cached) = load_or_generate("hand", dims, dir.path()).unwrap();
+        assert!(!cached);
+        let (b, cached) = load_or_generate("hand", dims, dir.path()).unwrap();
+        assert!(cached);
+        assert_eq!(a, b);
+        assert!(scaled_dims([4, 4, 4], 0.0).is_err());
+        assert!(scaled_dims([4, 4, 4], f64::NAN).is_err());
+        assert!(load_or_generate("teapot", dims, dir.path()).is_err());
+    }
+}

@@ -1,0 +1,195 @@
+//! Issue 6: scene files, built-in scenes, command-line overrides, and the errors a user
+//! meets with bad scene files or volumes too large for the device.
+
+mod common;
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+use common::with_context;
+use refrakt::render::Renderer;
+use refrakt::scene::Scene;
+use refrakt::transfer::TransferFunctions;
+use refrakt::volume::{Volume, Voxels};
+
+fn refrakt(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_refrakt"))
+        .args(args)
+        .env("REFRAKT_VALIDATE", "1")
+        .output()
+        .expect("running refrakt")
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> String {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p.to_str().unwrap().to_string()
+}
+
+/// Fails unless the command failed cleanly, said `needles`, and wrote no output file.
+fn fails_with(args: &[&str], out: &Path, needles: &[&str]) {
+    let o = refrakt(args);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{args:?} succeeded");
+    assert!(!err.contains("panicked"), "{err}");
+    for n in needles {
+        assert!(err.contains(n), "expected '{n}' in: {err}");
+    }
+    assert_eq!(err.trim().lines().count(), 1, "not one line: {err}");
+    assert!(
+        !out.exists(),
+        "partial output {} left behind",
+        out.display()
+    );
+}
+
+const SMALL: &str = r#"
+name = "tiny"
+[volume]
+builtin = "sphere"
+size = 24
+[transfer]
+colour = [[0.0, 1.0, 0.0, 0.0]]
+opacity = [[0.0, 0.0], [0.5, 0.0], [0.6, 1.0], [1.0, 1.0]]
+[camera]
+eye = [0.0, 0.0, 2.5]
+fov = 30
+[environment]
+map = "none"
+[render]
+width = 24
+height = 20
+background = [0.0, 0.0, 1.0, 1.0]
+tonemap = "none"
+"#;
+
+#[test]
+fn scene_file_sets_everything_and_flags_override_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write(dir.path(), "tiny.toml", SMALL);
+    let out = dir.path().join("a.png");
+    let o = refrakt(&["render", &scene, "-o", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("tiny"), "{stdout}");
+    let img = image::open(&out).unwrap().to_rgb8();
+    assert_eq!(img.dimensions(), (24, 20));
+    // The camera looks at the centre of a sphere that the inline transfer function makes
+    // opaque red; the corner sees the scene's blue background.
+    assert_eq!(img.get_pixel(0, 0).0, [0, 0, 255]);
+    let c = img.get_pixel(12, 10).0;
+    assert!(c[0] > 200 && c[2] < 30, "centre {c:?}");
+
+    // Flags override fields: size, background, and the environment.
+    let out2 = dir.path().join("b.png");
+    let o = refrakt(&[
+        "render",
+        &scene,
+        "-o",
+        out2.to_str().unwrap(),
+        "--width",
+        "16",
+        "--background",
+        "0,1,0",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let img = image::open(&out2).unwrap().to_rgb8();
+    assert_eq!(img.dimensions(), (16, 20));
+    assert_eq!(img.get_pixel(0, 0).0, [0, 255, 0]);
+}
+
+#[test]
+fn bad_scene_files_are_one_line_errors_naming_the_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("never.png");
+    let o = out.to_str().unwrap();
+    let unknown = write(
+        dir.path(),
+        "unknown.toml",
+        &SMALL.replace("fov = 30", "fov = 30\nzoom = 2"),
+    );
+    fails_with(
+        &["render", &unknown, "-o", o],
+        &out,
+        &["unknown.toml", "zoom"],
+    );
+    let wrong = write(
+        dir.path(),
+        "wrong.toml",
+        &SMALL.replace("width = 24", "width = \"wide\""),
+    );
+    fails_with(&["render", &wrong, "-o", o], &out, &["wrong.toml", "width"]);
+    let missing = write(
+        dir.path(),
+        "missing.toml",
+        "[volume]\nfile = \"no-such-volume.nrrd\"\n",
+    );
+    fails_with(
+        &["render", &missing, "-o", o],
+        &out,
+        &["missing.toml", "no-such-volume.nrrd", "not found"],
+    );
+    let env = write(
+        dir.path(),
+        "env.toml",
+        &SMALL.replace("map = \"none\"", "map = \"sky-that-is-not-here.exr\""),
+    );
+    fails_with(
+        &["render", &env, "-o", o],
+        &out,
+        &["env.toml", "sky-that-is-not-here.exr"],
+    );
+    let bad_camera = write(
+        dir.path(),
+        "cam.toml",
+        &SMALL.replace(
+            "eye = [0.0, 0.0, 2.5]",
+            "eye = [0.0, 0.0, 2.5]\nazimuth = 3",
+        ),
+    );
+    fails_with(
+        &["render", &bad_camera, "-o", o],
+        &out,
+        &["cam.toml", "eye"],
+    );
+    fails_with(
+        &["render", "no-such-scene", "-o", o],
+        &out,
+        &["no-such-scene", "not a built-in scene", "sphere-on-floor"],
+    );
+    fails_with(
+        &["render", "sphere-on-floor", "--scale", "0.5", "-o", o],
+        &out,
+        &["--scale", "stand-ins"],
+    );
+}
+
+#[test]
+fn every_builtin_scene_resolves_with_its_preset() {
+    for (name, _) in refrakt::scene::builtin_names() {
+        let s = Scene::resolve(&name).unwrap();
+        s.transfer_functions()
+            .unwrap_or_else(|e| panic!("{name}: {e:#}"));
+        s.render_options()
+            .unwrap_or_else(|e| panic!("{name}: {e:#}"));
+    }
+    let glass = Scene::resolve("glass").unwrap();
+    assert_eq!(glass.transfer_functions().unwrap().name, "glass-scene");
+    assert_eq!((glass.width, glass.height), (768, 768));
+}
+
+#[test]
+fn volumes_beyond_the_device_limit_are_refused_naming_it() {
+    with_context(|ctx| {
+        let max = ctx.info().limits.max_image_dimension3_d;
+        let dims = [max + 1, 2, 2];
+        let n = dims.iter().map(|&d| d as usize).product();
+        let vol = Volume::new(dims, [1.0; 3], Voxels::U8(vec![0; n])).unwrap();
+        let tf = TransferFunctions::load("ct-bone").unwrap();
+        let err = format!("{:#}", Renderer::new(ctx, &vol, &tf).err().unwrap());
+        assert!(
+            err.contains(&max.to_string()) && err.contains("maxImageDimension3D"),
+            "{err}"
+        );
+    });
+}
