@@ -11,6 +11,7 @@ fn main() {
     let glsl_dir = manifest.join("glsl");
     let out_dir = PathBuf::from(std::env::var("OUT_DIR").unwrap());
     println!("cargo:rerun-if-changed=glsl");
+    git_commit(&manifest);
 
     let mut entries: Vec<PathBuf> = std::fs::read_dir(&glsl_dir)
         .unwrap_or_else(|e| fail(&format!("cannot read {}: {e}", glsl_dir.display())))
@@ -100,4 +101,31 @@ fn write_if_changed(path: &Path, content: &str) {
 fn fail(msg: &str) -> ! {
     eprintln!("error: {msg}");
     std::process::exit(1);
+}
+
+/// Embeds the commit the binary is built from (REFRAKT_GIT_COMMIT), for benchmark reports;
+/// "unknown" outside a git checkout. A "+dirty" suffix marks uncommitted changes.
+fn git_commit(manifest: &Path) {
+    let git = |args: &[&str]| {
+        std::process::Command::new("git")
+            .args(args)
+            .current_dir(manifest)
+            .output()
+            .ok()
+            .filter(|o| o.status.success())
+            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+    };
+    let commit = git(&["rev-parse", "--short=12", "HEAD"]).unwrap_or_else(|| "unknown".into());
+    let dirty =
+        git(&["status", "--porcelain", "--untracked-files=no"]).is_some_and(|s| !s.is_empty());
+    let suffix = if dirty { "+dirty" } else { "" };
+    println!("cargo:rustc-env=REFRAKT_GIT_COMMIT={commit}{suffix}");
+    if let Some(dir) = git(&["rev-parse", "--git-dir"]) {
+        let dir = manifest.join(dir);
+        println!("cargo:rerun-if-changed={}", dir.join("HEAD").display());
+        println!("cargo:rerun-if-changed={}", dir.join("index").display());
+        if let Some(r) = git(&["symbolic-ref", "-q", "HEAD"]) {
+            println!("cargo:rerun-if-changed={}", dir.join(r).display());
+        }
+    }
 }

@@ -9,6 +9,7 @@ pub mod shaders {
     include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
 }
 
+pub mod bench;
 pub mod environment;
 pub mod output;
 pub mod render;

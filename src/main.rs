@@ -11,7 +11,7 @@ use refrakt::render::{Model, Renderer, StateBuffer};
 use refrakt::scene::{self, EnvSource, Scene, TransferSource, VolumeSource};
 use refrakt::vk::{self, Context, ContextDesc};
 use refrakt::volume::formats::RawLayout;
-use refrakt::volume::Volume;
+use refrakt::volume::{standins, Volume};
 
 #[derive(Parser)]
 #[command(
@@ -49,6 +49,87 @@ enum Command {
     /// Render a scene to an image (.png = 8-bit sRGB, .exr = linear float) and print the
     /// GPU time of each pass.
     Render(Box<RenderArgs>),
+    /// Benchmarks: the thesis' timing tables (6.1, 6.2) on this device, and how the
+    /// sweep's cost scales with planes and pixels. GPU timestamps; see docs/BENCH.md.
+    #[command(subcommand)]
+    Bench(BenchCommand),
+}
+
+#[derive(Subcommand)]
+enum BenchCommand {
+    /// One row per data set of Tables 6.1 and 6.2 (stand-ins at the thesis' resolutions
+    /// unless --data-dir holds the originals): 768² viewport, sample distance 1, 100
+    /// frames, the camera orbiting 0.5° per frame; the thesis' figures beside ours.
+    Thesis(ThesisArgs),
+    /// Sweep time against plane count (several sample distances) and against pixel count
+    /// (several viewports), with least-squares fits.
+    Scaling(ScalingArgs),
+}
+
+#[derive(Args)]
+struct ThesisArgs {
+    /// Shrinks viewport and volume together (e.g. 0.25 on lavapipe, where a full-size
+    /// frame takes tens of seconds). Printed in the table.
+    #[arg(long, default_value_t = 1.0)]
+    scale: f64,
+    /// Measured frames per row (the thesis: 100).
+    #[arg(long, default_value_t = 100)]
+    frames: u32,
+    /// Warm-up frames per row and variant, excluded from the statistics (reported).
+    #[arg(long, default_value_t = 3)]
+    warmup: u32,
+    /// Rows to run, comma-separated (supernova, piggy-bank, glass, hand, head, water, ship,
+    /// kiwi). Default: all.
+    #[arg(long, value_delimiter = ',')]
+    rows: Vec<String>,
+    /// Also time the EA ray marcher and the sweep's floor variant (same buffers, trivial
+    /// shader) per row, and print the ratios.
+    #[arg(long)]
+    baselines: bool,
+    /// Folder with the thesis originals (<name>.<ext>, e.g. supernova.nrrd) that replace
+    /// the stand-ins. Default: $REFRAKT_DATA_DIR or ~/.cache/refrakt/data.
+    #[arg(long, value_name = "DIR")]
+    data_dir: Option<PathBuf>,
+    /// Write every frame time with the full context as CSV.
+    #[arg(long, value_name = "FILE.csv")]
+    csv: Option<PathBuf>,
+    /// Write the whole report as JSON (schema in docs/BENCH.md).
+    #[arg(long, value_name = "FILE.json")]
+    json: Option<PathBuf>,
+    /// No progress bar on stderr.
+    #[arg(long)]
+    quiet: bool,
+}
+
+#[derive(Args)]
+struct ScalingArgs {
+    /// Scene to time (any `refrakt render` scene).
+    #[arg(long, default_value = "sphere-on-floor")]
+    scene: String,
+    /// Voxels per side for a procedural scene.
+    #[arg(long, default_value_t = 64)]
+    volume_size: u32,
+    /// Sample distances for the plane-count series.
+    #[arg(long, value_delimiter = ',', default_value = "0.5,1,2,4")]
+    sample_distances: Vec<f32>,
+    /// Viewport sides for the pixel-count series.
+    #[arg(long, value_delimiter = ',', default_value = "64,96,128,192")]
+    sides: Vec<u32>,
+    /// Viewport side for the plane-count series.
+    #[arg(long, default_value_t = 128)]
+    side: u32,
+    /// Measured frames per point (after one warm-up).
+    #[arg(long, default_value_t = 3)]
+    frames: u32,
+    /// Write the report as JSON.
+    #[arg(long, value_name = "FILE.json")]
+    json: Option<PathBuf>,
+    /// Folder of fetched data (see `render --data-dir`).
+    #[arg(long, value_name = "DIR")]
+    data_dir: Option<PathBuf>,
+    /// No progress bar on stderr.
+    #[arg(long)]
+    quiet: bool,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -216,6 +297,8 @@ fn run(cli: Cli) -> Result<ExitCode> {
     match cli.command {
         Command::Info => info(&desc),
         Command::Render(args) => render(&desc, &args),
+        Command::Bench(BenchCommand::Thesis(args)) => bench_thesis(&desc, &args),
+        Command::Bench(BenchCommand::Scaling(args)) => bench_scaling(&desc, &args),
     }
 }
 
@@ -298,13 +381,7 @@ fn info(desc: &ContextDesc) -> Result<ExitCode> {
 /// GPU time of a frame's rendering passes, without the one-off builds (preintegration
 /// table, environment SAT) that happen only when their inputs change.
 fn main_pass_ms(frame: &refrakt::render::Frame) -> f64 {
-    frame
-        .timings
-        .scopes
-        .iter()
-        .filter(|(name, _)| name != "preintegration" && name != "environment SAT")
-        .map(|(_, ms)| ms)
-        .sum()
+    frame.timings.get("frame").unwrap_or(0.0)
 }
 
 fn parse_floats<const N: usize>(flag: &str, s: &str) -> Result<[f32; N]> {
@@ -489,6 +566,70 @@ fn scene_from_args(args: &RenderArgs) -> Result<Scene> {
     Ok(s)
 }
 
+fn bench_thesis(desc: &ContextDesc, args: &ThesisArgs) -> Result<ExitCode> {
+    standins::scaled_dims([1, 1, 1], args.scale).context("--scale")?;
+    ensure!(args.frames >= 1, "--frames must be at least 1");
+    refrakt::bench::select_rows(&args.rows).context("--rows")?;
+    if let Some(p) = &args.csv {
+        refrakt::bench::check_output(p, "csv").context("--csv")?;
+    }
+    if let Some(p) = &args.json {
+        refrakt::bench::check_output(p, "json").context("--json")?;
+    }
+    let ctx = Context::new(desc)?;
+    let settings = refrakt::bench::ThesisSettings {
+        scale: args.scale,
+        frames: args.frames,
+        warmup: args.warmup,
+        rows: args.rows.clone(),
+        baselines: args.baselines,
+        data_dir: args.data_dir.clone().unwrap_or_else(scene::data_dir),
+        progress: !args.quiet,
+    };
+    let report = refrakt::bench::thesis(&ctx, &settings)?;
+    print!("{}", refrakt::bench::markdown(&report));
+    if let Some(p) = &args.csv {
+        refrakt::bench::write_csv(&report, p)?;
+        println!("\nwrote {}", p.display());
+    }
+    if let Some(p) = &args.json {
+        refrakt::bench::write_json(&report, p)?;
+        println!("wrote {}", p.display());
+    }
+    finish(ctx)
+}
+
+fn bench_scaling(desc: &ContextDesc, args: &ScalingArgs) -> Result<ExitCode> {
+    let mut s = Scene::resolve(&args.scene)?;
+    if let VolumeSource::Procedural { size, .. } = &mut s.volume {
+        *size = args.volume_size;
+    }
+    s.width = args.side;
+    s.height = args.side;
+    s.render_options()?;
+    if let Some(p) = &args.json {
+        refrakt::bench::check_output(p, "json").context("--json")?;
+    }
+    let ctx = Context::new(desc)?;
+    let data_dir = args.data_dir.clone().unwrap_or_else(scene::data_dir);
+    let r = refrakt::bench::scaling(
+        &ctx,
+        &s,
+        &data_dir,
+        &args.sample_distances,
+        &args.sides,
+        args.frames,
+        !args.quiet,
+    )?;
+    print!("{}", refrakt::bench::scaling_markdown(&r));
+    if let Some(p) = &args.json {
+        std::fs::write(p, serde_json::to_string_pretty(&r)? + "\n")
+            .with_context(|| format!("{}: cannot write", p.display()))?;
+        println!("wrote {}", p.display());
+    }
+    finish(ctx)
+}
+
 fn list_scenes() -> Result<ExitCode> {
     println!("Built-in scenes (refrakt render NAME):");
     for (n, d) in scene::builtin_names() {
@@ -568,8 +709,11 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
         println!("GPU timings: this device has no timestamp queries");
     } else {
         println!("GPU time per pass:");
-        for (name, ms) in &frame.timings.scopes {
+        for (name, ms) in frame.timings.scopes.iter().filter(|(n, _)| n != "frame") {
             println!("  {name:<16} {ms:9.3} ms");
+        }
+        if let Some(ms) = frame.timings.get("frame") {
+            println!("  {:<16} {ms:9.3} ms (whole frame command buffer)", "frame");
         }
     }
     if let Some(stats) = &frame.sweep {

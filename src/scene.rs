@@ -456,7 +456,7 @@ fn one_line(e: &toml::de::Error, text: &str) -> String {
 }
 
 /// `<name>.<ext>` in `dir` for any supported volume format, if present.
-fn original_in(dir: &Path, name: &str) -> Option<PathBuf> {
+pub fn original_in(dir: &Path, name: &str) -> Option<PathBuf> {
     let entries = std::fs::read_dir(dir).ok()?;
     let mut found: Vec<PathBuf> = entries
         .filter_map(|e| e.ok().map(|e| e.path()))

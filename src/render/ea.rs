@@ -105,6 +105,8 @@ impl EaPass {
         };
         self.params.write(0, bytemuck::bytes_of(&p))?;
         let timings = ctx.execute(|rec| {
+            // The whole frame's GPU time, as for the sweep.
+            rec.begin_scope("frame");
             rec.transition_all(volume, Access::Sampled);
             rec.transition_all(tf, Access::Sampled);
             rec.transition_all(preint, Access::Sampled);
@@ -118,6 +120,7 @@ impl EaPass {
             )?;
             rec.end_scope();
             self.output.record_copy(rec);
+            rec.end_scope();
             Ok(())
         })?;
         let pixels = self.output.pixels()?;

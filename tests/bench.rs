@@ -1,0 +1,180 @@
+//! Issue 7: the benchmark mode never rots. A tiny `bench thesis` run (two rows, two frames)
+//! must produce the documented structure: the Markdown table with the thesis' figures, a
+//! JSON report that deserialises into the strict schema types, and a CSV with one record
+//! per frame. Times are only checked to be GPU times (positive, finite), never compared.
+
+use std::process::Command;
+
+use refrakt::bench::{Report, SCHEMA};
+
+fn refrakt(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_refrakt"))
+        .args(args)
+        .env("REFRAKT_VALIDATE", "1")
+        // A private stand-in cache, so the test also exercises generation.
+        .env(
+            "REFRAKT_CACHE_DIR",
+            std::env::temp_dir().join("refrakt-bench-test-cache"),
+        )
+        .output()
+        .expect("running refrakt")
+}
+
+#[test]
+fn tiny_thesis_bench_has_the_documented_structure() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("r.json");
+    let csv = dir.path().join("r.csv");
+    let o = refrakt(&[
+        "bench",
+        "thesis",
+        "--scale",
+        "0.05",
+        "--frames",
+        "2",
+        "--warmup",
+        "1",
+        "--rows",
+        "kiwi,supernova",
+        "--baselines",
+        "--quiet",
+        "--json",
+        json.to_str().unwrap(),
+        "--csv",
+        csv.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    // Markdown: the thesis' figures beside ours, rows in table order.
+    let sn = stdout.find("| Supernova | 432×432×432 |").expect(&stdout);
+    let kiwi = stdout.find("| Kiwi | 256×256×128 |").expect(&stdout);
+    assert!(sn < kiwi);
+    for needle in [
+        "108.53",
+        "9.21",
+        "155.15",
+        "6.45",
+        "Refract / EA",
+        "Refract / floor",
+    ] {
+        assert!(stdout.contains(needle), "no {needle} in\n{stdout}");
+    }
+
+    // JSON: unknown or missing fields fail to deserialise (deny_unknown_fields).
+    let r: Report = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(r.schema, SCHEMA);
+    assert!(r.meta.device.contains("llvmpipe") || std::env::var("REFRAKT_DEVICE").is_ok());
+    assert!(!r.meta.git_commit.is_empty() && !r.meta.date.is_empty());
+    assert_eq!((r.settings.frames, r.settings.warmup), (2, 1));
+    let names: Vec<&str> = r.rows.iter().map(|r| r.dataset.as_str()).collect();
+    assert_eq!(names, ["supernova", "kiwi"]);
+    for row in &r.rows {
+        // Scale 0.05 of the thesis' resolution and viewport.
+        let expect = row
+            .thesis
+            .resolution
+            .map(|d| ((d as f64 * 0.05).round() as u32).max(2));
+        assert_eq!(row.resolution, expect, "{}", row.dataset);
+        assert_eq!(row.viewport, [38, 38]);
+        assert!(row.planes >= 2);
+        for v in [Some(&row.refract), row.ea.as_ref(), row.floor.as_ref()] {
+            let v = v.expect("baselines were asked for");
+            assert_eq!(
+                (v.frames_ms.len(), v.warmup_ms.len()),
+                (2, 1),
+                "{}",
+                v.variant
+            );
+            assert!(v.frames_ms.iter().all(|t| t.is_finite() && *t > 0.0));
+            assert!(v.stats.min <= v.stats.median && v.stats.median <= v.stats.max);
+        }
+        assert!(
+            row.refract.passes.sweep_ms > 0.0
+                && row.refract.passes.sweep_ms <= row.refract.stats.max
+        );
+        assert!(row.sweep_over_ea.unwrap() > 0.0 && row.sweep_over_floor.unwrap() > 0.0);
+        assert!(row.bytes_per_plane_pixel > 0.0);
+    }
+
+    // CSV: a header and one record per frame (warm-up included) of each variant.
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap();
+    for col in [
+        "dataset",
+        "variant",
+        "frame",
+        "warmup",
+        "frame_ms",
+        "device",
+        "git_commit",
+    ] {
+        assert!(header.split(',').any(|c| c == col), "no {col} in {header}");
+    }
+    assert_eq!(lines.count(), 2 * 3 * 3);
+}
+
+#[test]
+fn bad_bench_arguments_fail_before_any_work() {
+    for (args, needle) in [
+        (vec!["--rows", "teapot"], "teapot"),
+        (vec!["--scale", "0"], "scale"),
+        (vec!["--frames", "0"], "frames"),
+        (vec!["--csv", "/no/such/folder/x.csv"], "does not exist"),
+        (vec!["--json", "x.txt"], ".json"),
+    ] {
+        let mut a = vec!["bench", "thesis"];
+        a.extend(&args);
+        let o = refrakt(&a);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{a:?} succeeded");
+        assert!(
+            err.contains(needle) && !err.contains("panicked"),
+            "{a:?}: {err}"
+        );
+    }
+}
+
+#[test]
+fn scaling_bench_reports_both_series_and_fits() {
+    let dir = tempfile::tempdir().unwrap();
+    let json = dir.path().join("s.json");
+    let o = refrakt(&[
+        "bench",
+        "scaling",
+        "--volume-size",
+        "24",
+        "--sample-distances",
+        "1,2",
+        "--sides",
+        "32,48",
+        "--side",
+        "32",
+        "--frames",
+        "1",
+        "--quiet",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        stdout.contains("ms per plane") && stdout.contains("R²"),
+        "{stdout}"
+    );
+    let r: refrakt::bench::ScalingReport =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let planes: Vec<u32> = r.by_planes.iter().map(|p| p.planes).collect();
+    // Twice the sample distance, about half the planes.
+    assert!(
+        planes[1] < planes[0] && planes[1] * 2 + 2 >= planes[0],
+        "{planes:?}"
+    );
+    let pixels: Vec<u64> = r.by_pixels.iter().map(|p| p.pixels).collect();
+    assert_eq!(pixels, [32 * 32, 48 * 48]);
+    assert!(r.planes_fit.r2.is_finite() && r.pixels_fit.r2.is_finite());
+}
