@@ -797,3 +797,73 @@ mod tests {
         assert!(e.contains("teapot") && e.contains("supernova"), "{e}");
     }
 }
+
+/// Bar chart of the thesis' mean frame time beside ours per row (log scale: on lavapipe
+/// the two differ by orders of magnitude), as SVG.
+pub fn plot_svg(r: &Report, path: &Path) -> Result<()> {
+    use plotters::prelude::*;
+    let err = |e: &dyn std::fmt::Display| anyhow::anyhow!("{}: plotting: {e}", path.display());
+    let n = r.rows.len();
+    ensure!(n > 0, "no rows to plot");
+    let all: Vec<f64> = r
+        .rows
+        .iter()
+        .flat_map(|row| [row.thesis.ms, row.refract.stats.mean])
+        .collect();
+    let lo = all.iter().cloned().fold(f64::INFINITY, f64::min) / 2.0;
+    let hi = all.iter().cloned().fold(0.0, f64::max) * 2.0;
+    let root = SVGBackend::new(path, (120 * n as u32 + 160, 480)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| err(&e))?;
+    let caption = format!(
+        "Mean frame time, thesis GPU vs {} (scale {})",
+        r.meta.device, r.settings.scale
+    );
+    let mut chart = ChartBuilder::on(&root)
+        .caption(caption, ("sans-serif", 18))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d(0f64..n as f64, (lo..hi).log_scale())
+        .map_err(|e| err(&e))?;
+    let names: Vec<String> = r.rows.iter().map(|row| row.title.clone()).collect();
+    chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .x_labels(n)
+        .x_label_formatter(&|x| {
+            let i = x.floor() as usize;
+            names.get(i).cloned().unwrap_or_default()
+        })
+        .y_desc("ms per frame (log)")
+        .draw()
+        .map_err(|e| err(&e))?;
+    let thesis = RGBColor(120, 120, 120);
+    let ours = RGBColor(200, 80, 40);
+    chart
+        .draw_series(r.rows.iter().enumerate().map(|(i, row)| {
+            let x = i as f64;
+            Rectangle::new([(x + 0.15, lo), (x + 0.48, row.thesis.ms)], thesis.filled())
+        }))
+        .map_err(|e| err(&e))?
+        .label("thesis (GTX 1070 / 980)")
+        .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 10, y + 5)], thesis.filled()));
+    chart
+        .draw_series(r.rows.iter().enumerate().map(|(i, row)| {
+            let x = i as f64;
+            Rectangle::new(
+                [(x + 0.52, lo), (x + 0.85, row.refract.stats.mean)],
+                ours.filled(),
+            )
+        }))
+        .map_err(|e| err(&e))?
+        .label("ours")
+        .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 10, y + 5)], ours.filled()));
+    chart
+        .configure_series_labels()
+        .border_style(BLACK)
+        .background_style(WHITE)
+        .draw()
+        .map_err(|e| err(&e))?;
+    root.present().map_err(|e| err(&e))?;
+    Ok(())
+}

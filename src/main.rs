@@ -96,6 +96,9 @@ struct ThesisArgs {
     /// Write the whole report as JSON (schema in docs/BENCH.md).
     #[arg(long, value_name = "FILE.json")]
     json: Option<PathBuf>,
+    /// Draw the thesis' mean frame times beside ours as an SVG bar chart.
+    #[arg(long, value_name = "FILE.svg")]
+    plot: Option<PathBuf>,
     /// No progress bar on stderr.
     #[arg(long)]
     quiet: bool,
@@ -576,6 +579,9 @@ fn bench_thesis(desc: &ContextDesc, args: &ThesisArgs) -> Result<ExitCode> {
     if let Some(p) = &args.json {
         refrakt::bench::check_output(p, "json").context("--json")?;
     }
+    if let Some(p) = &args.plot {
+        refrakt::bench::check_output(p, "svg").context("--plot")?;
+    }
     let ctx = Context::new(desc)?;
     let settings = refrakt::bench::ThesisSettings {
         scale: args.scale,
@@ -594,6 +600,10 @@ fn bench_thesis(desc: &ContextDesc, args: &ThesisArgs) -> Result<ExitCode> {
     }
     if let Some(p) = &args.json {
         refrakt::bench::write_json(&report, p)?;
+        println!("wrote {}", p.display());
+    }
+    if let Some(p) = &args.plot {
+        refrakt::bench::plot_svg(&report, p)?;
         println!("wrote {}", p.display());
     }
     finish(ctx)
