@@ -760,44 +760,6 @@ pub fn scaling_markdown(r: &ScalingReport) -> String {
     s
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn stats_of_known_samples() {
-        let s = Stats::of(&[2.0, 4.0, 4.0, 4.0, 5.0, 5.0, 7.0, 9.0]).unwrap();
-        assert_eq!(s.mean, 5.0);
-        assert_eq!(s.median, 4.5);
-        assert_eq!((s.min, s.max), (2.0, 9.0));
-        // Sample variance 32/7.
-        assert!((s.std_dev - (32.0f64 / 7.0).sqrt()).abs() < 1e-12);
-        assert!(Stats::of(&[]).is_err());
-    }
-
-    #[test]
-    fn fit_recovers_a_line() {
-        let x = [10.0, 20.0, 40.0, 80.0];
-        let y: Vec<f64> = x.iter().map(|v| 3.0 + 0.5 * v).collect();
-        let f = fit(&x, &y).unwrap();
-        assert!((f.slope - 0.5).abs() < 1e-12 && (f.intercept - 3.0).abs() < 1e-9);
-        assert!((f.r2 - 1.0).abs() < 1e-12);
-        assert!(fit(&[1.0, 1.0], &[2.0, 3.0]).is_err());
-    }
-
-    #[test]
-    fn rows_select_in_table_order_and_unknown_is_an_error() {
-        let r = select_rows(&["kiwi".into(), "supernova".into()]).unwrap();
-        assert_eq!(
-            r.iter().map(|d| d.name).collect::<Vec<_>>(),
-            ["supernova", "kiwi"]
-        );
-        assert_eq!(select_rows(&[]).unwrap().len(), 8);
-        let e = select_rows(&["teapot".into()]).unwrap_err().to_string();
-        assert!(e.contains("teapot") && e.contains("supernova"), "{e}");
-    }
-}
-
 /// Bar chart of the thesis' mean frame time beside ours per row (log scale: on lavapipe
 /// the two differ by orders of magnitude), as SVG.
 pub fn plot_svg(r: &Report, path: &Path) -> Result<()> {
@@ -866,4 +828,42 @@ pub fn plot_svg(r: &Report, path: &Path) -> Result<()> {
         .map_err(|e| err(&e))?;
     root.present().map_err(|e| err(&e))?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stats_of_known_samples() {
+        let s = Stats::of(&[2.0, 4.0, 4.0, 4.0, 5.0, 5.0, 7.0, 9.0]).unwrap();
+        assert_eq!(s.mean, 5.0);
+        assert_eq!(s.median, 4.5);
+        assert_eq!((s.min, s.max), (2.0, 9.0));
+        // Sample variance 32/7.
+        assert!((s.std_dev - (32.0f64 / 7.0).sqrt()).abs() < 1e-12);
+        assert!(Stats::of(&[]).is_err());
+    }
+
+    #[test]
+    fn fit_recovers_a_line() {
+        let x = [10.0, 20.0, 40.0, 80.0];
+        let y: Vec<f64> = x.iter().map(|v| 3.0 + 0.5 * v).collect();
+        let f = fit(&x, &y).unwrap();
+        assert!((f.slope - 0.5).abs() < 1e-12 && (f.intercept - 3.0).abs() < 1e-9);
+        assert!((f.r2 - 1.0).abs() < 1e-12);
+        assert!(fit(&[1.0, 1.0], &[2.0, 3.0]).is_err());
+    }
+
+    #[test]
+    fn rows_select_in_table_order_and_unknown_is_an_error() {
+        let r = select_rows(&["kiwi".into(), "supernova".into()]).unwrap();
+        assert_eq!(
+            r.iter().map(|d| d.name).collect::<Vec<_>>(),
+            ["supernova", "kiwi"]
+        );
+        assert_eq!(select_rows(&[]).unwrap().len(), 8);
+        let e = select_rows(&["teapot".into()]).unwrap_err().to_string();
+        assert!(e.contains("teapot") && e.contains("supernova"), "{e}");
+    }
 }
