@@ -4,6 +4,7 @@
 //! filtering (thesis sect. 3.1): u8 and u16 through UNORM formats, f32 by mapping the
 //! volume's value range onto [0,1] on the CPU first.
 
+pub mod formats;
 pub mod procedural;
 
 use anyhow::{bail, ensure, Result};
