@@ -363,7 +363,7 @@ impl Scene {
                     standins::load_or_generate(name, dims, &standins::cache_dir())?.0
                 }
             }
-            VolumeSource::File { path, raw, window } => load_file(path, raw.clone(), *window)?,
+            VolumeSource::File { path, raw, window } => load_file(path, *raw, *window)?,
             VolumeSource::Fetched { file, window } => {
                 let path = data_dir.join(file);
                 ensure!(
@@ -604,16 +604,10 @@ pub fn parse_tonemap(s: &str) -> Result<ToneOperator> {
     }
 }
 
-/// Parses "u8|u16|i16|f32" (and the open-scivis spellings).
+/// Parses "u8|u16|i16|f32" (and the open-scivis spellings uint8, ...).
 pub fn parse_scalar_kind(s: &str) -> Result<crate::volume::formats::ScalarKind> {
-    use crate::volume::formats::ScalarKind;
-    Ok(match s {
-        "u8" | "uint8" => ScalarKind::U8,
-        "u16" | "uint16" => ScalarKind::U16,
-        "i16" | "int16" => ScalarKind::I16,
-        "f32" | "float32" => ScalarKind::F32,
-        _ => bail!("voxel type '{s}' is not one of u8, u16, i16, f32"),
-    })
+    crate::volume::formats::ScalarKind::parse(s)
+        .with_context(|| format!("voxel type '{s}' is not one of u8, u16, i16, f32"))
 }
 
 impl SceneFile {

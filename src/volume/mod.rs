@@ -8,7 +8,7 @@ pub mod formats;
 pub mod procedural;
 pub mod standins;
 
-use anyhow::{bail, ensure, Result};
+use anyhow::{bail, ensure, Context as _, Result};
 
 use crate::vk::{self, Context, Image, ImageDesc, ImageKind};
 
@@ -154,43 +154,14 @@ impl Volume {
     /// device-local memory heap (the texture also needs a staging copy of the same size).
     pub fn check_device_limits(&self, ctx: &Context) -> Result<()> {
         let info = ctx.info();
-        let max = info.limits.max_image_dimension3_d;
-        ensure!(
-            self.dims.iter().all(|&d| d <= max),
-            "volume of {}x{}x{} voxels: device '{}' allows at most {max} voxels per side (maxImageDimension3D)",
-            self.dims[0],
-            self.dims[1],
-            self.dims[2],
-            info.name
-        );
-        let bytes = self.voxel_count() * self.texel_size() as u64;
         let heap = info
             .memory_heaps
             .iter()
             .filter(|(_, local)| *local)
             .map(|(size, _)| *size)
-            .max()
-            .unwrap_or(0);
-        ensure!(
-            heap == 0 || bytes <= heap,
-            "volume of {}x{}x{} {} voxels needs {:.2} GiB; device '{}' has {:.2} GiB in its largest device-local heap",
-            self.dims[0],
-            self.dims[1],
-            self.dims[2],
-            self.voxels.type_name(),
-            bytes as f64 / (1u64 << 30) as f64,
-            info.name,
-            heap as f64 / (1u64 << 30) as f64
-        );
-        Ok(())
-    }
-
-    fn texel_size(&self) -> usize {
-        match self.voxels {
-            Voxels::U8(_) => 1,
-            Voxels::U16(_) => 2,
-            Voxels::F32(_) => 4,
-        }
+            .max();
+        formats::check_volume_limits(self, info.limits.max_image_dimension3_d, heap)
+            .with_context(|| format!("device '{}'", info.name))
     }
 
     /// Upload into a 3D texture ready for trilinear sampling.

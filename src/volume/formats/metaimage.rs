@@ -1,0 +1,167 @@
+//! MetaImage (ITK MetaIO): `.mhd` with a separate data file and `.mha` with the data
+//! after the header (`ElementDataFile = LOCAL`).
+//!
+//! Supported: `NDims = 3`, one channel, `ElementType` MET_CHAR, MET_UCHAR, MET_SHORT,
+//! MET_USHORT, MET_INT, MET_UINT, MET_FLOAT, MET_DOUBLE; `CompressedData = True` (zlib, or
+//! gzip when the data starts with the gzip magic); `ElementSpacing` (else `ElementSize`);
+//! `BinaryDataByteOrderMSB` / `ElementByteOrderMSB`; `HeaderSize` (bytes to skip in the
+//! data file, -1: data at its end); `BinaryData = False` (ASCII numbers).
+//! Not supported (clear error): `ElementDataFile = LIST` and file patterns, several
+//! channels, other element types, NDims other than 3.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use anyhow::{anyhow, bail, ensure, Context as _, Result};
+
+use super::{
+    build_volume, check_size, checked_dims, data_bytes, inflate_zlib_or_gzip, parse3, parse_ascii,
+    read_file, resolve_spacing, LoadOptions, Sample,
+};
+use crate::volume::Volume;
+
+pub(super) fn load(path: &Path, opts: &LoadOptions) -> Result<Volume> {
+    let file = read_file(path)?;
+    // Header lines "Key = Value" up to and including ElementDataFile, which is last.
+    let mut fields: HashMap<String, String> = HashMap::new();
+    let mut pos = 0;
+    let mut data_start = None;
+    while pos < file.len() {
+        let end = file[pos..]
+            .iter()
+            .position(|&b| b == b'\n')
+            .map_or(file.len(), |i| pos + i + 1);
+        let line = String::from_utf8_lossy(&file[pos..end]);
+        let line = line.trim();
+        pos = end;
+        if line.is_empty() {
+            continue;
+        }
+        let Some((k, v)) = line.split_once('=') else {
+            bail!(
+                "malformed header line '{}' (expected 'Key = Value'; not a MetaImage file?)",
+                line.chars().take(60).collect::<String>()
+            );
+        };
+        let key = k.trim().to_ascii_lowercase();
+        let done = key == "elementdatafile";
+        fields.insert(key, v.trim().to_string());
+        if done {
+            data_start = Some(pos);
+            break;
+        }
+    }
+    let data_start =
+        data_start.ok_or_else(|| anyhow!("header has no ElementDataFile line (truncated?)"))?;
+    let get = |k: &str| fields.get(k).map(String::as_str);
+    let truthy = |k: &str| get(k).is_some_and(|v| v.eq_ignore_ascii_case("true"));
+
+    let ndims = get("ndims").unwrap_or("3");
+    ensure!(
+        ndims == "3",
+        "NDims = {ndims} is not supported (only 3-D volumes)"
+    );
+    let dim_size = get("dimsize").ok_or_else(|| anyhow!("header has no DimSize"))?;
+    let dims = checked_dims(parse3::<i64>(dim_size, "DimSize")?)?;
+    if let Some(c) = get("elementnumberofchannels") {
+        ensure!(
+            c == "1",
+            "ElementNumberOfChannels = {c} is not supported (only scalar volumes)"
+        );
+    }
+    let et = get("elementtype").ok_or_else(|| anyhow!("header has no ElementType"))?;
+    let sample = match et.to_ascii_uppercase().as_str() {
+        "MET_CHAR" => Sample::I8,
+        "MET_UCHAR" => Sample::U8,
+        "MET_SHORT" => Sample::I16,
+        "MET_USHORT" => Sample::U16,
+        "MET_INT" => Sample::I32,
+        "MET_UINT" => Sample::U32,
+        "MET_FLOAT" => Sample::F32,
+        "MET_DOUBLE" => Sample::F64,
+        _ => bail!(
+            "unsupported ElementType '{et}' (supported: MET_CHAR, MET_UCHAR, MET_SHORT, \
+             MET_USHORT, MET_INT, MET_UINT, MET_FLOAT, MET_DOUBLE)"
+        ),
+    };
+    let expected = data_bytes(dims, sample)?;
+    let big_endian = truthy("binarydatabyteordermsb") || truthy("elementbyteordermsb");
+    let compressed = truthy("compresseddata");
+    let binary = get("binarydata").map_or(true, |v| v.eq_ignore_ascii_case("true"));
+    let spacing = match get("elementspacing").or(get("elementsize")) {
+        Some(s) => Some(parse3::<f64>(s, "ElementSpacing")?),
+        None => None,
+    };
+    let header_size: i64 = match get("headersize") {
+        Some(s) => s.parse().map_err(|_| anyhow!("bad HeaderSize '{s}'"))?,
+        None => 0,
+    };
+    ensure!(header_size >= -1, "bad HeaderSize {header_size}");
+
+    let edf = get("elementdatafile").unwrap_or_default();
+    let detached;
+    let (data, what): (&[u8], String) = if edf.eq_ignore_ascii_case("local") {
+        (&file[data_start..], "data after the header".to_string())
+    } else {
+        ensure!(
+            !edf.is_empty() && !edf.to_ascii_uppercase().starts_with("LIST") && !edf.contains('%'),
+            "ElementDataFile = '{edf}' is not supported (LOCAL or one file name)"
+        );
+        let dir = path.parent().unwrap_or(Path::new("."));
+        detached = read_file(&dir.join(edf))?;
+        (&detached, format!("data file '{edf}'"))
+    };
+
+    let bytes: Vec<u8>;
+    let payload: &[u8] = if compressed {
+        ensure!(
+            header_size >= 0,
+            "HeaderSize = -1 is not allowed with compressed data"
+        );
+        let skip = header_size as usize;
+        ensure!(
+            skip <= data.len(),
+            "{what} is shorter than HeaderSize {skip}"
+        );
+        let data = &data[skip..];
+        if let Some(cs) = get("compresseddatasize") {
+            let cs: u64 = cs
+                .parse()
+                .map_err(|_| anyhow!("bad CompressedDataSize '{cs}'"))?;
+            ensure!(
+                data.len() as u64 == cs,
+                "{what} is {} bytes, header says CompressedDataSize = {cs} bytes",
+                data.len()
+            );
+        }
+        bytes = inflate_zlib_or_gzip(data, expected).with_context(|| what.clone())?;
+        &bytes
+    } else if binary {
+        let start = if header_size == -1 {
+            ensure!(
+                data.len() >= expected,
+                "{what} is {} bytes, header says {expected} bytes (file too short: truncated?)",
+                data.len()
+            );
+            data.len() - expected
+        } else {
+            let skip = header_size as usize;
+            ensure!(
+                skip <= data.len(),
+                "{what} is {} bytes, shorter than HeaderSize {skip}",
+                data.len()
+            );
+            skip
+        };
+        check_size(&what, data.len() - start, expected)?;
+        &data[start..]
+    } else {
+        let text = String::from_utf8_lossy(data);
+        bytes =
+            parse_ascii(&text, sample, expected / sample.size()).with_context(|| what.clone())?;
+        &bytes
+    };
+    let big_endian = big_endian && (binary || compressed);
+    let spacing = resolve_spacing(opts, spacing)?;
+    build_volume(dims, spacing, sample, big_endian, payload, None, opts)
+}
