@@ -193,3 +193,22 @@ fn volumes_beyond_the_device_limit_are_refused_naming_it() {
         );
     });
 }
+
+#[test]
+fn the_readme_scene_file_example_parses() {
+    let readme = include_str!("../README.md");
+    let start = readme
+        .find("```toml\nname = \"ct-demo\"")
+        .expect("README has the scene file example");
+    let body = &readme[start + "```toml\n".len()..];
+    let text = &body[..body.find("```").unwrap()];
+    let dir = tempfile::tempdir().unwrap();
+    // The example names a volume file next to it; the parser checks it exists.
+    std::fs::write(dir.path().join("lung1_image.nrrd"), b"").unwrap();
+    let s = Scene::parse(text, &dir.path().join("ct-demo.toml")).unwrap();
+    assert_eq!(s.name, "ct-demo");
+    assert_eq!((s.width, s.height), (512, 512));
+    assert_eq!(s.camera.azimuth, 20.0);
+    assert_eq!(s.clip.map(|c| c.1), Some(0.0));
+    assert_eq!(s.transfer_functions().unwrap().name, "lung-ct");
+}
