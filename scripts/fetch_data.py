@@ -4,7 +4,8 @@
 Subcommands:
   nrrd   FILE DIMS TYPE        check a NRRD header (stdlib only)
   nifti  FILE DIMS TYPE        check a NIfTI-1 header (stdlib only)
-  envmaps SRC DST              re-encode DWAB EXRs as ZIP EXRs (needs numpy, OpenEXR)
+  envmaps SRC DST              write OpenEXR's decode of each EXR in SRC to DST, ZIP
+                               compressed, checked bit for bit (needs numpy, OpenEXR)
   convert NRRD OUT             write lung1 in other formats and verify them (needs numpy,
                                SimpleITK, pydicom, vtk)
 
