@@ -26,7 +26,7 @@ pub struct EnvironmentMap {
 }
 
 impl EnvironmentMap {
-    /// A map checked for shape (2:1) and finite, non-negative values.
+    /// A map checked for shape (2:1) and finite values; see below for negative ones.
     pub fn new(width: u32, height: u32, pixels: Vec<[f32; 4]>, origin: &str) -> Result<Self> {
         ensure!(
             width >= 2 && height >= 1 && width == 2 * height,
@@ -38,15 +38,45 @@ impl EnvironmentMap {
             "{origin}: {} pixels for {width}x{height}",
             pixels.len()
         );
-        if let Some(i) = pixels
-            .iter()
-            .position(|p| p.iter().any(|c| !c.is_finite() || *c < 0.0))
-        {
+        if let Some(i) = pixels.iter().position(|p| p.iter().any(|c| !c.is_finite())) {
             bail!(
-                "{origin}: pixel ({}, {}) is {:?}, not a finite non-negative colour",
+                "{origin}: pixel ({}, {}) is {:?}, not a finite colour",
                 i as u32 % width,
                 i as u32 / width,
                 pixels[i]
+            );
+        }
+        // Lossy EXR codecs (DWAA/DWAB, as in Blender's CC0 studio lights) ring slightly
+        // below zero next to dark pixels. Values within 1 % of the map's mean are that
+        // ringing: set to 0 and reported. Anything more negative is not a radiance map.
+        let mean = pixels
+            .iter()
+            .map(|p| (p[0] + p[1] + p[2]) as f64)
+            .sum::<f64>()
+            / (3 * pixels.len()) as f64;
+        let tolerance = -(0.01 * mean) as f32;
+        let mut pixels = pixels;
+        let (mut fixed, mut lowest) = (0usize, 0f32);
+        for (i, p) in pixels.iter_mut().enumerate() {
+            for c in &mut p[..3] {
+                if *c < 0.0 {
+                    ensure!(
+                        *c >= tolerance,
+                        "{origin}: pixel ({}, {}) has the negative value {c}, more than 1 % of \
+                         the map's mean ({mean:.4}) below zero: not a radiance map",
+                        i as u32 % width,
+                        i as u32 / width
+                    );
+                    lowest = lowest.min(*c);
+                    *c = 0.0;
+                    fixed += 1;
+                }
+            }
+        }
+        if fixed > 0 {
+            log::warn!(
+                "{origin}: {fixed} slightly negative channel values (lowest {lowest:e}, \
+                 compression ringing) set to 0"
             );
         }
         Ok(Self {

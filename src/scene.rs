@@ -152,14 +152,14 @@ pub type FetchedScene = (
 pub const FETCHED: &[FetchedScene] = &[
     (
         "lung-ct",
-        "lung1_image.nrrd",
+        "ct/lung1_image.nrrd",
         Some((-1000.0, 1000.0)),
         "lung-ct",
         "CT of a lung (pyradiomics 3.1.0 test data, 512x512x48 int16, HU window -1000..1000)",
     ),
     (
         "mri-head",
-        "ch2.nii.gz",
+        "mri/ch2.nii.gz",
         None,
         "mri-head",
         "MRI head template ch2 (mricron-data, 181x217x181 u8)",
@@ -268,10 +268,12 @@ impl Scene {
             s.transfer = TransferSource::Named(tf.to_string());
             match name {
                 "lung-ct" => {
-                    // Slices along z; look at the chest from the front, slightly above.
+                    // Slices along z (world z); the scan's +y is posterior, which is world
+                    // up. Look along the body axis, slightly from the feet, so the lungs
+                    // show as cavities in the chest.
                     s.camera = Camera {
-                        azimuth: 20.0,
-                        elevation: 25.0,
+                        azimuth: 10.0,
+                        elevation: -12.0,
                         distance: 2.0,
                         fov_y: 35.0,
                     };

@@ -327,3 +327,30 @@ mod composite {
         });
     }
 }
+
+/// The maps shipped in assets/env (CC0, from Blender): they load, are 2:1, and their DWAB
+/// ringing below zero is set to 0 rather than refused; a clearly negative map is refused.
+#[test]
+fn shipped_maps_load_and_negative_ringing_is_handled() {
+    for name in ["city", "courtyard"] {
+        let p =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("assets/env/{name}.exr"));
+        let m = EnvironmentMap::load(&p).unwrap();
+        assert_eq!((m.width, m.height), (1024, 512));
+        assert!(m
+            .pixels
+            .iter()
+            .all(|p| p.iter().all(|c| c.is_finite() && *c >= 0.0)));
+        let mean: f32 = m.pixels.iter().map(|p| p[0]).sum::<f32>() / m.pixels.len() as f32;
+        assert!(mean > 0.01, "{name}: mean red {mean}");
+    }
+    let mut px = vec![[1.0f32, 1.0, 1.0, 1.0]; 8];
+    px[3][1] = -1e-4;
+    let m = EnvironmentMap::new(4, 2, px.clone(), "ringing").unwrap();
+    assert_eq!(m.pixels[3][1], 0.0);
+    px[3][1] = -0.5;
+    let e = EnvironmentMap::new(4, 2, px, "negative")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("negative") && e.contains("(3, 0)"), "{e}");
+}

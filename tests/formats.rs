@@ -1509,12 +1509,7 @@ fn check_limits_reports_the_limit() {
 // Real files from scripts/fetch-data.
 
 fn data_dir() -> PathBuf {
-    match std::env::var_os("REFRAKT_DATA_DIR") {
-        Some(d) if !d.is_empty() => PathBuf::from(d),
-        _ => {
-            PathBuf::from(std::env::var_os("HOME").unwrap_or_default()).join(".cache/refrakt/data")
-        }
-    }
+    refrakt::scene::data_dir()
 }
 
 fn require_data() -> bool {
@@ -1541,7 +1536,7 @@ fn real(name: &str) -> Option<PathBuf> {
 
 fn lung1_nrrd() -> Option<&'static Volume> {
     static V: std::sync::OnceLock<Option<Volume>> = std::sync::OnceLock::new();
-    V.get_or_init(|| real("lung1_image.nrrd").map(|p| load(&p)))
+    V.get_or_init(|| real("ct/lung1_image.nrrd").map(|p| load(&p)))
         .as_ref()
 }
 
@@ -1609,7 +1604,9 @@ fn real_lung1_nrrd() {
 
 #[test]
 fn real_ch2_nifti() {
-    let Some(p) = real("ch2.nii.gz") else { return };
+    let Some(p) = real("mri/ch2.nii.gz") else {
+        return;
+    };
     let v = load(&p);
     assert_eq!(v.dims, [181, 217, 181]);
     assert!(
@@ -1622,36 +1619,30 @@ fn real_ch2_nifti() {
 
 #[test]
 fn real_lung1_mha_matches_nrrd() {
-    assert_same_as_lung1("lung1.mha", true);
+    assert_same_as_lung1("formats/lung1.mha", true);
 }
 
 #[test]
 fn real_lung1_mhd_matches_nrrd() {
-    assert_same_as_lung1("lung1.mhd", true);
+    assert_same_as_lung1("formats/lung1.mhd", true);
 }
 
 #[test]
 fn real_lung1_vti_matches_nrrd() {
-    assert_same_as_lung1("lung1.vti", true);
+    assert_same_as_lung1("formats/lung1.vti", true);
 }
 
 #[test]
 fn real_lung1_dicom_matches_nrrd() {
-    assert_same_as_lung1("lung1_dicom", true);
+    assert_same_as_lung1("formats/lung1_dicom", true);
 }
 
-/// `lung1.nii.gz` is written by `scripts/fetch-data` too, but is not on the list of files
-/// that `REFRAKT_REQUIRE_DATA` demands: it is checked when it is there.
 #[test]
-fn real_lung1_nifti_matches_nrrd_when_present() {
-    if data_dir().join("lung1.nii.gz").exists() {
-        assert_same_as_lung1("lung1.nii.gz", true);
-    } else {
-        println!("skipped: lung1.nii.gz not found");
-    }
+fn real_lung1_nifti_matches_nrrd() {
+    assert_same_as_lung1("formats/lung1.nii.gz", true);
 }
 
 #[test]
 fn real_lung1_raw_matches_nrrd() {
-    assert_same_as_lung1("lung1_512x512x48_int16.raw", false);
+    assert_same_as_lung1("formats/lung1_512x512x48_int16.raw", false);
 }
