@@ -49,6 +49,9 @@ enum Command {
     /// Render a scene to an image (.png = 8-bit sRGB, .exr = linear float) and print the
     /// GPU time of each pass.
     Render(Box<RenderArgs>),
+    /// Generate (and cache) thesis stand-ins ahead of time, printing the time each took;
+    /// `render` and `bench` generate missing ones themselves.
+    Generate(GenerateArgs),
     /// Benchmarks: the thesis' timing tables (6.1, 6.2) on this device, and how the
     /// sweep's cost scales with planes and pixels. GPU timestamps; see docs/BENCH.md.
     #[command(subcommand)]
@@ -64,6 +67,17 @@ enum BenchCommand {
     /// Sweep time against plane count (several sample distances) and against pixel count
     /// (several viewports), with least-squares fits.
     Scaling(ScalingArgs),
+}
+
+#[derive(Args)]
+struct GenerateArgs {
+    /// Stand-ins to generate (supernova, piggy-bank, glass, hand, head, water, ship,
+    /// kiwi); default: all.
+    #[arg(value_delimiter = ',')]
+    names: Vec<String>,
+    /// Fraction of the thesis resolution.
+    #[arg(long, default_value_t = 1.0)]
+    scale: f64,
 }
 
 #[derive(Args)]
@@ -300,6 +314,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
     match cli.command {
         Command::Info => info(&desc),
         Command::Render(args) => render(&desc, &args),
+        Command::Generate(args) => generate(&args),
         Command::Bench(BenchCommand::Thesis(args)) => bench_thesis(&desc, &args),
         Command::Bench(BenchCommand::Scaling(args)) => bench_scaling(&desc, &args),
     }
@@ -567,6 +582,32 @@ fn scene_from_args(args: &RenderArgs) -> Result<Scene> {
         };
     }
     Ok(s)
+}
+
+fn generate(args: &GenerateArgs) -> Result<ExitCode> {
+    let rows = refrakt::bench::select_rows(&args.names)?;
+    let dir = standins::cache_dir();
+    for d in rows {
+        let dims = standins::scaled_dims(d.dims, args.scale).context("--scale")?;
+        let file = standins::cache_file(&dir, d.name, dims);
+        let t = std::time::Instant::now();
+        let (_, cached) = standins::load_or_generate(d.name, dims, &dir)?;
+        println!(
+            "{:<11} {}x{}x{} {} in {:.2} s: {}",
+            d.name,
+            dims[0],
+            dims[1],
+            dims[2],
+            if cached {
+                "read from cache"
+            } else {
+                "generated"
+            },
+            t.elapsed().as_secs_f64(),
+            file.display()
+        );
+    }
+    Ok(ExitCode::SUCCESS)
 }
 
 fn bench_thesis(desc: &ContextDesc, args: &ThesisArgs) -> Result<ExitCode> {

@@ -212,3 +212,39 @@ fn the_readme_scene_file_example_parses() {
     assert_eq!(s.clip.map(|c| c.1), Some(0.0));
     assert_eq!(s.transfer_functions().unwrap().name, "lung-ct");
 }
+
+/// The real scenes load their fetched scans (scripts/fetch-data; required in CI).
+#[test]
+fn real_scenes_load_their_scans() {
+    let dir = refrakt::scene::data_dir();
+    for (name, dims) in [("lung-ct", [512, 512, 48]), ("mri-head", [181, 217, 181])] {
+        let s = Scene::resolve(name).unwrap();
+        match s.load_volume(&dir) {
+            Ok(v) => {
+                assert_eq!(v.dims, dims, "{name}");
+                // The CT's 5 mm slices and 0.57 mm pixels survive into the spacing.
+                if name == "lung-ct" {
+                    assert!((v.spacing[2] / v.spacing[0] - 5.0 / 0.5703125).abs() < 1e-3);
+                }
+            }
+            Err(e) => {
+                let e = format!("{e:#}");
+                assert!(
+                    std::env::var("REFRAKT_REQUIRE_DATA").is_err() && e.contains("fetch-data"),
+                    "{name}: {e}"
+                );
+                println!("skipped {name}: {e}");
+            }
+        }
+    }
+}
+
+#[test]
+fn generate_names_unknown_stand_ins() {
+    let o = refrakt(&["generate", "teapot"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("teapot") && err.contains("kiwi"),
+        "{err}"
+    );
+}
