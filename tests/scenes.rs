@@ -248,3 +248,58 @@ fn generate_names_unknown_stand_ins() {
         "{err}"
     );
 }
+
+/// Bad volume files through the command line: one line naming the file and the reason,
+/// a non-zero exit, no panic, no output image.
+#[test]
+fn bad_volume_files_fail_cleanly_from_the_command_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("never.png");
+    let o = out.to_str().unwrap();
+    // 4x4x4 u8 needs 64 bytes; 60 given.
+    let short = dir.path().join("short_4x4x4_uint8.raw");
+    std::fs::write(&short, [0u8; 60]).unwrap();
+    fails_with(
+        &["render", short.to_str().unwrap(), "-o", o],
+        &out,
+        &["short_4x4x4_uint8.raw", "64"],
+    );
+    // dims x type that do not match an explicit raw file's size.
+    let raw = dir.path().join("scan.bin");
+    std::fs::write(&raw, [0u8; 100]).unwrap();
+    fails_with(
+        &[
+            "render",
+            raw.to_str().unwrap(),
+            "--dims",
+            "4,4,4",
+            "--type",
+            "u16",
+            "-o",
+            o,
+        ],
+        &out,
+        &["scan.bin", "128"],
+    );
+    let nii = dir.path().join("bad.nii");
+    let mut hdr = vec![0u8; 400];
+    hdr[..4].copy_from_slice(&348i32.to_le_bytes());
+    hdr[344..348].copy_from_slice(b"xy1\0");
+    std::fs::write(&nii, hdr).unwrap();
+    fails_with(
+        &["render", nii.to_str().unwrap(), "-o", o],
+        &out,
+        &["bad.nii", "magic"],
+    );
+    let nrrd = dir.path().join("bz.nrrd");
+    std::fs::write(
+        &nrrd,
+        "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 2 2 2\nencoding: bzip2\n\nxxxx",
+    )
+    .unwrap();
+    fails_with(
+        &["render", nrrd.to_str().unwrap(), "-o", o],
+        &out,
+        &["bz.nrrd", "bzip2"],
+    );
+}
