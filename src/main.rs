@@ -202,6 +202,10 @@ struct RenderArgs {
     /// Voxel spacing "X,Y,Z" (overrides the file's).
     #[arg(long, value_name = "X,Y,Z")]
     spacing: Option<String>,
+    /// Mirror the volume along these axes after loading, e.g. "xy" (two axes = a 180°
+    /// turn, keeping handedness), or "none" to undo a scene's flip.
+    #[arg(long, value_name = "AXES")]
+    flip: Option<String>,
     /// Value window "LO,HI" mapped to [0,1] for signed or float data (e.g. CT Hounsfield
     /// units -1000,2000); default: the data's minimum and maximum. See docs/FORMATS.md.
     #[arg(long, value_name = "LO,HI", allow_hyphen_values = true)]
@@ -512,6 +516,9 @@ fn scene_from_args(args: &RenderArgs) -> Result<Scene> {
     }
     if let Some(sp) = &args.spacing {
         s.spacing = Some(parse_floats::<3>("--spacing", sp)?);
+    }
+    if let Some(f) = &args.flip {
+        s.flip = scene::parse_flip(f).context("--flip")?;
     }
     if let Some(tf) = &args.tf {
         s.transfer = TransferSource::Named(tf.clone());

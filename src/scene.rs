@@ -54,6 +54,8 @@ pub struct Scene {
     pub volume: VolumeSource,
     /// Voxel spacing override (x, y, z); `None` keeps the volume's own.
     pub spacing: Option<[f32; 3]>,
+    /// Axes (x, y, z) to mirror the data along after loading (two = a 180° rotation).
+    pub flip: [bool; 3],
     /// A preset name or a TF file path (resolved), or inline functions.
     pub transfer: TransferSource,
     pub camera: Camera,
@@ -91,6 +93,7 @@ impl Default for Scene {
                 size: 128,
             },
             spacing: None,
+            flip: [false; 3],
             transfer: TransferSource::Named("glass-floor".into()),
             camera: Camera::default(),
             light_towards: None,
@@ -268,13 +271,14 @@ impl Scene {
             s.transfer = TransferSource::Named(tf.to_string());
             match name {
                 "lung-ct" => {
-                    // Slices along z (world z); the scan's +y is posterior, which is world
-                    // up. Look along the body axis, slightly from the feet, so the lungs
-                    // show as cavities in the chest.
+                    // Slices along z (world z). The scan's +y is posterior and world +y is
+                    // up, so turn it 180° about z (x and y flipped: still a right-handed
+                    // body, spine down). Look along the body axis, slightly from above.
+                    s.flip = [true, true, false];
                     s.camera = Camera {
-                        azimuth: 10.0,
-                        elevation: -12.0,
-                        distance: 2.0,
+                        azimuth: 20.0,
+                        elevation: 15.0,
+                        distance: 1.8,
                         fov_y: 35.0,
                     };
                 }
@@ -380,6 +384,7 @@ impl Scene {
             vol.spacing = s;
             vol.validate()?;
         }
+        vol.flip(self.flip);
         Ok(vol)
     }
 
@@ -534,6 +539,8 @@ struct VolumeTable {
     kind: Option<String>,
     spacing: Option<[f32; 3]>,
     window: Option<[f32; 2]>,
+    /// Axes to mirror, e.g. "xy" (a 180° turn about z).
+    flip: Option<String>,
 }
 
 #[derive(Deserialize)]
@@ -587,6 +594,29 @@ struct RenderTable {
     clip: Option<[f32; 4]>,
     exposure: Option<f32>,
     tonemap: Option<String>,
+}
+
+/// "x", "xy", "xyz", ... (or "none") to the axes to mirror.
+pub fn parse_flip(s: &str) -> Result<[bool; 3]> {
+    let mut axes = [false; 3];
+    if s == "none" {
+        return Ok(axes);
+    }
+    ensure!(
+        !s.is_empty(),
+        "'' names no axes (use x, y, z, e.g. \"xy\", or \"none\")"
+    );
+    for c in s.chars() {
+        let i = match c {
+            'x' => 0,
+            'y' => 1,
+            'z' => 2,
+            _ => bail!("'{s}': '{c}' is not an axis (use x, y, z, e.g. \"xy\", or \"none\")"),
+        };
+        ensure!(!axes[i], "'{s}' names {c} twice");
+        axes[i] = true;
+    }
+    Ok(axes)
 }
 
 pub fn parse_model(s: &str) -> Result<Model> {
@@ -685,6 +715,9 @@ impl SceneFile {
             }
         }
         s.spacing = v.spacing;
+        if let Some(f) = &v.flip {
+            s.flip = parse_flip(f).context("[volume] flip")?;
+        }
         if let Some(n) = self.name {
             s.name = n;
         } else if let Some(stem) = path.file_stem() {

@@ -95,6 +95,33 @@ impl Volume {
         Ok(())
     }
 
+    /// Mirrors the voxels along the given axes (0 = x, 1 = y, 2 = z). Flipping two axes is
+    /// a 180° rotation and keeps the data's handedness; one axis mirrors it.
+    pub fn flip(&mut self, axes: [bool; 3]) {
+        fn flip_vec<T: Copy>(v: &mut [T], dims: [u32; 3], axes: [bool; 3]) {
+            let [nx, ny, nz] = dims.map(|d| d as usize);
+            let src = v.to_vec();
+            for z in 0..nz {
+                let sz = if axes[2] { nz - 1 - z } else { z };
+                for y in 0..ny {
+                    let sy = if axes[1] { ny - 1 - y } else { y };
+                    for x in 0..nx {
+                        let sx = if axes[0] { nx - 1 - x } else { x };
+                        v[(z * ny + y) * nx + x] = src[(sz * ny + sy) * nx + sx];
+                    }
+                }
+            }
+        }
+        if !axes.iter().any(|&a| a) {
+            return;
+        }
+        match &mut self.voxels {
+            Voxels::U8(v) => flip_vec(v, self.dims, axes),
+            Voxels::U16(v) => flip_vec(v, self.dims, axes),
+            Voxels::F32(v) => flip_vec(v, self.dims, axes),
+        }
+    }
+
     pub fn voxel_count(&self) -> u64 {
         self.dims.iter().map(|&d| d as u64).product()
     }
@@ -193,5 +220,24 @@ impl Volume {
         )?;
         ctx.upload_image(&image, 0, &self.texel_bytes())?;
         Ok(image)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn flip_mirrors_the_named_axes() {
+        let dims = [3, 2, 2];
+        let v: Vec<u8> = (0..12).collect();
+        let mut vol = Volume::new(dims, [1.0; 3], Voxels::U8(v)).unwrap();
+        vol.flip([true, false, false]);
+        let Voxels::U8(f) = &vol.voxels else { panic!() };
+        assert_eq!(&f[..3], &[2, 1, 0]);
+        vol.flip([true, true, true]);
+        let Voxels::U8(f) = &vol.voxels else { panic!() };
+        // x flipped twice (identity), y and z once: voxel (0,0,0) comes from (0,1,1).
+        assert_eq!(f[0], 9);
     }
 }
