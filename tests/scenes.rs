@@ -303,3 +303,15 @@ fn bad_volume_files_fail_cleanly_from_the_command_line() {
         &["bz.nrrd", "bzip2"],
     );
 }
+
+#[test]
+fn flip_axes_parse_or_fail_clearly() {
+    let p = Path::new("f.toml");
+    let s = Scene::parse("[volume]\nbuiltin = \"sphere\"\nflip = \"xz\"\n", p).unwrap();
+    assert_eq!(s.flip, [true, false, true]);
+    for bad in ["xq", "xx", ""] {
+        let text = format!("[volume]\nbuiltin = \"sphere\"\nflip = \"{bad}\"\n");
+        let e = format!("{:#}", Scene::parse(&text, p).unwrap_err());
+        assert!(e.contains("f.toml") && e.contains("flip"), "{e}");
+    }
+}
