@@ -3,14 +3,12 @@
 //! JSON report that deserialises into the strict schema types, and a CSV with one record
 //! per frame. Times are only checked to be GPU times (positive, finite), never compared.
 
-use std::process::Command;
+mod common;
 
 use refrakt::bench::{Report, SCHEMA};
 
 fn refrakt(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_refrakt"))
-        .args(args)
-        .env("REFRAKT_VALIDATE", "1")
+    common::refrakt_command(args)
         // A private stand-in cache, so the test also exercises generation.
         .env(
             "REFRAKT_CACHE_DIR",

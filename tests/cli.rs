@@ -1,16 +1,12 @@
 //! The command line as a user meets it: `info`, `render` to PNG and EXR, and clear errors
 //! with a non-zero exit (never a panic) on bad input.
 
-use std::path::Path;
-use std::process::{Command, Output};
+mod common;
 
-fn refrakt(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_refrakt"))
-        .args(args)
-        .env("REFRAKT_VALIDATE", "1")
-        .output()
-        .expect("running refrakt")
-}
+use std::path::Path;
+use std::process::Output;
+
+use common::refrakt;
 
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()

@@ -4,21 +4,12 @@
 mod common;
 
 use std::path::Path;
-use std::process::{Command, Output};
 
-use common::with_context;
+use common::{refrakt, with_context};
 use refrakt::render::Renderer;
 use refrakt::scene::Scene;
 use refrakt::transfer::TransferFunctions;
 use refrakt::volume::{Volume, Voxels};
-
-fn refrakt(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_refrakt"))
-        .args(args)
-        .env("REFRAKT_VALIDATE", "1")
-        .output()
-        .expect("running refrakt")
-}
 
 fn write(dir: &Path, name: &str, text: &str) -> String {
     let p = dir.join(name);

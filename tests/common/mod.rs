@@ -70,3 +70,16 @@ pub fn constant_tf(colour: [f32; 3], opacity: f32) -> TransferFunctions {
     );
     TransferFunctions::parse(&text, "test tf").unwrap()
 }
+
+/// The `refrakt` binary with validation on (REFRAKT_VALIDATE=1: exit status 3 on any
+/// validation message), ready for arguments.
+pub fn refrakt_command(args: &[&str]) -> std::process::Command {
+    let mut c = std::process::Command::new(env!("CARGO_BIN_EXE_refrakt"));
+    c.args(args).env("REFRAKT_VALIDATE", "1");
+    c
+}
+
+/// Runs `refrakt` with validation on and returns its output.
+pub fn refrakt(args: &[&str]) -> std::process::Output {
+    refrakt_command(args).output().expect("running refrakt")
+}
