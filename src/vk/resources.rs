@@ -84,13 +84,14 @@ impl Buffer {
         })
     }
 
-    /// A host-written uniform buffer for one `T` (std140 layout is the caller's business).
+    /// A device-local uniform buffer for one `T` (std140 layout is the caller's business),
+    /// written in the command stream with [`crate::vk::Recorder::update_uniform`].
     pub fn uniform<T>(ctx: &Context, name: &str) -> Result<Self> {
         Self::new(
             ctx,
             std::mem::size_of::<T>() as u64,
-            vk::BufferUsageFlags::UNIFORM_BUFFER,
-            Memory::Upload,
+            vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            Memory::Gpu,
             name,
         )
     }
