@@ -17,7 +17,7 @@ use crate::vk::{
 use crate::volume::Volume;
 
 pub use preintegration::{PreintegrationTable, TABLE_SIZE};
-pub use sweep::{Dump, Light, Planes, StateBuffer, SweepOptions, SweepStats};
+pub use sweep::{Dump, Light, Planes, StateBuffer, SweepOptions, SweepStats, MAX_ETA_SCALE};
 
 /// Orbit camera around the volume centre (the world origin). The volume box's largest side
 /// is 1 world unit.

@@ -107,6 +107,9 @@ impl Default for Light {
 /// see MIN_FORWARD in glsl/sweep_common.glsl.
 pub const MIN_FORWARD: f32 = 0.1;
 
+/// Largest refractive-index scale ([`SweepOptions::eta_scale`]).
+pub const MAX_ETA_SCALE: f32 = 3.0;
+
 /// Options of the refractive model beyond the common [`RenderOptions`].
 #[derive(Clone, Debug)]
 pub struct SweepOptions {
@@ -134,6 +137,9 @@ pub struct SweepOptions {
     /// Average the environment over each pixel's refracted footprint with the summed-area
     /// table (thesis Fig. 4.5); false = one bilinear lookup per pixel (for comparison).
     pub env_footprint: bool,
+    /// Refractive-index scale k: the sweep uses η' = 1 + k (η_tf − 1), so 0 turns refraction
+    /// off and 1 (default) is the transfer function's η.
+    pub eta_scale: f32,
 }
 
 impl Default for SweepOptions {
@@ -149,6 +155,7 @@ impl Default for SweepOptions {
             drop_barrier_before_plane: None,
             env_rotation: 0.0,
             env_footprint: true,
+            eta_scale: 1.0,
         }
     }
 }
@@ -191,6 +198,11 @@ impl SweepOptions {
             "environment rotation {} must be a finite number of degrees",
             self.env_rotation
         );
+        ensure!(
+            self.eta_scale.is_finite() && (0.0..=MAX_ETA_SCALE).contains(&self.eta_scale),
+            "refractive-index scale {} must be in [0, {MAX_ETA_SCALE}]",
+            self.eta_scale
+        );
         if let Some((n, o)) = self.clip {
             ensure!(
                 n.is_finite() && n.length() > 1e-6 && o.is_finite(),
@@ -215,6 +227,7 @@ struct SweepParams {
     specular: [f32; 4],
     clip: [f32; 4],
     background: [f32; 4],
+    refraction: [f32; 4],
 }
 
 /// std140 mirror of `EnvParams` in glsl/sweep_composite.comp.
@@ -616,6 +629,7 @@ impl SweepPass {
             specular: [sweep.roughness, sweep.specular, opts.termination_alpha, 0.0],
             clip: [clip_n.x, clip_n.y, clip_n.z, clip_o],
             background: opts.background,
+            refraction: [sweep.eta_scale, 0.0, 0.0, 0.0],
         };
         let e = EnvParams {
             info: [
