@@ -5,6 +5,7 @@
 mod ea;
 pub mod preintegration;
 pub mod sweep;
+mod tonemap;
 
 use anyhow::{bail, ensure, Result};
 use glam::Vec3;
@@ -18,6 +19,7 @@ use crate::volume::Volume;
 
 pub use preintegration::{PreintegrationTable, TABLE_SIZE};
 pub use sweep::{Dump, Light, Planes, StateBuffer, SweepOptions, SweepStats, MAX_ETA_SCALE};
+pub use tonemap::ToneMapPass;
 
 /// Orbit camera around the volume centre (the world origin). The volume box's largest side
 /// is 1 world unit.
