@@ -12,5 +12,7 @@ pub mod shaders {
 pub mod environment;
 pub mod output;
 pub mod render;
+pub mod scene;
 pub mod transfer;
+pub mod viewer;
 pub mod volume;

@@ -1,4 +1,5 @@
-//! `refrakt` command line: `info` and `render`.
+//! `refrakt` command line: `info`, `render` and `view`. `render` and `view` share the scene
+//! options ([`SceneArgs`]) and build the scene in one function ([`build_scene`]).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -9,7 +10,9 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use refrakt::environment::EnvironmentMap;
 use refrakt::output;
 use refrakt::render::{Camera, Light, Model, RenderOptions, Renderer, StateBuffer, SweepOptions};
+use refrakt::scene::Scene;
 use refrakt::transfer::TransferFunctions;
+use refrakt::viewer::{self, ViewOptions};
 use refrakt::vk::{self, Context, ContextDesc};
 use refrakt::volume::{procedural, Volume};
 
@@ -49,6 +52,10 @@ enum Command {
     /// Render a scene to an image (.png = 8-bit sRGB, .exr = linear float) and print the
     /// GPU time of each pass.
     Render(Box<RenderArgs>),
+    /// Open a window and render the scene every frame: left-drag orbits, the wheel zooms,
+    /// right-drag or the arrow keys move the light, H prints every key. Takes the same
+    /// scene options as `render`.
+    View(Box<ViewArgs>),
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -81,11 +88,9 @@ enum ModelArg {
     Ea,
 }
 
-#[derive(Args)]
-struct RenderArgs {
-    /// Output image; the extension picks the format: .png (8-bit sRGB) or .exr (linear).
-    #[arg(short, long, default_value = "refrakt.png")]
-    output: PathBuf,
+/// Scene options shared by `render` and `view`.
+#[derive(Args, Clone)]
+struct SceneArgs {
     /// Procedural scene to render.
     #[arg(long, value_enum, default_value = "shell")]
     scene: SceneArg,
@@ -103,10 +108,10 @@ struct RenderArgs {
     /// Sample the transfer function at each step instead of using the preintegration table.
     #[arg(long)]
     no_preintegration: bool,
-    /// Image width in pixels.
+    /// Image width in pixels (view: the window's initial inner width).
     #[arg(long, default_value_t = 512)]
     width: u32,
-    /// Image height in pixels.
+    /// Image height in pixels (view: the window's initial inner height).
     #[arg(long, default_value_t = 512)]
     height: u32,
     /// Distance between samples in units of the smallest voxel side (1 = one sample per
@@ -150,14 +155,6 @@ struct RenderArgs {
     /// n·p > offset, the medium and refraction stay (refract, thesis Fig. 6.6).
     #[arg(long, value_name = "NX,NY,NZ,D", allow_hyphen_values = true)]
     clip: Option<String>,
-    /// Write state buffers after given planes as EXR: "BUFFER@PLANE[,...]" with BUFFER one
-    /// of light-colour, light-direction, view-position, view-direction, colour-opacity,
-    /// medium (refract). Files go to --dump-dir as BUFFER-PLANE.exr.
-    #[arg(long, value_name = "BUFFER@PLANE,...")]
-    dump: Option<String>,
-    /// Folder for --dump files (default: the output image's folder).
-    #[arg(long)]
-    dump_dir: Option<PathBuf>,
     /// Environment map behind the volume (refract): an equirectangular .exr or .hdr
     /// (linear), .png or .jpg (sRGB), twice as wide as high; "sky" for the built-in sky,
     /// sun and checkered ground; "none" for the flat --background.
@@ -166,18 +163,70 @@ struct RenderArgs {
     /// Rotation of the environment map about the vertical axis, degrees.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     env_rotation: f32,
-    /// Exposure in stops applied before tone mapping (PNG output only).
+    /// Exposure in stops applied before tone mapping (PNG output and the window).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     exposure: f32,
-    /// Tone mapping for PNG output: aces (filmic), reinhard, or none (clamp). EXR output is
-    /// always the linear HDR image.
+    /// Tone mapping for PNG output and the window: aces (filmic), reinhard, or none
+    /// (clamp). EXR output is always the linear HDR image.
     #[arg(long, value_enum, default_value = "aces")]
     tonemap: ToneArg,
+    /// Refractive-index scale k: the sweep uses eta' = 1 + k (eta_tf - 1); 0 turns
+    /// refraction off, 1 is the transfer function's eta (refract).
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
+    eta_scale: f32,
+}
+
+#[derive(Args)]
+struct RenderArgs {
+    /// Output image; the extension picks the format: .png (8-bit sRGB) or .exr (linear).
+    #[arg(short, long, default_value = "refrakt.png")]
+    output: PathBuf,
+    /// Write state buffers after given planes as EXR: "BUFFER@PLANE[,...]" with BUFFER one
+    /// of light-colour, light-direction, view-position, view-direction, colour-opacity,
+    /// medium (refract). Files go to --dump-dir as BUFFER-PLANE.exr.
+    #[arg(long, value_name = "BUFFER@PLANE,...")]
+    dump: Option<String>,
+    /// Folder for --dump files (default: the output image's folder).
+    #[arg(long)]
+    dump_dir: Option<PathBuf>,
     /// Also render the EA baseline with the same volume, view, image size and sample
     /// distance in the same run, and print its GPU time and the ratio to this model's
     /// (the comparison the thesis' cost discussion needs; compare ratios on lavapipe).
     #[arg(long)]
     with_baseline: bool,
+    #[command(flatten)]
+    scene: SceneArgs,
+}
+
+#[derive(Args)]
+struct ViewArgs {
+    /// Procedural scene to show (the same as --scene).
+    #[arg(value_enum, conflicts_with = "scene", value_name = "SCENE")]
+    scene_name: Option<SceneArg>,
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Present without waiting for the display's vertical blank (mailbox or immediate
+    /// presentation where the surface offers one).
+    #[arg(long)]
+    no_vsync: bool,
+    /// Render this many frames, then exit (for tests and scripts).
+    #[arg(long, value_name = "N")]
+    frames: Option<u64>,
+    /// With --frames: write the last frame as shown (PNG, read back from the window's
+    /// swapchain image) and as linear EXR, to FILE and FILE with the other extension.
+    #[arg(long, value_name = "FILE", requires = "frames")]
+    screenshot: Option<PathBuf>,
+    /// Ask for a new window size before frame N, "WxH@N" (for tests and scripts); the
+    /// viewer waits for the window to take it.
+    #[arg(long, value_name = "WxH@N")]
+    resize: Option<String>,
+    /// Folder for the screenshots the P key writes.
+    #[arg(long, default_value = ".", value_name = "DIR")]
+    screenshot_dir: PathBuf,
+    /// Do not reload the scene when its files (transfer functions, environment map) change
+    /// on disk (R still reloads).
+    #[arg(long)]
+    no_watch: bool,
 }
 
 fn main() -> ExitCode {
@@ -199,6 +248,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
     match cli.command {
         Command::Info => info(&desc),
         Command::Render(args) => render(&desc, &args),
+        Command::View(args) => view(&desc, *args),
     }
 }
 
@@ -347,9 +397,10 @@ fn parse_background(s: &str) -> Result<[f32; 4]> {
     Ok(out)
 }
 
-fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
-    // Everything that can be checked without the GPU is checked first, so bad input fails
-    // at once with a clear message.
+/// The scene the options describe: parsed and checked (everything that can be checked
+/// without the GPU), with its volume built and its files read. The one place `render` and
+/// `view` get a scene from.
+fn build_scene(args: &SceneArgs) -> Result<Scene> {
     let opts = RenderOptions {
         width: args.width,
         height: args.height,
@@ -395,15 +446,11 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
             }
             None => None,
         },
-        dumps: match &args.dump {
-            Some(d) => parse_dumps(d)?,
-            None => Vec::new(),
-        },
+        env_rotation: args.env_rotation,
+        eta_scale: args.eta_scale,
         ..Default::default()
     };
-    opts.sweep.env_rotation = args.env_rotation;
     opts.validate()?;
-    output::format_for(&args.output)?;
     if !args.exposure.is_finite() {
         bail!(
             "--exposure {} must be a finite number of stops",
@@ -418,25 +465,15 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
             ToneArg::None => output::ToneOperator::None,
         },
     };
+    let mut files = Vec::new();
     let env = match args.env.as_str() {
         "none" => None,
         "sky" => Some(EnvironmentMap::procedural(1024)?),
-        file => Some(EnvironmentMap::load(std::path::Path::new(file))?),
+        file => {
+            files.push(PathBuf::from(file));
+            Some(EnvironmentMap::load(std::path::Path::new(file))?)
+        }
     };
-    let dump_dir = match &args.dump_dir {
-        Some(d) => d.clone(),
-        None => args
-            .output
-            .parent()
-            .map(|p| p.to_path_buf())
-            .unwrap_or_default(),
-    };
-    if !opts.sweep.dumps.is_empty() && !dump_dir.as_os_str().is_empty() && !dump_dir.is_dir() {
-        bail!(
-            "--dump-dir {}: the folder does not exist",
-            dump_dir.display()
-        );
-    }
     let tf_name = args.tf.clone().unwrap_or_else(|| {
         match args.scene {
             SceneArg::Shell => "supernova",
@@ -447,6 +484,9 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
         .to_string()
     });
     let tf = TransferFunctions::load(&tf_name)?;
+    if std::path::Path::new(&tf_name).is_file() {
+        files.push(PathBuf::from(&tf_name));
+    }
     let n = args.volume_size;
     let volume: Volume = match args.scene {
         SceneArg::Shell => procedural::shell_on_floor(n, 7)?,
@@ -459,6 +499,52 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
         ModelArg::Ea => Model::Ea,
         ModelArg::Refract => Model::Refract,
     };
+    Ok(Scene {
+        name: scene_name(args.scene).to_string(),
+        volume,
+        tf,
+        env,
+        model,
+        camera,
+        opts,
+        tone,
+        files,
+    })
+}
+
+fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
+    // Everything that can be checked without the GPU is checked first, so bad input fails
+    // at once with a clear message.
+    output::format_for(&args.output)?;
+    let dumps = match &args.dump {
+        Some(d) => parse_dumps(d)?,
+        None => Vec::new(),
+    };
+    let dump_dir = match &args.dump_dir {
+        Some(d) => d.clone(),
+        None => args
+            .output
+            .parent()
+            .map(|p| p.to_path_buf())
+            .unwrap_or_default(),
+    };
+    if !dumps.is_empty() && !dump_dir.as_os_str().is_empty() && !dump_dir.is_dir() {
+        bail!(
+            "--dump-dir {}: the folder does not exist",
+            dump_dir.display()
+        );
+    }
+    let Scene {
+        volume,
+        tf,
+        env,
+        model,
+        camera,
+        mut opts,
+        tone,
+        ..
+    } = build_scene(&args.scene)?;
+    opts.sweep.dumps = dumps;
 
     let ctx = Context::new(desc)?;
     println!(
@@ -481,7 +567,7 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
         "rendered {}x{} of the {} scene ({}x{}x{}, transfer functions {}), model {}{}, sample distance {}, up to {} steps per ray",
         opts.width,
         opts.height,
-        scene_name(args.scene),
+        scene_name(args.scene.scene),
         volume.dims[0],
         volume.dims[1],
         volume.dims[2],
@@ -536,4 +622,61 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
     println!("wrote {}", args.output.display());
     drop(renderer);
     finish(ctx)
+}
+
+/// "WxH@N" of --resize.
+fn parse_resize(s: &str) -> Result<([u32; 2], u64)> {
+    let bad = || format!("--resize '{s}': expected WIDTHxHEIGHT@FRAME, e.g. 320x200@2");
+    let (size, frame) = s.split_once('@').with_context(bad)?;
+    let (w, h) = size.split_once(['x', 'X']).with_context(bad)?;
+    let w: u32 = w.trim().parse().ok().with_context(bad)?;
+    let h: u32 = h.trim().parse().ok().with_context(bad)?;
+    let frame: u64 = frame.trim().parse().ok().with_context(bad)?;
+    if w == 0 || h == 0 || w > 16384 || h > 16384 {
+        bail!("--resize '{s}': the size must be between 1 and 16384 per side");
+    }
+    Ok(([w, h], frame))
+}
+
+fn view(desc: &ContextDesc, args: ViewArgs) -> Result<ExitCode> {
+    let mut scene_args = args.scene.clone();
+    if let Some(s) = args.scene_name {
+        scene_args.scene = s;
+    }
+    if let Some(path) = &args.screenshot {
+        output::format_for(path)?;
+    }
+    if args.frames == Some(0) {
+        bail!("--frames must be at least 1");
+    }
+    let resize = args.resize.as_deref().map(parse_resize).transpose()?;
+    if !args.screenshot_dir.is_dir() {
+        bail!(
+            "--screenshot-dir {}: the folder does not exist",
+            args.screenshot_dir.display()
+        );
+    }
+    let scene = build_scene(&scene_args)?;
+    let options = ViewOptions {
+        vsync: !args.no_vsync,
+        frames: args.frames,
+        screenshot: args.screenshot.clone(),
+        resize,
+        screenshot_dir: args.screenshot_dir.clone(),
+        watch: !args.no_watch,
+    };
+    let report = viewer::run(
+        desc.clone(),
+        scene,
+        Box::new(move || build_scene(&scene_args)),
+        options,
+    )?;
+    if report.validation_messages > 0 {
+        eprintln!(
+            "validation: {} message(s) reported (see above)",
+            report.validation_messages
+        );
+        return Ok(ExitCode::from(3));
+    }
+    Ok(ExitCode::SUCCESS)
 }
