@@ -3,6 +3,15 @@
 //! image by [`ToneMapPass`] (the arithmetic of the PNG path). Nothing is read back to the
 //! CPU except for screenshots.
 //!
+//! Two threads. The main thread runs the winit event loop: input changes the shared view
+//! state ([`ViewState`]: model, camera, render options, tone map), and actions (pause,
+//! reload, screenshot, quit) go to the render thread as messages. The render thread owns
+//! the swapchain, renderer and tone-map pass and draws frame after frame, each with the
+//! view state as it is when the frame is recorded ("every change takes effect on the next
+//! frame"). It is a thread of its own because presentation may block until the frame is
+//! rendered (Mesa's software WSI does, so on lavapipe a 512² sweep would freeze the window
+//! for seconds per frame); the event loop never waits for the GPU.
+//!
 //! Per frame: the renderer's recording (preintegration if the transfer functions changed,
 //! sweep or EA) and the tone-map pass go into one command buffer with the swapchain's
 //! acquire/present synchronization ([`Swapchain::frame`]); up to
@@ -12,7 +21,9 @@
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
+use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender, TryRecvError};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
 use std::time::{Duration, Instant, SystemTime};
 
 use anyhow::{anyhow, Context as _, Result};
@@ -20,12 +31,13 @@ use glam::Vec3;
 use winit::application::ApplicationHandler;
 use winit::dpi::PhysicalSize;
 use winit::event::{ElementState, KeyEvent, MouseButton, MouseScrollDelta, WindowEvent};
-use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop, EventLoopProxy};
 use winit::keyboard::{Key, ModifiersState, NamedKey};
 use winit::window::{Window, WindowId};
 
 use crate::output;
-use crate::render::{Camera, Frame, Model, Renderer, ToneMapPass, MAX_ETA_SCALE};
+use crate::output::ToneMap;
+use crate::render::{Camera, Frame, Model, RenderOptions, Renderer, ToneMapPass, MAX_ETA_SCALE};
 use crate::scene::Scene;
 use crate::vk::{
     Buffer, Context, ContextDesc, FrameStatus, Framebuffer, LayerView, Swapchain, SwapchainDesc,
@@ -34,6 +46,34 @@ use crate::vk::{
 
 /// Reloads the scene from its sources (the command line's options and files).
 pub type SceneLoader = Box<dyn FnMut() -> Result<Scene>>;
+
+/// What the controls change and every frame reads.
+#[derive(Clone, Debug)]
+pub struct ViewState {
+    pub model: Model,
+    pub camera: Camera,
+    /// The size is replaced by the swapchain's at each frame.
+    pub opts: RenderOptions,
+    pub tone: ToneMap,
+}
+
+/// Main thread → render thread.
+enum ToRender {
+    /// Stop drawing (minimised, occluded) or go on.
+    Pause(bool),
+    /// New data for the scene (the view state stays).
+    Reload(Box<Scene>),
+    /// Write a screenshot of the next frame.
+    Screenshot,
+    Quit,
+}
+
+/// Render thread → main thread (wakes the event loop).
+#[derive(Debug)]
+enum FromRender {
+    /// The render thread has ended (--frames done, quit, or an error it returns).
+    Finished,
+}
 
 /// How the viewer runs, besides the scene.
 #[derive(Clone, Debug)]
@@ -132,32 +172,48 @@ pub fn run(
     loader: SceneLoader,
     options: ViewOptions,
 ) -> Result<ViewReport> {
-    let event_loop = EventLoop::new().map_err(|e| {
-        anyhow!(
-            "cannot open a window: {e}. `refrakt view` needs a display (X11 or Wayland; \
-             DISPLAY or WAYLAND_DISPLAY); for a headless machine use Xvfb (Debian package \
-             xvfb, installed by scripts/setup.sh), e.g. `xvfb-run refrakt view`"
-        )
-    })?;
-    let mut app = App::new(desc, scene, loader, options);
-    event_loop
-        .run_app(&mut app)
-        .map_err(|e| anyhow!("window event loop: {e}"))?;
-    // Everything on the GPU goes before the validation log is read.
-    let log = app.gpu.as_ref().map(|g| g.ctx.validation_log());
-    let gpu = app.gpu.take();
-    drop(gpu);
-    let mut report = app.report;
-    report.validation_messages = log.map(|l: Arc<ValidationLog>| l.count()).unwrap_or(0);
-    if let Some(e) = app.error {
-        return Err(e);
+    let event_loop = EventLoop::<FromRender>::with_user_event()
+        .build()
+        .map_err(|e| {
+            anyhow!(
+                "cannot open a window: {e}. `refrakt view` needs a display (X11 or Wayland; \
+                 DISPLAY or WAYLAND_DISPLAY); for a headless machine use Xvfb (Debian package \
+                 xvfb, installed by scripts/setup.sh), e.g. `xvfb-run refrakt view`"
+            )
+        })?;
+    let proxy = event_loop.create_proxy();
+    let mut app = App::new(desc, scene, loader, options, proxy);
+    let looped = event_loop.run_app(&mut app);
+    // The render thread holds everything on the GPU; it ends on Quit (or has ended).
+    if let Some(tx) = &app.to_render {
+        let _ = tx.send(ToRender::Quit);
     }
-    Ok(report)
+    let mut report = ViewReport::default();
+    let mut error = app.error.take();
+    if let Some(handle) = app.render_thread.take() {
+        match handle.join() {
+            Ok((r, result)) => {
+                report = r;
+                if let (Err(e), None) = (result, &error) {
+                    error = Some(e);
+                }
+            }
+            Err(_) => error = error.or(Some(anyhow!("the render thread panicked"))),
+        }
+    }
+    report.validation_messages = app.validation.as_ref().map(|l| l.count()).unwrap_or(0);
+    // The window goes last, on this thread.
+    drop(app);
+    looped.map_err(|e| anyhow!("window event loop: {e}"))?;
+    match error {
+        Some(e) => Err(e),
+        None => Ok(report),
+    }
 }
 
-/// The window and everything on the GPU. Dropped in field order after [`Gpu::drop`]
-/// waited for the device: what the frames use, then the swapchain, the context (device,
-/// surface), and the window last.
+/// Everything on the GPU, owned by the render thread. Dropped in field order after
+/// [`Gpu::drop`] waited for the device: what the frames use, then the swapchain, the
+/// context (device, surface).
 struct Gpu {
     framebuffers: Vec<Framebuffer>,
     views: Vec<LayerView>,
@@ -179,7 +235,7 @@ impl Gpu {
     fn rebuild_targets(&mut self) -> Result<()> {
         self.framebuffers.clear();
         self.views.clear();
-        if self.swapchain.format() != self.tonemap_format() {
+        if self.swapchain.format() != self.tonemap.format() {
             self.tonemap = ToneMapPass::new(
                 &self.ctx,
                 self.swapchain.format(),
@@ -202,19 +258,6 @@ impl Gpu {
         }
         Ok(())
     }
-
-    fn tonemap_format(&self) -> crate::vk::Format {
-        self.tonemap.format()
-    }
-}
-
-/// Mouse and keyboard state between events.
-#[derive(Default)]
-struct Input {
-    cursor: Option<(f64, f64)>,
-    orbiting: bool,
-    lighting: bool,
-    modifiers: ModifiersState,
 }
 
 /// Host copies of a frame for a screenshot, read once it completes.
@@ -230,179 +273,148 @@ struct Shot {
     linear: Buffer,
 }
 
-struct App {
-    desc: ContextDesc,
-    scene: Scene,
-    loader: SceneLoader,
+/// The render thread: draws frames until told to quit or `--frames` are done.
+struct RenderLoop {
+    gpu: Gpu,
+    state: Arc<Mutex<ViewState>>,
+    rx: Receiver<ToRender>,
     options: ViewOptions,
-    gpu: Option<Gpu>,
-    error: Option<anyhow::Error>,
+    scene_name: String,
+    volume: crate::volume::Volume,
     report: ViewReport,
-    input: Input,
-    /// The clipping plane C toggles when there was none on the command line.
-    clip_default: Option<(Vec3, f32)>,
-    minimised: bool,
-    occluded: bool,
-    swapchain_dirty: bool,
-    /// A requested window size the viewer waits for (--resize), with its deadline.
-    awaiting_size: Option<([u32; 2], Instant)>,
-    resize_done: bool,
+    paused: bool,
     shot_requested: bool,
     shot_counter: u32,
+    resize_done: bool,
     /// Planes of each frame in flight, for the title once its timings arrive.
     planes: HashMap<u64, Option<u32>>,
     last_print: Option<Instant>,
-    last_watch: Instant,
-    watched: Vec<(PathBuf, Option<SystemTime>)>,
     last_check_error: Option<String>,
-    last_minimised_poll: Instant,
 }
 
-fn mtime(path: &Path) -> Option<SystemTime> {
-    std::fs::metadata(path).and_then(|m| m.modified()).ok()
-}
-
-impl App {
-    fn new(desc: ContextDesc, scene: Scene, loader: SceneLoader, options: ViewOptions) -> Self {
-        let watched = scene.files.iter().map(|f| (f.clone(), mtime(f))).collect();
-        Self {
-            clip_default: scene.opts.sweep.clip,
-            desc,
-            scene,
-            loader,
-            options,
-            gpu: None,
-            error: None,
-            report: ViewReport::default(),
-            input: Input::default(),
-            minimised: false,
-            occluded: false,
-            swapchain_dirty: false,
-            awaiting_size: None,
-            resize_done: false,
-            shot_requested: false,
-            shot_counter: 0,
-            planes: HashMap::new(),
-            last_print: None,
-            last_watch: Instant::now(),
-            watched,
-            last_check_error: None,
-            last_minimised_poll: Instant::now(),
+impl RenderLoop {
+    fn run(&mut self) -> Result<()> {
+        loop {
+            if !self.messages()? {
+                return Ok(());
+            }
+            if self.done() {
+                self.gpu.swapchain.wait_idle()?;
+                self.collect_timings();
+                return Ok(());
+            }
+            self.draw()?;
+            self.collect_timings();
         }
     }
 
-    fn fail(&mut self, event_loop: &ActiveEventLoop, e: anyhow::Error) {
-        if self.error.is_none() {
-            self.error = Some(e);
+    /// Handle what the main thread sent; false once told to quit. Blocks while paused
+    /// (or while the window has no area), so a minimised window costs nothing.
+    fn messages(&mut self) -> Result<bool> {
+        loop {
+            let size = self.gpu.window.inner_size();
+            let idle = self.paused || size.width == 0 || size.height == 0;
+            let msg = if idle {
+                match self.rx.recv_timeout(Duration::from_millis(250)) {
+                    Ok(m) => m,
+                    Err(RecvTimeoutError::Timeout) => continue,
+                    Err(RecvTimeoutError::Disconnected) => return Ok(false),
+                }
+            } else {
+                match self.rx.try_recv() {
+                    Ok(m) => m,
+                    Err(TryRecvError::Empty) => return Ok(true),
+                    Err(TryRecvError::Disconnected) => return Ok(false),
+                }
+            };
+            match msg {
+                ToRender::Pause(p) => self.paused = p,
+                ToRender::Reload(scene) => self.reload(*scene)?,
+                ToRender::Screenshot => self.shot_requested = true,
+                ToRender::Quit => return Ok(false),
+            }
         }
-        event_loop.exit();
     }
 
-    fn create_gpu(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
-        let attrs = Window::default_attributes()
-            .with_title(format!("refrakt view: {}", self.scene.name))
-            .with_inner_size(PhysicalSize::new(
-                self.scene.opts.width,
-                self.scene.opts.height,
-            ));
-        let window = Arc::new(
-            event_loop
-                .create_window(attrs)
-                .context("creating the window")?,
-        );
-        let mut desc = self.desc.clone();
-        desc.window = Some(window.clone());
-        let ctx = Context::new(&desc)?;
-        let size = window.inner_size();
-        let swapchain = Swapchain::new(
-            &ctx,
-            SwapchainDesc {
-                size: [size.width.max(1), size.height.max(1)],
-                vsync: self.options.vsync,
-            },
-        )?;
-        let mut renderer = Renderer::new(&ctx, &self.scene.volume, &self.scene.tf)?;
-        renderer.set_environment(self.scene.env.as_ref())?;
-        let tonemap = ToneMapPass::new(&ctx, swapchain.format(), swapchain.encodes_srgb())?;
-        println!(
-            "device: {} ({}); window {}x{}, swapchain {:?}, {}",
-            ctx.info().name,
-            crate::vk::device_type_name(ctx.info().device_type),
-            swapchain.extent()[0],
-            swapchain.extent()[1],
-            swapchain.format(),
-            swapchain.present_mode_name()
-        );
-        println!("press H in the window for the keys");
-        let mut gpu = Gpu {
-            framebuffers: Vec::new(),
-            views: Vec::new(),
-            tonemap,
-            renderer,
-            swapchain,
-            ctx,
-            window,
-        };
-        gpu.rebuild_targets()?;
-        self.gpu = Some(gpu);
+    fn done(&self) -> bool {
+        self.options
+            .frames
+            .map(|n| self.report.frames >= n)
+            .unwrap_or(false)
+    }
+
+    fn reload(&mut self, new: Scene) -> Result<()> {
+        let gpu = &mut self.gpu;
+        gpu.swapchain.wait_idle()?;
+        if new.volume != self.volume {
+            gpu.renderer = Renderer::new(&gpu.ctx, &new.volume, &new.tf)?;
+            self.volume = new.volume;
+        } else {
+            gpu.renderer.set_transfer_functions(&new.tf)?;
+        }
+        gpu.renderer.set_environment(new.env.as_ref())?;
+        self.scene_name = new.name;
         Ok(())
     }
 
-    fn paused(&self) -> bool {
-        self.minimised || self.occluded || self.awaiting_size.is_some()
+    /// --resize: ask for the size before frame N and wait (up to RESIZE_TIMEOUT) until the
+    /// window has it.
+    fn scripted_resize(&mut self) {
+        let Some((size, at)) = self.options.resize else {
+            return;
+        };
+        if at != self.report.frames || self.resize_done {
+            return;
+        }
+        self.resize_done = true;
+        let window = &self.gpu.window;
+        let _ = window.request_inner_size(PhysicalSize::new(size[0], size[1]));
+        let deadline = Instant::now() + RESIZE_TIMEOUT;
+        loop {
+            let s = window.inner_size();
+            if [s.width, s.height] == size {
+                return;
+            }
+            if Instant::now() >= deadline {
+                eprintln!(
+                    "warning: the window did not take the size {}x{} within {:?}; going on",
+                    size[0], size[1], RESIZE_TIMEOUT
+                );
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        }
     }
 
-    /// Record and present one frame, if the window can show one.
+    /// Record and present one frame.
     fn draw(&mut self) -> Result<()> {
-        if self.paused() || self.done() {
-            return Ok(());
-        }
-        let frame_no = self.report.frames;
-        if let Some((size, at)) = self.options.resize {
-            if at == frame_no && !self.resize_done {
-                self.resize_done = true;
-                let gpu = self.gpu.as_ref().expect("drawn with a window");
-                let current = gpu.window.inner_size();
-                if [current.width, current.height] != size {
-                    let _ = gpu
-                        .window
-                        .request_inner_size(PhysicalSize::new(size[0], size[1]));
-                    self.awaiting_size = Some((size, Instant::now() + RESIZE_TIMEOUT));
-                    return Ok(());
-                }
-            }
-        }
-        let gpu = self.gpu.as_mut().expect("drawn with a window");
-        let size = gpu.window.inner_size();
+        self.scripted_resize();
+        let size = self.gpu.window.inner_size();
         if size.width == 0 || size.height == 0 {
-            self.minimised = true;
             return Ok(());
         }
-        if self.swapchain_dirty
-            || gpu.swapchain.is_stale()
-            || gpu.swapchain.extent() != [size.width, size.height]
-        {
+        let gpu = &mut self.gpu;
+        if gpu.swapchain.is_stale() || gpu.swapchain.extent() != [size.width, size.height] {
             gpu.swapchain.recreate([size.width, size.height])?;
             gpu.rebuild_targets()?;
-            self.swapchain_dirty = false;
         }
         let [w, h] = gpu.swapchain.extent();
-        let mut opts = self.scene.opts.clone();
-        opts.width = w;
-        opts.height = h;
-        let model = self.scene.model;
-        let camera = self.scene.camera;
+        let mut view = self.state.lock().unwrap().clone();
+        view.opts.width = w;
+        view.opts.height = h;
         // Controls keep every value in range; anything left (a reloaded scene the renderer
         // refuses) is reported once and nothing is drawn until it changes.
-        if let Err(e) = gpu.renderer.check(model, &camera, &opts) {
+        if let Err(e) = gpu.renderer.check(view.model, &view.camera, &view.opts) {
             let msg = format!("{e:#}");
             if self.last_check_error.as_deref() != Some(&msg) {
                 eprintln!("cannot render: {msg}");
                 self.last_check_error = Some(msg);
             }
+            std::thread::sleep(Duration::from_millis(100));
             return Ok(());
         }
         self.last_check_error = None;
+        let frame_no = self.report.frames;
         let last = self
             .options
             .frames
@@ -414,8 +426,6 @@ impl App {
         } else {
             None
         };
-        let gpu = self.gpu.as_mut().expect("drawn with a window");
-        let tone = self.scene.tone;
         let mut planes = None;
         let Gpu {
             framebuffers,
@@ -423,12 +433,12 @@ impl App {
             renderer,
             swapchain,
             ..
-        } = gpu;
+        } = &mut self.gpu;
         let status = swapchain.frame(|rec, index, target| {
             rec.begin_scope("frame");
-            let out = renderer.record(rec, model, &camera, &opts)?;
+            let out = renderer.record(rec, view.model, &view.camera, &view.opts)?;
             planes = out.sweep.as_ref().map(|s| s.planes.count);
-            tonemap.record(rec, out.image, target, &framebuffers[index], &tone)?;
+            tonemap.record(rec, out.image, target, &framebuffers[index], &view.tone)?;
             if let Some(shot) = &shot {
                 if let Some(buf) = &shot.shown {
                     rec.copy_image_to_buffer(target, 0, buf);
@@ -438,47 +448,33 @@ impl App {
             rec.end_scope();
             Ok(())
         })?;
-        match status {
-            FrameStatus::OutOfDate => {
-                self.swapchain_dirty = true;
-            }
-            FrameStatus::Presented(n) => {
-                self.planes.insert(n, planes);
-                self.report.frames += 1;
-                if let Some(shot) = shot {
-                    let gpu = self.gpu.as_mut().expect("drawn with a window");
-                    gpu.swapchain.wait_idle()?;
-                    write_shot(&shot)?;
-                }
+        if let FrameStatus::Presented(n) = status {
+            self.planes.insert(n, planes);
+            self.report.frames += 1;
+            if let Some(shot) = shot {
+                self.gpu.swapchain.wait_idle()?;
+                write_shot(&shot)?;
             }
         }
-        self.collect_timings();
         Ok(())
     }
 
     fn prepare_shot(&mut self, last: bool, w: u32, h: u32) -> Result<Shot> {
         let (png, exr) = match (&self.options.screenshot, last) {
-            (Some(path), true) => {
-                let other = match output::format_for(path)? {
-                    output::ImageFormat::Png => path.with_extension("exr"),
-                    output::ImageFormat::Exr => path.with_extension("png"),
-                };
-                if output::format_for(path)? == output::ImageFormat::Png {
-                    (path.clone(), other)
-                } else {
-                    (other, path.clone())
-                }
-            }
+            (Some(path), true) => match output::format_for(path)? {
+                output::ImageFormat::Png => (path.clone(), path.with_extension("exr")),
+                output::ImageFormat::Exr => (path.with_extension("png"), path.clone()),
+            },
             _ => loop {
                 self.shot_counter += 1;
-                let stem = format!("refrakt-{}-{:03}", self.scene.name, self.shot_counter);
+                let stem = format!("refrakt-{}-{:03}", self.scene_name, self.shot_counter);
                 let png = self.options.screenshot_dir.join(format!("{stem}.png"));
                 if !png.exists() {
                     break (png.clone(), png.with_extension("exr"));
                 }
             },
         };
-        let gpu = self.gpu.as_ref().expect("drawn with a window");
+        let gpu = &self.gpu;
         let shown = if gpu.swapchain.can_copy_from() {
             Some(Buffer::readback(
                 &gpu.ctx,
@@ -502,21 +498,19 @@ impl App {
     /// Timings of completed frames: the window title and, at most once a second (every
     /// frame with --frames), a line on stdout.
     fn collect_timings(&mut self) {
-        let Some(gpu) = self.gpu.as_mut() else {
-            return;
-        };
-        let done = gpu.swapchain.take_timings();
+        let done = self.gpu.swapchain.take_timings();
         for (n, t) in done {
             let planes = self.planes.remove(&n).flatten();
             let line = summary(&t, planes);
             if let Some(ms) = t.get("frame") {
                 self.report.frame_ms.push(ms);
             }
-            let [w, h] = gpu.swapchain.extent();
-            gpu.window.set_title(&format!(
+            let [w, h] = self.gpu.swapchain.extent();
+            let model = self.state.lock().unwrap().model;
+            self.gpu.window.set_title(&format!(
                 "refrakt view: {} ({}) {w}x{h} | {line}",
-                self.scene.name,
-                self.scene.model.name()
+                self.scene_name,
+                model.name()
             ));
             let due = self
                 .last_print
@@ -528,86 +522,237 @@ impl App {
             }
         }
     }
+}
 
-    fn done(&self) -> bool {
-        self.options
-            .frames
-            .map(|n| self.report.frames >= n)
-            .unwrap_or(false)
+/// Mouse and keyboard state between events.
+#[derive(Default)]
+struct Input {
+    cursor: Option<(f64, f64)>,
+    orbiting: bool,
+    lighting: bool,
+    modifiers: ModifiersState,
+}
+
+/// The main thread: window, events, controls.
+struct App {
+    desc: ContextDesc,
+    /// Until the render thread takes it.
+    scene: Option<Scene>,
+    loader: SceneLoader,
+    options: ViewOptions,
+    proxy: EventLoopProxy<FromRender>,
+    state: Arc<Mutex<ViewState>>,
+    window: Option<Arc<Window>>,
+    to_render: Option<Sender<ToRender>>,
+    render_thread: Option<JoinHandle<(ViewReport, Result<()>)>>,
+    validation: Option<Arc<ValidationLog>>,
+    error: Option<anyhow::Error>,
+    input: Input,
+    /// Half the volume box's diagonal: the camera stays outside it.
+    volume_radius: f32,
+    /// The clipping plane C toggles when there was none on the command line.
+    clip_default: Option<(Vec3, f32)>,
+    paused: bool,
+    minimised: bool,
+    occluded: bool,
+    last_watch: Instant,
+    watched: Vec<(PathBuf, Option<SystemTime>)>,
+    last_minimised_poll: Instant,
+}
+
+fn mtime(path: &Path) -> Option<SystemTime> {
+    std::fs::metadata(path).and_then(|m| m.modified()).ok()
+}
+
+impl App {
+    fn new(
+        desc: ContextDesc,
+        scene: Scene,
+        loader: SceneLoader,
+        options: ViewOptions,
+        proxy: EventLoopProxy<FromRender>,
+    ) -> Self {
+        let watched = scene.files.iter().map(|f| (f.clone(), mtime(f))).collect();
+        let state = ViewState {
+            model: scene.model,
+            camera: scene.camera,
+            opts: scene.opts.clone(),
+            tone: scene.tone,
+        };
+        Self {
+            clip_default: scene.opts.sweep.clip,
+            volume_radius: 0.5 * Vec3::from(scene.volume.normalised_extent()).length(),
+            desc,
+            scene: Some(scene),
+            loader,
+            options,
+            proxy,
+            state: Arc::new(Mutex::new(state)),
+            window: None,
+            to_render: None,
+            render_thread: None,
+            validation: None,
+            error: None,
+            input: Input::default(),
+            paused: false,
+            minimised: false,
+            occluded: false,
+            last_watch: Instant::now(),
+            watched,
+            last_minimised_poll: Instant::now(),
+        }
     }
 
-    fn reload(&mut self) -> Result<()> {
-        let started = Instant::now();
-        let new = match (self.loader)() {
-            Ok(s) => s,
-            Err(e) => {
-                eprintln!("reload failed, keeping the current scene: {e:#}");
-                return Ok(());
-            }
-        };
-        let gpu = self.gpu.as_mut().expect("reloaded with a window");
-        gpu.swapchain.wait_idle()?;
-        if new.volume != self.scene.volume {
-            gpu.renderer = Renderer::new(&gpu.ctx, &new.volume, &new.tf)?;
-        } else {
-            gpu.renderer.set_transfer_functions(&new.tf)?;
+    fn fail(&mut self, event_loop: &ActiveEventLoop, e: anyhow::Error) {
+        if self.error.is_none() {
+            self.error = Some(e);
         }
-        gpu.renderer.set_environment(new.env.as_ref())?;
-        // The view (camera, light, keys' settings) stays; the data is new.
-        self.scene.name = new.name;
-        self.scene.volume = new.volume;
-        self.scene.tf = new.tf;
-        self.scene.env = new.env;
-        self.scene.files = new.files;
-        self.watched = self
-            .scene
-            .files
-            .iter()
-            .map(|f| (f.clone(), mtime(f)))
-            .collect();
-        println!(
-            "reloaded the {} scene (transfer functions {}) in {:.0} ms",
-            self.scene.name,
-            self.scene.tf.name,
-            started.elapsed().as_secs_f64() * 1e3
+        event_loop.exit();
+    }
+
+    fn send(&self, msg: ToRender) {
+        if let Some(tx) = &self.to_render {
+            // A closed channel means the render thread has ended; its result arrives with
+            // FromRender::Finished.
+            let _ = tx.send(msg);
+        }
+    }
+
+    /// Window, context, swapchain, renderer, tone-map pass; then the render thread.
+    fn start(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
+        let scene = self.scene.take().expect("started once");
+        let attrs = Window::default_attributes()
+            .with_title(format!("refrakt view: {}", scene.name))
+            .with_inner_size(PhysicalSize::new(scene.opts.width, scene.opts.height));
+        let window = Arc::new(
+            event_loop
+                .create_window(attrs)
+                .context("creating the window")?,
         );
+        self.window = Some(window.clone());
+        let mut desc = self.desc.clone();
+        desc.window = Some(window.clone());
+        let ctx = Context::new(&desc)?;
+        self.validation = Some(ctx.validation_log());
+        let size = window.inner_size();
+        let swapchain = Swapchain::new(
+            &ctx,
+            SwapchainDesc {
+                size: [size.width.max(1), size.height.max(1)],
+                vsync: self.options.vsync,
+            },
+        )?;
+        let mut renderer = Renderer::new(&ctx, &scene.volume, &scene.tf)?;
+        renderer.set_environment(scene.env.as_ref())?;
+        let tonemap = ToneMapPass::new(&ctx, swapchain.format(), swapchain.encodes_srgb())?;
+        println!(
+            "device: {} ({}); window {}x{}, swapchain {:?}, {}",
+            ctx.info().name,
+            crate::vk::device_type_name(ctx.info().device_type),
+            swapchain.extent()[0],
+            swapchain.extent()[1],
+            swapchain.format(),
+            swapchain.present_mode_name()
+        );
+        println!("press H in the window for the keys");
+        let mut gpu = Gpu {
+            framebuffers: Vec::new(),
+            views: Vec::new(),
+            tonemap,
+            renderer,
+            swapchain,
+            ctx,
+            window,
+        };
+        gpu.rebuild_targets()?;
+        let (tx, rx) = mpsc::channel();
+        let mut render = RenderLoop {
+            gpu,
+            state: self.state.clone(),
+            rx,
+            options: self.options.clone(),
+            scene_name: scene.name,
+            volume: scene.volume,
+            report: ViewReport::default(),
+            paused: false,
+            shot_requested: false,
+            shot_counter: 0,
+            resize_done: false,
+            planes: HashMap::new(),
+            last_print: None,
+            last_check_error: None,
+        };
+        let proxy = self.proxy.clone();
+        let handle = std::thread::Builder::new()
+            .name("refrakt render".into())
+            .spawn(move || {
+                let result = render.run();
+                let report = std::mem::take(&mut render.report);
+                // Everything on the GPU goes before the main thread reads the validation
+                // log (and before the window, which the main thread drops last).
+                drop(render);
+                let _ = proxy.send_event(FromRender::Finished);
+                (report, result)
+            })
+            .context("starting the render thread")?;
+        self.to_render = Some(tx);
+        self.render_thread = Some(handle);
         Ok(())
     }
 
-    fn watch(&mut self) -> Result<()> {
+    fn update_pause(&mut self) {
+        let paused = self.minimised || self.occluded;
+        if paused != self.paused {
+            self.paused = paused;
+            self.send(ToRender::Pause(paused));
+        }
+    }
+
+    fn reload(&mut self) {
+        let started = Instant::now();
+        match (self.loader)() {
+            Ok(new) => {
+                self.watched = new.files.iter().map(|f| (f.clone(), mtime(f))).collect();
+                self.volume_radius = 0.5 * Vec3::from(new.volume.normalised_extent()).length();
+                println!(
+                    "reloaded the {} scene (transfer functions {}) in {:.0} ms",
+                    new.name,
+                    new.tf.name,
+                    started.elapsed().as_secs_f64() * 1e3
+                );
+                self.send(ToRender::Reload(Box::new(new)));
+            }
+            Err(e) => eprintln!("reload failed, keeping the current scene: {e:#}"),
+        }
+    }
+
+    fn watch(&mut self) {
         if !self.options.watch || self.last_watch.elapsed() < WATCH_INTERVAL {
-            return Ok(());
+            return;
         }
         self.last_watch = Instant::now();
-        let changed: Vec<&PathBuf> = self
+        let changed = self
             .watched
             .iter()
-            .filter(|(p, t)| mtime(p) != *t)
-            .map(|(p, _)| p)
-            .collect();
-        if let Some(p) = changed.first() {
+            .find(|(p, t)| mtime(p) != *t)
+            .map(|(p, _)| p.clone());
+        if let Some(p) = changed {
             println!("{} changed on disk; reloading", p.display());
-            self.reload()?;
+            self.reload();
         }
-        Ok(())
     }
 
     fn light_moved(&mut self, yaw: f32, pitch: f32) {
-        let l = &mut self.scene.opts.sweep.light.towards;
-        *l = turn_light(*l, &self.scene.camera, yaw, pitch);
+        let mut s = self.state.lock().unwrap();
+        let camera = s.camera;
+        let l = &mut s.opts.sweep.light.towards;
+        *l = turn_light(*l, &camera, yaw, pitch);
     }
 
-    fn min_distance(&self) -> f32 {
-        let e = self.scene.volume.normalised_extent();
-        0.5 * Vec3::from(e).length() + 0.05
-    }
-
-    fn key(&mut self, event: &KeyEvent, event_loop: &ActiveEventLoop) -> Result<()> {
+    fn key(&mut self, event: &KeyEvent, event_loop: &ActiveEventLoop) {
         if event.state != ElementState::Pressed {
-            return Ok(());
+            return;
         }
-        let o = &mut self.scene.opts;
-        let s = &mut o.sweep;
         let step = |v: &mut f32, d: f32, (lo, hi): (f32, f32)| *v = (*v + d).clamp(lo, hi);
         let mut said = None;
         match &event.logical_key {
@@ -616,103 +761,105 @@ impl App {
             Key::Named(NamedKey::ArrowRight) => self.light_moved(KEY_LIGHT_DEG, 0.0),
             Key::Named(NamedKey::ArrowUp) => self.light_moved(0.0, KEY_LIGHT_DEG),
             Key::Named(NamedKey::ArrowDown) => self.light_moved(0.0, -KEY_LIGHT_DEG),
-            Key::Character(c) => match c.to_lowercase().as_str() {
-                "q" => event_loop.exit(),
-                "[" | "{" => {
-                    step(&mut s.light.softness, -0.25, LIMITS_SOFTNESS);
-                    said = Some(format!("softness {:.2}", s.light.softness));
-                }
-                "]" | "}" => {
-                    step(&mut s.light.softness, 0.25, LIMITS_SOFTNESS);
-                    said = Some(format!("softness {:.2}", s.light.softness));
-                }
-                "-" | "_" => {
-                    step(&mut s.eta_scale, -0.1, (0.0, MAX_ETA_SCALE));
-                    said = Some(format!("refractive-index scale {:.2}", s.eta_scale));
-                }
-                "=" | "+" => {
-                    step(&mut s.eta_scale, 0.1, (0.0, MAX_ETA_SCALE));
-                    said = Some(format!("refractive-index scale {:.2}", s.eta_scale));
-                }
-                "," | "<" => {
-                    o.sample_distance = (o.sample_distance / 1.25)
-                        .clamp(LIMITS_SAMPLE_DISTANCE.0, LIMITS_SAMPLE_DISTANCE.1);
-                    said = Some(format!("sample distance {:.3}", o.sample_distance));
-                }
-                "." | ">" => {
-                    o.sample_distance = (o.sample_distance * 1.25)
-                        .clamp(LIMITS_SAMPLE_DISTANCE.0, LIMITS_SAMPLE_DISTANCE.1);
-                    said = Some(format!("sample distance {:.3}", o.sample_distance));
-                }
-                ";" | ":" => {
-                    step(&mut s.roughness, -0.05, LIMITS_ROUGHNESS);
-                    said = Some(format!("roughness {:.2}", s.roughness));
-                }
-                "'" | "\"" => {
-                    step(&mut s.roughness, 0.05, LIMITS_ROUGHNESS);
-                    said = Some(format!("roughness {:.2}", s.roughness));
-                }
-                "m" => {
-                    self.scene.model = match self.scene.model {
-                        Model::Refract => Model::Ea,
-                        Model::Ea => Model::Refract,
-                    };
-                    said = Some(format!("model {}", self.scene.model.name()));
-                }
-                "c" => {
-                    if s.clip.is_some() {
-                        s.clip = None;
-                        said = Some("clipping off".into());
-                    } else {
-                        // The command line's plane, else one through the centre facing the
-                        // camera (cuts the near half away).
-                        let plane = self.clip_default.unwrap_or_else(|| {
-                            let (eye, ..) = self.scene.camera.frame();
-                            (eye.normalize(), 0.0)
-                        });
-                        self.clip_default = Some(plane);
-                        s.clip = Some(plane);
-                        said = Some(format!(
-                            "clipping on: n = ({:.2}, {:.2}, {:.2}), offset {:.2}",
-                            plane.0.x, plane.0.y, plane.0.z, plane.1
-                        ));
+            Key::Character(c) => {
+                let c = c.to_lowercase();
+                match c.as_str() {
+                    "q" => event_loop.exit(),
+                    "r" => self.reload(),
+                    "p" => {
+                        self.send(ToRender::Screenshot);
+                        said = Some("screenshot at the next frame".into());
+                    }
+                    "h" => println!("{KEY_MAP}"),
+                    "c" => {
+                        let mut st = self.state.lock().unwrap();
+                        if st.opts.sweep.clip.is_some() {
+                            st.opts.sweep.clip = None;
+                            said = Some("clipping off".into());
+                        } else {
+                            // The command line's plane, else one through the centre facing
+                            // the camera (cuts the near half away).
+                            let (eye, ..) = st.camera.frame();
+                            let plane = *self.clip_default.get_or_insert((eye.normalize(), 0.0));
+                            st.opts.sweep.clip = Some(plane);
+                            said = Some(format!(
+                                "clipping on: n = ({:.2}, {:.2}, {:.2}), offset {:.2}",
+                                plane.0.x, plane.0.y, plane.0.z, plane.1
+                            ));
+                        }
+                    }
+                    _ => {
+                        let mut st = self.state.lock().unwrap();
+                        let ViewState { model, opts, .. } = &mut *st;
+                        let s = &mut opts.sweep;
+                        match c.as_str() {
+                            "[" | "{" => {
+                                step(&mut s.light.softness, -0.25, LIMITS_SOFTNESS);
+                                said = Some(format!("softness {:.2}", s.light.softness));
+                            }
+                            "]" | "}" => {
+                                step(&mut s.light.softness, 0.25, LIMITS_SOFTNESS);
+                                said = Some(format!("softness {:.2}", s.light.softness));
+                            }
+                            "-" | "_" => {
+                                step(&mut s.eta_scale, -0.1, (0.0, MAX_ETA_SCALE));
+                                said = Some(format!("refractive-index scale {:.2}", s.eta_scale));
+                            }
+                            "=" | "+" => {
+                                step(&mut s.eta_scale, 0.1, (0.0, MAX_ETA_SCALE));
+                                said = Some(format!("refractive-index scale {:.2}", s.eta_scale));
+                            }
+                            ";" | ":" => {
+                                step(&mut s.roughness, -0.05, LIMITS_ROUGHNESS);
+                                said = Some(format!("roughness {:.2}", s.roughness));
+                            }
+                            "'" | "\"" => {
+                                step(&mut s.roughness, 0.05, LIMITS_ROUGHNESS);
+                                said = Some(format!("roughness {:.2}", s.roughness));
+                            }
+                            "," | "<" | "." | ">" => {
+                                let f = if matches!(c.as_str(), "," | "<") {
+                                    1.0 / 1.25
+                                } else {
+                                    1.25
+                                };
+                                opts.sample_distance = (opts.sample_distance * f)
+                                    .clamp(LIMITS_SAMPLE_DISTANCE.0, LIMITS_SAMPLE_DISTANCE.1);
+                                said = Some(format!("sample distance {:.3}", opts.sample_distance));
+                            }
+                            "m" => {
+                                *model = match *model {
+                                    Model::Refract => Model::Ea,
+                                    Model::Ea => Model::Refract,
+                                };
+                                said = Some(format!("model {}", model.name()));
+                            }
+                            _ => {}
+                        }
                     }
                 }
-                "r" => self.reload()?,
-                "p" => {
-                    self.shot_requested = true;
-                    said = Some("screenshot at the next frame".into());
-                }
-                "h" => println!("{KEY_MAP}"),
-                _ => {}
-            },
+            }
             _ => {}
         }
         if let Some(msg) = said {
             println!("{msg}");
         }
-        Ok(())
     }
 
-    fn window_event_inner(
-        &mut self,
-        event_loop: &ActiveEventLoop,
-        event: WindowEvent,
-    ) -> Result<()> {
+    fn window_event_inner(&mut self, event_loop: &ActiveEventLoop, event: WindowEvent) {
         match event {
             WindowEvent::CloseRequested => event_loop.exit(),
             WindowEvent::Resized(size) => {
+                // The render thread follows the window's size by itself.
                 self.minimised = size.width == 0 || size.height == 0;
-                self.swapchain_dirty = true;
-                if let Some((want, _)) = self.awaiting_size {
-                    if [size.width, size.height] == want {
-                        self.awaiting_size = None;
-                    }
-                }
+                self.update_pause();
             }
-            WindowEvent::Occluded(o) => self.occluded = o,
+            WindowEvent::Occluded(o) => {
+                self.occluded = o;
+                self.update_pause();
+            }
             WindowEvent::ModifiersChanged(m) => self.input.modifiers = m.state(),
-            WindowEvent::KeyboardInput { event, .. } => self.key(&event, event_loop)?,
+            WindowEvent::KeyboardInput { event, .. } => self.key(&event, event_loop),
             WindowEvent::MouseInput { state, button, .. } => {
                 let down = state == ElementState::Pressed;
                 match button {
@@ -726,12 +873,14 @@ impl App {
                 if let Some((px, py)) = self.input.cursor {
                     let (dx, dy) = ((x - px) as f32, (y - py) as f32);
                     if self.input.orbiting {
-                        let c = &mut self.scene.camera;
+                        let mut s = self.state.lock().unwrap();
+                        let c = &mut s.camera;
                         c.azimuth = (c.azimuth - dx * DRAG_DEG_PER_PIXEL).rem_euclid(360.0);
                         c.elevation = (c.elevation + dy * DRAG_DEG_PER_PIXEL).clamp(-89.0, 89.0);
                         // The light stays put in the world unless the camera left its cone.
-                        let l = &mut self.scene.opts.sweep.light.towards;
-                        *l = clamp_light(*l, &self.scene.camera);
+                        let camera = s.camera;
+                        let l = &mut s.opts.sweep.light.towards;
+                        *l = clamp_light(*l, &camera);
                     } else if self.input.lighting {
                         self.light_moved(dx * DRAG_DEG_PER_PIXEL, -dy * DRAG_DEG_PER_PIXEL);
                     }
@@ -744,14 +893,12 @@ impl App {
                     MouseScrollDelta::LineDelta(_, y) => y,
                     MouseScrollDelta::PixelDelta(p) => p.y as f32 / 50.0,
                 };
-                let min = self.min_distance();
-                let c = &mut self.scene.camera;
+                let min = self.volume_radius + 0.05;
+                let c = &mut self.state.lock().unwrap().camera;
                 c.distance = (c.distance * 0.9f32.powf(steps)).clamp(min, MAX_DISTANCE);
             }
-            WindowEvent::RedrawRequested => self.draw()?,
             _ => {}
         }
-        Ok(())
     }
 }
 
@@ -818,80 +965,47 @@ fn write_shot(shot: &Shot) -> Result<()> {
     Ok(())
 }
 
-impl ApplicationHandler for App {
+impl ApplicationHandler<FromRender> for App {
     fn resumed(&mut self, event_loop: &ActiveEventLoop) {
-        if self.gpu.is_some() {
+        if self.window.is_some() || self.error.is_some() {
             return;
         }
-        if let Err(e) = self.create_gpu(event_loop) {
+        if let Err(e) = self.start(event_loop) {
             self.fail(event_loop, e);
+        }
+    }
+
+    fn user_event(&mut self, event_loop: &ActiveEventLoop, event: FromRender) {
+        match event {
+            // Done, quit or failed: run() joins the thread and reports.
+            FromRender::Finished => event_loop.exit(),
         }
     }
 
     fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
-        if self.gpu.is_none() {
-            return;
-        }
-        if let Err(e) = self.window_event_inner(event_loop, event) {
-            self.fail(event_loop, e);
+        if self.window.is_some() {
+            self.window_event_inner(event_loop, event);
         }
     }
 
     fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
-        if self.gpu.is_none() {
+        let Some(window) = self.window.clone() else {
             return;
-        }
-        if let Err(e) = self.watch() {
-            return self.fail(event_loop, e);
-        }
-        self.collect_timings();
-        if self.done() {
-            if let Some(gpu) = self.gpu.as_mut() {
-                if let Err(e) = gpu.swapchain.wait_idle() {
-                    return self.fail(event_loop, e);
-                }
-            }
-            self.collect_timings();
-            event_loop.exit();
-            return;
-        }
-        if let Some((want, deadline)) = self.awaiting_size {
-            if Instant::now() >= deadline {
-                eprintln!(
-                    "warning: the window did not take the size {}x{} within {:?}; going on",
-                    want[0], want[1], RESIZE_TIMEOUT
-                );
-                self.awaiting_size = None;
-            }
-        }
+        };
+        self.watch();
         // A minimised X11 window may get no event at all; poll its state a few times a
-        // second rather than render into it.
+        // second (the render thread sleeps meanwhile).
         if self.last_minimised_poll.elapsed() >= Duration::from_millis(250) {
             self.last_minimised_poll = Instant::now();
-            let gpu = self.gpu.as_ref().expect("checked");
-            if gpu.window.is_minimized() == Some(true) {
-                self.minimised = true;
-            } else if self.minimised {
-                let s = gpu.window.inner_size();
-                self.minimised = s.width == 0 || s.height == 0;
-            }
+            let size = window.inner_size();
+            self.minimised =
+                window.is_minimized() == Some(true) || size.width == 0 || size.height == 0;
+            self.update_pause();
         }
-        let gpu = self.gpu.as_ref().expect("checked");
-        if self.paused() {
-            // Nothing to draw: sleep until an event, waking a few times a second for the
-            // file watch, the minimised poll and the resize deadline.
-            event_loop.set_control_flow(ControlFlow::WaitUntil(
-                Instant::now() + Duration::from_millis(250),
-            ));
-        } else if gpu.swapchain.ready() {
-            gpu.window.request_redraw();
-            event_loop.set_control_flow(ControlFlow::Wait);
-        } else {
-            // The GPU is still on an earlier frame: stay responsive to input meanwhile.
-            event_loop.set_control_flow(ControlFlow::WaitUntil(
-                Instant::now() + Duration::from_millis(4),
-            ));
-        }
+        // Wake up for the file watch and the minimised poll; input wakes us anyway.
+        event_loop.set_control_flow(ControlFlow::WaitUntil(
+            Instant::now() + Duration::from_millis(250),
+        ));
     }
 }
 
