@@ -19,6 +19,7 @@ layout(set = 0, binding = 0) uniform SweepParams {
     vec4 clip;           // xyz = world normal, w = offset: opacity is zero where dot(n, p) > w;
                          // a zero normal disables clipping
     vec4 background;     // linear RGBA behind the volume
+    vec4 refraction;     // x = refractive-index scale k: eta' = 1 + k (eta_tf - 1)
 } P;
 
 layout(set = 0, binding = 1) uniform sampler3D volume;
@@ -50,7 +51,9 @@ float value_at_tex(vec3 t) {
 }
 
 float eta_of(float s) {
-    return textureLod(tf, vec2(tf_coord(s), 1.0), 0.0).a;
+    float eta = textureLod(tf, vec2(tf_coord(s), 1.0), 0.0).a;
+    // k = 1 returns the transfer function's eta bit for bit.
+    return P.refraction.x == 1.0 ? eta : 1.0 + P.refraction.x * (eta - 1.0);
 }
 
 // Value, gradient of the value and gradient of eta at view-space p (view-space units), by

@@ -9,10 +9,16 @@
 #                           the system shaderc + glslang + SPIRV-Tools static libraries
 #                           build.rs links (see .cargo/config.toml)
 #   gcc g++ pkg-config      C/C++ toolchain and libstdc++ for the static shaderc link
+#   libx11-6 libx11-xcb1 libxcursor1 libxi6 libxkbcommon0 libxkbcommon-x11-0
+#                           what winit loads at run time for `refrakt view` on X11
+#   xvfb                    a virtual X server: tests/viewer.rs opens its window there
+#   xdotool x11-utils       drive and inspect the viewer's window by hand (xdotool, xwininfo)
 set -euo pipefail
 
 packages=(mesa-vulkan-drivers libvulkan1 vulkan-validationlayers libshaderc-dev glslang-dev
-          spirv-tools gcc g++ pkg-config ca-certificates curl)
+          spirv-tools gcc g++ pkg-config ca-certificates curl
+          libx11-6 libx11-xcb1 libxcursor1 libxi6 libxkbcommon0 libxkbcommon-x11-0
+          xvfb xdotool x11-utils)
 
 missing=()
 for p in "${packages[@]}"; do

@@ -15,4 +15,5 @@ pub mod output;
 pub mod render;
 pub mod scene;
 pub mod transfer;
+pub mod viewer;
 pub mod volume;

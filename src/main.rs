@@ -8,10 +8,11 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 
 use refrakt::output;
 use refrakt::render::{Model, Renderer, StateBuffer};
-use refrakt::scene::{self, EnvSource, Scene, TransferSource, VolumeSource};
+use refrakt::scene::{self, EnvSource, LoadedScene, Scene, TransferSource, VolumeSource};
+use refrakt::viewer::{self, ViewOptions};
 use refrakt::vk::{self, Context, ContextDesc};
 use refrakt::volume::formats::RawLayout;
-use refrakt::volume::{standins, Volume};
+use refrakt::volume::standins;
 
 #[derive(Parser)]
 #[command(
@@ -49,6 +50,10 @@ enum Command {
     /// Render a scene to an image (.png = 8-bit sRGB, .exr = linear float) and print the
     /// GPU time of each pass.
     Render(Box<RenderArgs>),
+    /// Open a window and render the scene every frame: left-drag orbits, the wheel zooms,
+    /// right-drag or the arrow keys move the light, H prints every key. Takes the same
+    /// scene options as `render`.
+    View(Box<ViewArgs>),
     /// Generate (and cache) thesis stand-ins ahead of time, printing the time each took;
     /// `render` and `bench` generate missing ones themselves.
     Generate(GenerateArgs),
@@ -164,8 +169,9 @@ enum ModelArg {
     Ea,
 }
 
-#[derive(Args)]
-struct RenderArgs {
+/// Scene options shared by `render` and `view`.
+#[derive(Args, Clone)]
+struct SceneArgs {
     /// What to render: a built-in scene name (see --list-scenes; default
     /// sphere-on-floor), a scene file (.toml, see README "Scene files"), or a volume file
     /// (.raw, .nrrd, .nhdr, .nii, .nii.gz, .mhd, .mha, .vti, or a DICOM directory).
@@ -175,12 +181,6 @@ struct RenderArgs {
     /// Same as the SCENE argument (kept for scripts).
     #[arg(long = "scene", value_name = "SCENE", conflicts_with = "scene")]
     scene_flag: Option<String>,
-    /// List the built-in scenes and exit.
-    #[arg(long)]
-    list_scenes: bool,
-    /// Output image; the extension picks the format: .png (8-bit sRGB) or .exr (linear).
-    #[arg(short, long, default_value = "refrakt.png")]
-    output: PathBuf,
     /// Folder of fetched data (scripts/fetch-data) and of thesis originals that replace the
     /// stand-ins (<name>.<ext>, e.g. supernova.nrrd). Default: $REFRAKT_DATA_DIR or
     /// ~/.cache/refrakt/data.
@@ -264,6 +264,10 @@ struct RenderArgs {
     /// Specular strength; 0 turns highlights off (refract) [default: 1].
     #[arg(long, allow_negative_numbers = true)]
     specular: Option<f32>,
+    /// Refractive-index scale k: the sweep uses eta' = 1 + k (eta_tf - 1); 0 turns
+    /// refraction off, 1 is the transfer function's eta (refract) [default: 1].
+    #[arg(long, allow_negative_numbers = true)]
+    eta_scale: Option<f32>,
     /// Clipping plane "nx,ny,nz,offset" in world space: opacity is zero where
     /// n·p > offset, the medium and refraction stay (refract, thesis Fig. 6.6); "none"
     /// removes a scene's plane.
@@ -271,12 +275,6 @@ struct RenderArgs {
     clip: Option<String>,
     /// Write state buffers after given planes as EXR: "BUFFER@PLANE[,...]" with BUFFER one
     /// of light-colour, light-direction, view-position, view-direction, colour-opacity,
-    /// medium (refract). Files go to --dump-dir as BUFFER-PLANE.exr.
-    #[arg(long, value_name = "BUFFER@PLANE,...")]
-    dump: Option<String>,
-    /// Folder for --dump files (default: the output image's folder).
-    #[arg(long)]
-    dump_dir: Option<PathBuf>,
     /// Environment map behind the volume (refract): an equirectangular .exr or .hdr
     /// (linear), .png or .jpg (sRGB), twice as wide as high; "sky" for the built-in sky,
     /// sun and checkered ground; "none" for the flat --background [default: sky].
@@ -285,18 +283,65 @@ struct RenderArgs {
     /// Rotation of the environment map about the vertical axis, degrees [default: 0].
     #[arg(long, allow_negative_numbers = true)]
     env_rotation: Option<f32>,
-    /// Exposure in stops applied before tone mapping (PNG output only) [default: 0].
+    /// Exposure in stops applied before tone mapping (PNG output and the window)
+    /// [default: 0].
     #[arg(long, allow_negative_numbers = true)]
     exposure: Option<f32>,
     /// Tone mapping for PNG output: aces (filmic), reinhard, or none (clamp). EXR output is
     /// always the linear HDR image [default: aces].
     #[arg(long, value_enum)]
     tonemap: Option<ToneArg>,
+}
+
+#[derive(Args)]
+struct RenderArgs {
+    /// List the built-in scenes and exit.
+    #[arg(long)]
+    list_scenes: bool,
+    /// Output image; the extension picks the format: .png (8-bit sRGB) or .exr (linear).
+    #[arg(short, long, default_value = "refrakt.png")]
+    output: PathBuf,
+    /// medium (refract). Files go to --dump-dir as BUFFER-PLANE.exr.
+    #[arg(long, value_name = "BUFFER@PLANE,...")]
+    dump: Option<String>,
+    /// Folder for --dump files (default: the output image's folder).
+    #[arg(long)]
+    dump_dir: Option<PathBuf>,
     /// Also render the EA baseline with the same volume, view, image size and sample
     /// distance in the same run, and print its GPU time and the ratio to this model's
     /// (the comparison the thesis' cost discussion needs; compare ratios on lavapipe).
     #[arg(long)]
     with_baseline: bool,
+    #[command(flatten)]
+    scene: SceneArgs,
+}
+
+#[derive(Args)]
+struct ViewArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Present without waiting for the display's vertical blank (mailbox or immediate
+    /// presentation where the surface offers one).
+    #[arg(long)]
+    no_vsync: bool,
+    /// Render this many frames, then exit (for tests and scripts).
+    #[arg(long, value_name = "N")]
+    frames: Option<u64>,
+    /// With --frames: write the last frame as shown (PNG, read back from the window's
+    /// swapchain image) and as linear EXR, to FILE and FILE with the other extension.
+    #[arg(long, value_name = "FILE", requires = "frames")]
+    screenshot: Option<PathBuf>,
+    /// Ask for a new window size before frame N, "WxH@N" (for tests and scripts); the
+    /// viewer waits for the window to take it.
+    #[arg(long, value_name = "WxH@N")]
+    resize: Option<String>,
+    /// Folder for the screenshots the P key writes.
+    #[arg(long, default_value = ".", value_name = "DIR")]
+    screenshot_dir: PathBuf,
+    /// Do not reload the scene when its files (scene file, volume, transfer functions,
+    /// environment map) change on disk (R still reloads).
+    #[arg(long)]
+    no_watch: bool,
 }
 
 fn main() -> ExitCode {
@@ -318,6 +363,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
     match cli.command {
         Command::Info => info(&desc),
         Command::Render(args) => render(&desc, &args),
+        Command::View(args) => view(&desc, *args),
         Command::Generate(args) => generate(&args),
         Command::Bench(BenchCommand::Thesis(args)) => bench_thesis(&desc, &args),
         Command::Bench(BenchCommand::Scaling(args)) => bench_scaling(&desc, &args),
@@ -454,7 +500,7 @@ fn parse_background(s: &str) -> Result<[f32; 4]> {
 }
 
 /// The scene the arguments name, with every given flag applied over it.
-fn scene_from_args(args: &RenderArgs) -> Result<Scene> {
+fn scene_from_args(args: &SceneArgs) -> Result<Scene> {
     let name = args
         .scene
         .as_deref()
@@ -549,6 +595,7 @@ fn scene_from_args(args: &RenderArgs) -> Result<Scene> {
     set!(s.softness, args.softness);
     set!(s.roughness, args.roughness);
     set!(s.specular, args.specular);
+    set!(s.eta_scale, args.eta_scale);
     set!(s.env_rotation, args.env_rotation);
     if let Some(e) = args.exposure {
         ensure!(
@@ -688,6 +735,14 @@ fn bench_scaling(desc: &ContextDesc, args: &ScalingArgs) -> Result<ExitCode> {
     finish(ctx)
 }
 
+/// The scene the options describe, loaded: the one place `render` and `view` (and the
+/// viewer's reload) get a scene from.
+fn build_scene(args: &SceneArgs) -> Result<LoadedScene> {
+    let scene = scene_from_args(args)?;
+    let data_dir = args.data_dir.clone().unwrap_or_else(scene::data_dir);
+    scene.load_all(&data_dir)
+}
+
 fn list_scenes() -> Result<ExitCode> {
     println!("Built-in scenes (refrakt render NAME):");
     for (n, d) in scene::builtin_names() {
@@ -703,16 +758,11 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
     }
     // Everything that can be checked without the GPU is checked first, so bad input fails
     // at once with a clear message.
-    let scene = scene_from_args(args)?;
-    let mut opts = scene.render_options()?;
-    opts.sweep.dumps = match &args.dump {
+    output::format_for(&args.output)?;
+    let dumps = match &args.dump {
         Some(d) => parse_dumps(d)?,
         None => Vec::new(),
     };
-    let camera = scene.camera;
-    let model = scene.model;
-    output::format_for(&args.output)?;
-    let tone = scene.tone_map()?;
     let dump_dir = match &args.dump_dir {
         Some(d) => d.clone(),
         None => args
@@ -721,16 +771,24 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
             .map(|p| p.to_path_buf())
             .unwrap_or_default(),
     };
-    if !opts.sweep.dumps.is_empty() && !dump_dir.as_os_str().is_empty() && !dump_dir.is_dir() {
+    if !dumps.is_empty() && !dump_dir.as_os_str().is_empty() && !dump_dir.is_dir() {
         bail!(
             "--dump-dir {}: the folder does not exist",
             dump_dir.display()
         );
     }
-    let tf = scene.transfer_functions()?;
-    let env = scene.environment_map()?;
-    let data_dir = args.data_dir.clone().unwrap_or_else(scene::data_dir);
-    let volume: Volume = scene.load_volume(&data_dir)?;
+    let LoadedScene {
+        name,
+        volume,
+        tf,
+        env,
+        model,
+        camera,
+        mut opts,
+        tone,
+        ..
+    } = build_scene(&args.scene)?;
+    opts.sweep.dumps = dumps;
 
     let ctx = Context::new(desc)?;
     println!(
@@ -753,7 +811,7 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
         "rendered {}x{} of the {} scene ({}x{}x{}, transfer functions {}), model {}{}, sample distance {}, up to {} steps per ray",
         opts.width,
         opts.height,
-        scene.name,
+        name,
         volume.dims[0],
         volume.dims[1],
         volume.dims[2],
@@ -771,7 +829,10 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
             println!("  {name:<16} {ms:9.3} ms");
         }
         if let Some(ms) = frame.timings.get("frame") {
-            println!("  {:<16} {ms:9.3} ms (whole frame command buffer)", "frame");
+            println!(
+                "  {:<16} {ms:9.3} ms (the whole frame: passes and barriers)",
+                "frame"
+            );
         }
     }
     if let Some(stats) = &frame.sweep {
@@ -811,4 +872,58 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
     println!("wrote {}", args.output.display());
     drop(renderer);
     finish(ctx)
+}
+
+/// "WxH@N" of --resize.
+fn parse_resize(s: &str) -> Result<([u32; 2], u64)> {
+    let bad = || format!("--resize '{s}': expected WIDTHxHEIGHT@FRAME, e.g. 320x200@2");
+    let (size, frame) = s.split_once('@').with_context(bad)?;
+    let (w, h) = size.split_once(['x', 'X']).with_context(bad)?;
+    let w: u32 = w.trim().parse().ok().with_context(bad)?;
+    let h: u32 = h.trim().parse().ok().with_context(bad)?;
+    let frame: u64 = frame.trim().parse().ok().with_context(bad)?;
+    if w == 0 || h == 0 || w > 16384 || h > 16384 {
+        bail!("--resize '{s}': the size must be between 1 and 16384 per side");
+    }
+    Ok(([w, h], frame))
+}
+
+fn view(desc: &ContextDesc, args: ViewArgs) -> Result<ExitCode> {
+    if let Some(path) = &args.screenshot {
+        output::format_for(path)?;
+    }
+    if args.frames == Some(0) {
+        bail!("--frames must be at least 1");
+    }
+    let resize = args.resize.as_deref().map(parse_resize).transpose()?;
+    if !args.screenshot_dir.is_dir() {
+        bail!(
+            "--screenshot-dir {}: the folder does not exist",
+            args.screenshot_dir.display()
+        );
+    }
+    let scene_args = args.scene.clone();
+    let scene = build_scene(&scene_args)?;
+    let options = ViewOptions {
+        vsync: !args.no_vsync,
+        frames: args.frames,
+        screenshot: args.screenshot.clone(),
+        resize,
+        screenshot_dir: args.screenshot_dir.clone(),
+        watch: !args.no_watch,
+    };
+    let report = viewer::run(
+        desc.clone(),
+        scene,
+        Box::new(move || build_scene(&scene_args)),
+        options,
+    )?;
+    if report.validation_messages > 0 {
+        eprintln!(
+            "validation: {} message(s) reported (see above)",
+            report.validation_messages
+        );
+        return Ok(ExitCode::from(3));
+    }
+    Ok(ExitCode::SUCCESS)
 }

@@ -73,9 +73,35 @@ pub struct Scene {
     pub background: [f32; 4],
     pub roughness: f32,
     pub specular: f32,
+    /// Refractive-index scale k: η' = 1 + k (η_tf − 1); 0 turns refraction off.
+    pub eta_scale: f32,
     pub clip: Option<(Vec3, f32)>,
     pub exposure: f32,
     pub tonemap: ToneOperator,
+    /// The scene file this came from, if any (the viewer reloads when it changes).
+    pub file: Option<PathBuf>,
+}
+
+/// A scene with its inputs loaded: what `render` and `view` draw. Built only by
+/// [`Scene::load_all`], the one place both commands get a scene from.
+#[derive(Clone, Debug)]
+pub struct LoadedScene {
+    /// Short name for messages and the window title.
+    pub name: String,
+    pub volume: Volume,
+    pub tf: TransferFunctions,
+    /// Environment behind the volume (refractive model); None = the flat background.
+    pub env: Option<EnvironmentMap>,
+    pub model: Model,
+    pub camera: Camera,
+    /// Image size, sampling, light, specular, clipping (the viewer replaces the size with
+    /// the window's).
+    pub opts: RenderOptions,
+    /// How linear colour becomes 8-bit output (PNG, the window).
+    pub tone: ToneMap,
+    /// Files the scene was read from (scene file, volume, transfer functions, environment
+    /// map): the viewer reloads the scene when one of them changes.
+    pub files: Vec<PathBuf>,
 }
 
 #[derive(Clone, Debug)]
@@ -109,9 +135,11 @@ impl Default for Scene {
             background: [0.08, 0.08, 0.1, 1.0],
             roughness: 0.3,
             specular: 1.0,
+            eta_scale: 1.0,
             clip: None,
             exposure: 0.0,
             tonemap: ToneOperator::Aces,
+            file: None,
         }
     }
 }
@@ -426,6 +454,7 @@ impl Scene {
                 light: self.light(),
                 roughness: self.roughness,
                 specular: self.specular,
+                eta_scale: self.eta_scale,
                 clip: self.clip,
                 env_rotation: self.env_rotation,
                 ..Default::default()
@@ -434,6 +463,40 @@ impl Scene {
         };
         opts.validate()?;
         Ok(opts)
+    }
+
+    /// Loads everything: volume, transfer functions, environment map; checks the options.
+    pub fn load_all(&self, data_dir: &Path) -> Result<LoadedScene> {
+        let opts = self.render_options()?;
+        let tone = self.tone_map()?;
+        let tf = self.transfer_functions()?;
+        let env = self.environment_map()?;
+        let volume = self.load_volume(data_dir)?;
+        let mut files: Vec<PathBuf> = self.file.iter().cloned().collect();
+        if let TransferSource::Named(n) = &self.transfer {
+            if Path::new(n).is_file() {
+                files.push(PathBuf::from(n));
+            }
+        }
+        if let EnvSource::File(p) = &self.environment {
+            files.push(p.clone());
+        }
+        if let VolumeSource::File { path, .. } = &self.volume {
+            if path.is_file() {
+                files.push(path.clone());
+            }
+        }
+        Ok(LoadedScene {
+            name: self.name.clone(),
+            volume,
+            tf,
+            env,
+            model: self.model,
+            camera: self.camera,
+            opts,
+            tone,
+            files,
+        })
     }
 
     pub fn tone_map(&self) -> Result<ToneMap> {
@@ -591,6 +654,7 @@ struct RenderTable {
     background: Option<[f32; 4]>,
     roughness: Option<f32>,
     specular: Option<f32>,
+    eta_scale: Option<f32>,
     clip: Option<[f32; 4]>,
     exposure: Option<f32>,
     tonemap: Option<String>,
@@ -715,6 +779,7 @@ impl SceneFile {
             }
         }
         s.spacing = v.spacing;
+        s.file = Some(path.to_path_buf());
         if let Some(f) = &v.flip {
             s.flip = parse_flip(f).context("[volume] flip")?;
         }
@@ -837,6 +902,9 @@ impl SceneFile {
             }
             if let Some(x) = r.specular {
                 s.specular = x;
+            }
+            if let Some(x) = r.eta_scale {
+                s.eta_scale = x;
             }
             if let Some(c) = r.clip {
                 s.clip = Some((Vec3::new(c[0], c[1], c[2]), c[3]));

@@ -4,9 +4,11 @@
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 
-use super::{Camera, Frame, FrameTarget, RenderOptions, VolumeInfo};
+use super::{Camera, FrameTarget, RenderOptions, VolumeInfo};
 use crate::shaders;
-use crate::vk::{Access, Binding, Buffer, ComputePipeline, Context, DescriptorSet, Image, Sampler};
+use crate::vk::{
+    Access, Binding, Buffer, ComputePipeline, Context, DescriptorSet, Image, Recorder, Sampler,
+};
 
 /// std140 mirror of `Params` in glsl/ea.comp.
 #[repr(C)]
@@ -69,17 +71,23 @@ impl EaPass {
         (self.width, self.height)
     }
 
+    /// The finished frame (linear RGBA32F) once a recording has run.
+    pub fn output(&self) -> &FrameTarget {
+        &self.output
+    }
+
+    /// Record the ray march into [`EaPass::output`]; returns the most steps a ray takes.
     #[allow(clippy::too_many_arguments)]
-    pub fn render(
+    pub fn record(
         &mut self,
-        ctx: &Context,
+        rec: &mut Recorder,
         info: VolumeInfo,
         camera: &Camera,
         opts: &RenderOptions,
         volume: &Image,
         tf: &Image,
         preint: &Image,
-    ) -> Result<Frame> {
+    ) -> Result<u32> {
         let (eye, forward, right, up) = camera.frame();
         let tan_half = (camera.fov_y.to_radians() * 0.5).tan();
         let aspect = self.width as f32 / self.height as f32;
@@ -103,38 +111,20 @@ impl EaPass {
             ],
             size: [self.width, self.height, 0, 0],
         };
-        self.params.write(0, bytemuck::bytes_of(&p))?;
-        let timings = ctx.execute(|rec| {
-            // The whole frame's GPU time, as for the sweep.
-            rec.begin_scope("frame");
-            rec.transition_all(volume, Access::Sampled);
-            rec.transition_all(tf, Access::Sampled);
-            rec.transition_all(preint, Access::Sampled);
-            rec.transition_all(&self.output.image, Access::ComputeStorage);
-            rec.begin_scope("ea raymarch");
-            rec.dispatch(
-                &self.pipeline,
-                &self.set,
-                &[],
-                [self.width.div_ceil(8), self.height.div_ceil(8), 1],
-            )?;
-            rec.end_scope();
-            self.output.record_copy(rec);
-            rec.end_scope();
-            Ok(())
-        })?;
-        let pixels = self.output.pixels()?;
+        rec.update_uniform(&self.params, bytemuck::bytes_of(&p))?;
+        rec.transition_all(volume, Access::Sampled);
+        rec.transition_all(tf, Access::Sampled);
+        rec.transition_all(preint, Access::Sampled);
+        rec.transition_all(&self.output.image, Access::ComputeStorage);
+        rec.begin_scope("ea raymarch");
+        rec.dispatch(
+            &self.pipeline,
+            &self.set,
+            &[],
+            [self.width.div_ceil(8), self.height.div_ceil(8), 1],
+        )?;
+        rec.end_scope();
         // Longest possible ray through the box, in steps: the box diagonal.
-        let max_steps =
-            super::steps_for(info.half_extent, info.ref_step, opts.sample_distance) as u32;
-        Ok(Frame {
-            width: self.width,
-            height: self.height,
-            pixels,
-            timings,
-            max_steps,
-            dumps: Vec::new(),
-            sweep: None,
-        })
+        Ok(super::steps_for(info.half_extent, info.ref_step, opts.sample_distance) as u32)
     }
 }

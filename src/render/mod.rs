@@ -5,6 +5,7 @@
 mod ea;
 pub mod preintegration;
 pub mod sweep;
+mod tonemap;
 
 use anyhow::{bail, ensure, Result};
 use glam::Vec3;
@@ -17,7 +18,8 @@ use crate::vk::{
 use crate::volume::Volume;
 
 pub use preintegration::{PreintegrationTable, TABLE_SIZE};
-pub use sweep::{Dump, Light, Planes, StateBuffer, SweepOptions, SweepStats};
+pub use sweep::{Dump, Light, Planes, StateBuffer, SweepOptions, SweepStats, MAX_ETA_SCALE};
+pub use tonemap::ToneMapPass;
 
 /// Orbit camera around the volume centre (the world origin). The volume box's largest side
 /// is 1 world unit.
@@ -252,7 +254,7 @@ impl FrameTarget {
                 format: vk::Format::R32G32B32A32_SFLOAT,
                 extent: [width, height, 1],
                 layers: 1,
-                usage: vk::usage::STORAGE | vk::usage::TRANSFER_SRC,
+                usage: vk::usage::STORAGE | vk::usage::SAMPLED | vk::usage::TRANSFER_SRC,
             },
             name,
         )?;
@@ -392,8 +394,10 @@ impl Renderer {
         Ok(t)
     }
 
-    /// Render one frame with `model`.
-    pub fn render(&mut self, model: Model, camera: &Camera, opts: &RenderOptions) -> Result<Frame> {
+    /// Everything [`Renderer::render`] and [`Renderer::record`] would refuse for these
+    /// arguments, checked without recording anything: camera, options, the step limit and,
+    /// for the sweep, the light's side, the camera outside the box and dump planes.
+    pub fn check(&self, model: Model, camera: &Camera, opts: &RenderOptions) -> Result<()> {
         camera.validate()?;
         opts.validate()?;
         let steps = steps_for(
@@ -408,9 +412,106 @@ impl Renderer {
                 opts.sample_distance
             );
         }
+        if model == Model::Refract {
+            sweep::check(self.volume_info, camera, opts, &opts.sweep)?;
+        }
+        Ok(())
+    }
+
+    /// Render one frame with `model` and read it back.
+    pub fn render(&mut self, model: Model, camera: &Camera, opts: &RenderOptions) -> Result<Frame> {
+        self.check(model, camera, opts)?;
+        let ctx = self.ctx.clone();
+        let mut recorded = None;
+        let timings = ctx.execute(|rec| {
+            let r = self.record_inner(rec, model, camera, opts)?;
+            self.target(model)?.record_copy(rec);
+            recorded = Some(r);
+            Ok(())
+        })?;
+        let recorded = recorded.expect("recorded by execute");
+        let target = self.target(model)?;
+        let (width, height) = (opts.width, opts.height);
+        let dumps = match &recorded.sweep {
+            Some(s) => s.read_dumps(width, height)?,
+            None => Vec::new(),
+        };
+        Ok(Frame {
+            width,
+            height,
+            pixels: target.pixels()?,
+            timings,
+            max_steps: recorded.max_steps,
+            dumps,
+            sweep: recorded.sweep.map(|s| s.stats),
+        })
+    }
+
+    /// Record one frame with `model` into `rec` (the viewer's path; [`Renderer::render`]
+    /// records exactly the same and then copies the image to the host). The finished
+    /// frame, linear RGBA32F, is left in the returned image for later commands of the same
+    /// recording (its barriers are tracked as usual). The preintegration table is rebuilt
+    /// in the same recording if the transfer functions changed. Parameters travel in the
+    /// command stream, so earlier frames may still be in flight; the caller keeps the
+    /// renderer alive (and must not resize or replace its inputs) until they complete.
+    /// State-buffer dumps need [`Renderer::render`].
+    pub fn record(
+        &mut self,
+        rec: &mut Recorder,
+        model: Model,
+        camera: &Camera,
+        opts: &RenderOptions,
+    ) -> Result<RecordedFrame<'_>> {
+        ensure!(
+            opts.sweep.dumps.is_empty(),
+            "state-buffer dumps are read back by Renderer::render, not recorded frames"
+        );
+        self.check(model, camera, opts)?;
+        let r = self.record_inner(rec, model, camera, opts)?;
+        Ok(RecordedFrame {
+            image: &self.target(model)?.image,
+            max_steps: r.max_steps,
+            sweep: r.sweep.map(|s| s.stats),
+        })
+    }
+
+    fn target(&self, model: Model) -> Result<&FrameTarget> {
+        match model {
+            Model::Ea => self.ea.as_ref().map(|p| p.output()),
+            Model::Refract => self.sweep.as_ref().map(|p| p.output()),
+        }
+        .ok_or_else(|| anyhow::anyhow!("no {} frame has been recorded", model.name()))
+    }
+
+    /// The recording shared by `render` and `record`; arguments already checked.
+    fn record_inner(
+        &mut self,
+        rec: &mut Recorder,
+        model: Model,
+        camera: &Camera,
+        opts: &RenderOptions,
+    ) -> Result<Recorded> {
+        if self.tf_dirty {
+            self.preint.record_build(rec, &self.tf)?;
+            self.tf_dirty = false;
+        }
+        // The benchmark's frame time: every pass and barrier of the frame, without a table
+        // rebuild (only when the transfer functions change) and without the copy out.
+        rec.begin_scope("frame");
+        let recorded = self.record_passes(rec, model, camera, opts);
+        rec.end_scope();
+        recorded
+    }
+
+    fn record_passes(
+        &mut self,
+        rec: &mut Recorder,
+        model: Model,
+        camera: &Camera,
+        opts: &RenderOptions,
+    ) -> Result<Recorded> {
         match model {
             Model::Ea => {
-                let mut timings = self.update_preintegration()?;
                 let pass = sized_pass(&mut self.ea, opts, |w, h| {
                     ea::EaPass::new(
                         &self.ctx,
@@ -422,8 +523,8 @@ impl Renderer {
                         h,
                     )
                 })?;
-                let mut frame = pass.render(
-                    &self.ctx,
+                let max_steps = pass.record(
+                    rec,
                     self.volume_info,
                     camera,
                     opts,
@@ -431,12 +532,12 @@ impl Renderer {
                     &self.tf_image,
                     self.preint.image(),
                 )?;
-                timings.extend(std::mem::take(&mut frame.timings));
-                frame.timings = timings;
-                Ok(frame)
+                Ok(Recorded {
+                    max_steps,
+                    sweep: None,
+                })
             }
             Model::Refract => {
-                let mut timings = self.update_preintegration()?;
                 let env = sweep::EnvInputs {
                     map: &self.env.image,
                     sat: &self.env.sat.table,
@@ -455,7 +556,8 @@ impl Renderer {
                         h,
                     )
                 })?;
-                let (mut frame, dumps, stats) = pass.render(
+                let recording = pass.record(
+                    rec,
                     &self.ctx,
                     self.volume_info,
                     self.volume_info.dims,
@@ -465,12 +567,27 @@ impl Renderer {
                     [&self.volume_tex, &self.tf_image, self.preint.image()],
                     &env,
                 )?;
-                timings.extend(std::mem::take(&mut frame.timings));
-                frame.timings = timings;
-                frame.dumps = dumps;
-                frame.sweep = Some(stats);
-                Ok(frame)
+                Ok(Recorded {
+                    max_steps: recording.stats.planes.count,
+                    sweep: Some(recording),
+                })
             }
         }
     }
+}
+
+/// What [`Renderer::record_inner`] leaves for after the submission.
+struct Recorded {
+    max_steps: u32,
+    sweep: Option<sweep::SweepRecording>,
+}
+
+/// A frame recorded by [`Renderer::record`].
+pub struct RecordedFrame<'a> {
+    /// The finished frame, linear RGBA32F (sampled, storage and transfer-source usage).
+    pub image: &'a Image,
+    /// Samples along the longest ray (EA) or planes (sweep).
+    pub max_steps: u32,
+    /// Plane count and traffic of the sweep.
+    pub sweep: Option<SweepStats>,
 }

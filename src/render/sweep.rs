@@ -20,11 +20,11 @@ use anyhow::{bail, ensure, Result};
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
-use super::{Camera, Frame, FrameTarget, RenderOptions, VolumeInfo};
+use super::{Camera, FrameTarget, RenderOptions, VolumeInfo};
 use crate::shaders;
 use crate::vk::{
     self, Access, Binding, Buffer, ComputePipeline, Context, DescriptorSet, Framebuffer,
-    GraphicsPipeline, Image, ImageDesc, ImageKind, LayerView, RenderPass, Sampler, Timings,
+    GraphicsPipeline, Image, ImageDesc, ImageKind, LayerView, Recorder, RenderPass, Sampler,
 };
 
 /// The six state buffers, in attachment order.
@@ -107,6 +107,9 @@ impl Default for Light {
 /// see MIN_FORWARD in glsl/sweep_common.glsl.
 pub const MIN_FORWARD: f32 = 0.1;
 
+/// Largest refractive-index scale ([`SweepOptions::eta_scale`]).
+pub const MAX_ETA_SCALE: f32 = 3.0;
+
 /// Options of the refractive model beyond the common [`RenderOptions`].
 #[derive(Clone, Debug)]
 pub struct SweepOptions {
@@ -134,6 +137,9 @@ pub struct SweepOptions {
     /// Average the environment over each pixel's refracted footprint with the summed-area
     /// table (thesis Fig. 4.5); false = one bilinear lookup per pixel (for comparison).
     pub env_footprint: bool,
+    /// Refractive-index scale k: the sweep uses η' = 1 + k (η_tf − 1), so 0 turns refraction
+    /// off and 1 (default) is the transfer function's η.
+    pub eta_scale: f32,
     /// Benchmark baseline: run every plane with glsl/sweep_floor.frag, which only carries
     /// the state forward (same passes, barriers, attachments and reads). The image is not
     /// a rendering; the time is the floor the sweep's optics add to.
@@ -153,6 +159,7 @@ impl Default for SweepOptions {
             drop_barrier_before_plane: None,
             env_rotation: 0.0,
             env_footprint: true,
+            eta_scale: 1.0,
             floor: false,
         }
     }
@@ -196,6 +203,11 @@ impl SweepOptions {
             "environment rotation {} must be a finite number of degrees",
             self.env_rotation
         );
+        ensure!(
+            self.eta_scale.is_finite() && (0.0..=MAX_ETA_SCALE).contains(&self.eta_scale),
+            "refractive-index scale {} must be in [0, {MAX_ETA_SCALE}]",
+            self.eta_scale
+        );
         if let Some((n, o)) = self.clip {
             ensure!(
                 n.is_finite() && n.length() > 1e-6 && o.is_finite(),
@@ -220,6 +232,7 @@ struct SweepParams {
     specular: [f32; 4],
     clip: [f32; 4],
     background: [f32; 4],
+    refraction: [f32; 4],
 }
 
 /// std140 mirror of `EnvParams` in glsl/sweep_composite.comp.
@@ -289,6 +302,70 @@ impl Planes {
 
     pub fn depth(&self, i: u32) -> f32 {
         self.first_depth + i as f32 * self.spacing
+    }
+}
+
+/// The planes of a frame, after the checks that depend on the camera and the light: the
+/// light must come from the viewer's side, the camera must be outside the volume box, and
+/// dumps must name planes the frame has.
+pub(super) fn check(
+    info: VolumeInfo,
+    camera: &Camera,
+    opts: &RenderOptions,
+    sweep: &SweepOptions,
+) -> Result<Planes> {
+    let (_, forward, _, _) = camera.frame();
+    let travel = -sweep.light.towards.normalize();
+    let forwardness = travel.dot(forward);
+    if forwardness < MIN_FORWARD {
+        bail!(
+            "the light must come from the viewer's side: the sweep runs front to back, so \
+             light travelling against it cannot be propagated (light direction makes {:.1}° \
+             with the view direction; at most {:.1}° is supported)",
+            forwardness.clamp(-1.0, 1.0).acos().to_degrees(),
+            MIN_FORWARD.acos().to_degrees()
+        );
+    }
+    let planes = Planes::for_box(
+        camera,
+        info.half_extent,
+        opts.sample_distance * info.ref_step,
+    )?;
+    for (b, plane) in &sweep.dumps {
+        ensure!(
+            *plane < planes.count,
+            "--dump {}@{plane}: this frame has planes 0..{}",
+            b.name(),
+            planes.count - 1
+        );
+    }
+    Ok(planes)
+}
+
+/// What recording a sweep leaves for after the submission: the plane stats and the
+/// buffers the requested dumps are copied into (alive until the submission completes).
+pub(super) struct SweepRecording {
+    pub stats: SweepStats,
+    pub dumps: Vec<(StateBuffer, u32, Buffer)>,
+}
+
+impl SweepRecording {
+    /// The dumps, once the submission has completed.
+    pub fn read_dumps(&self, width: u32, height: u32) -> Result<Vec<Dump>> {
+        let count = width as usize * height as usize;
+        self.dumps
+            .iter()
+            .map(|(b, plane, buf)| {
+                Ok(Dump {
+                    buffer: *b,
+                    plane: *plane,
+                    depth: self.stats.planes.depth(*plane),
+                    width,
+                    height,
+                    pixels: buf.read_values(count)?,
+                })
+            })
+            .collect()
     }
 }
 
@@ -496,9 +573,18 @@ impl SweepPass {
         pixels * (reads + 6) * STATE_BYTES_PER_PIXEL
     }
 
+    /// The finished frame (linear RGBA32F) once a recording has run.
+    pub fn output(&self) -> &FrameTarget {
+        &self.output
+    }
+
+    /// Record one frame into `rec`: setup, every plane, and the composite into
+    /// [`SweepPass::output`]. Parameters travel in the command stream, so earlier frames
+    /// may still be in flight.
     #[allow(clippy::too_many_arguments)]
-    pub fn render(
+    pub fn record(
         &mut self,
+        rec: &mut Recorder,
         ctx: &Context,
         info: VolumeInfo,
         volume_dims: [u32; 3],
@@ -507,32 +593,10 @@ impl SweepPass {
         sweep: &SweepOptions,
         inputs: [&Image; 3],
         env: &EnvInputs,
-    ) -> Result<(Frame, Vec<Dump>, SweepStats)> {
+    ) -> Result<SweepRecording> {
         let (eye, forward, right, up) = camera.frame();
         let travel = -sweep.light.towards.normalize();
-        let forwardness = travel.dot(forward);
-        if forwardness < MIN_FORWARD {
-            bail!(
-                "the light must come from the viewer's side: the sweep runs front to back, so \
-                 light travelling against it cannot be propagated (light direction makes {:.1}° \
-                 with the view direction; at most {:.1}° is supported)",
-                forwardness.clamp(-1.0, 1.0).acos().to_degrees(),
-                MIN_FORWARD.acos().to_degrees()
-            );
-        }
-        let planes = Planes::for_box(
-            camera,
-            info.half_extent,
-            opts.sample_distance * info.ref_step,
-        )?;
-        for (b, plane) in &sweep.dumps {
-            ensure!(
-                *plane < planes.count,
-                "--dump {}@{plane}: this frame has planes 0..{}",
-                b.name(),
-                planes.count - 1
-            );
-        }
+        let planes = check(info, camera, opts, sweep)?;
         let view_to_world = Mat4::from_cols(
             right.extend(0.0),
             up.extend(0.0),
@@ -583,8 +647,8 @@ impl SweepPass {
             specular: [sweep.roughness, sweep.specular, opts.termination_alpha, 0.0],
             clip: [clip_n.x, clip_n.y, clip_n.z, clip_o],
             background: opts.background,
+            refraction: [sweep.eta_scale, 0.0, 0.0, 0.0],
         };
-        self.params.write(0, bytemuck::bytes_of(&p))?;
         let e = EnvParams {
             info: [
                 if env.enabled { 1.0 } else { 0.0 },
@@ -594,7 +658,6 @@ impl SweepPass {
             ],
             mean: env.mean,
         };
-        self.env_params.write(0, bytemuck::bytes_of(&e))?;
 
         let dump_buffers: Vec<(StateBuffer, u32, Buffer)> = sweep
             .dumps
@@ -610,114 +673,80 @@ impl SweepPass {
             .collect::<Result<_>>()?;
 
         let groups = [self.width.div_ceil(8), self.height.div_ceil(8), 1];
-        let timings: Timings = ctx.execute(|rec| {
-            // The whole frame's GPU time (the benchmark's figure): passes, barriers and the
-            // copy of the image out.
-            rec.begin_scope("frame");
-            for img in inputs.into_iter().chain([env.map, env.sat]) {
-                rec.transition_all(img, Access::Sampled);
-            }
-            rec.begin_scope("sweep setup");
-            rec.transition_many(&self.state_layers(0..2, Access::ComputeStorage));
-            rec.dispatch(&self.setup, &self.setup_set, &[], groups)?;
-            // Both layers become sampled: every draw's set names both (see module docs).
-            rec.transition_many(&self.state_layers(0..2, Access::SampledGeneral));
-            rec.end_scope();
+        rec.update_uniform(&self.params, bytemuck::bytes_of(&p))?;
+        rec.update_uniform(&self.env_params, bytemuck::bytes_of(&e))?;
+        for img in inputs.into_iter().chain([env.map, env.sat]) {
+            rec.transition_all(img, Access::Sampled);
+        }
+        rec.begin_scope("sweep setup");
+        rec.transition_many(&self.state_layers(0..2, Access::ComputeStorage));
+        rec.dispatch(&self.setup, &self.setup_set, &[], groups)?;
+        // Both layers become sampled: every draw's set names both (see module docs).
+        rec.transition_many(&self.state_layers(0..2, Access::SampledGeneral));
+        rec.end_scope();
 
-            rec.begin_scope("sweep");
-            // Bound once: between planes only push constants change.
-            let plane_pipeline = if sweep.floor {
-                &self.floor
-            } else {
-                &self.sweep
-            };
-            rec.bind_graphics(plane_pipeline, &self.sweep_set, self.width, self.height);
-            for i in 0..planes.count {
-                let write = i % 2;
-                let read = 1 - write;
-                // The layer the previous plane wrote becomes sampled (one batched barrier
-                // over the six images); begin_render_pass then makes the layer the previous
-                // plane sampled an attachment (a second one). Nothing else is synchronised.
-                if sweep.drop_barrier_before_plane == Some(i) {
-                    for s in &self.states {
-                        rec.assume_without_barrier(
-                            &s.image,
-                            read..read + 1,
-                            Access::SampledGeneral,
-                        );
-                    }
-                } else {
-                    rec.transition_many(&self.state_layers(read..read + 1, Access::SampledGeneral));
-                }
-                let attachments: Vec<(&Image, u32)> =
-                    self.states.iter().map(|s| (&s.image, write)).collect();
-                rec.begin_render_pass(
-                    &self.render_pass,
-                    &self.framebuffers[write as usize],
-                    &attachments,
-                )?;
-                let push = PlanePush {
-                    plane: i,
-                    read_layer: read,
-                    depth: planes.depth(i),
-                    pad: 0,
-                };
-                rec.draw_fullscreen(plane_pipeline, bytemuck::bytes_of(&push))?;
-                rec.end_render_pass();
-                for (b, plane, buf) in &dump_buffers {
-                    if *plane == i {
-                        rec.copy_image_to_buffer(&self.states[b.index()].image, write, buf);
-                    }
-                }
-            }
-            rec.end_scope();
-
-            rec.begin_scope("composite");
-            let last = (planes.count - 1) % 2;
-            rec.transition_many(&self.state_layers(0..2, Access::SampledGeneral));
-            rec.transition_all(&self.output.image, Access::ComputeStorage);
-            rec.dispatch(
-                &self.composite,
-                &self.composite_set,
-                &last.to_le_bytes(),
-                groups,
-            )?;
-            rec.end_scope();
-            self.output.record_copy(rec);
-            rec.end_scope();
-            Ok(())
-        })?;
-        let pixels = self.output.pixels()?;
-        let count = self.width as usize * self.height as usize;
-        let dumps = dump_buffers
-            .iter()
-            .map(|(b, plane, buf)| {
-                Ok(Dump {
-                    buffer: *b,
-                    plane: *plane,
-                    depth: planes.depth(*plane),
-                    width: self.width,
-                    height: self.height,
-                    pixels: buf.read_values(count)?,
-                })
-            })
-            .collect::<Result<Vec<_>>>()?;
-        let stats = SweepStats {
-            planes,
-            bytes_per_plane: self.bytes_per_plane(sweep.light.softness > 0.0, sweep.specular > 0.0),
+        rec.begin_scope("sweep");
+        // Bound once: between planes only push constants change.
+        let plane_pipeline = if sweep.floor {
+            &self.floor
+        } else {
+            &self.sweep
         };
-        Ok((
-            Frame {
-                width: self.width,
-                height: self.height,
-                pixels,
-                timings,
-                max_steps: planes.count,
-                dumps: Vec::new(),
-                sweep: None,
+        rec.bind_graphics(plane_pipeline, &self.sweep_set, self.width, self.height);
+        for i in 0..planes.count {
+            let write = i % 2;
+            let read = 1 - write;
+            // The layer the previous plane wrote becomes sampled (one batched barrier
+            // over the six images); begin_render_pass then makes the layer the previous
+            // plane sampled an attachment (a second one). Nothing else is synchronised.
+            if sweep.drop_barrier_before_plane == Some(i) {
+                for s in &self.states {
+                    rec.assume_without_barrier(&s.image, read..read + 1, Access::SampledGeneral);
+                }
+            } else {
+                rec.transition_many(&self.state_layers(read..read + 1, Access::SampledGeneral));
+            }
+            let attachments: Vec<(&Image, u32)> =
+                self.states.iter().map(|s| (&s.image, write)).collect();
+            rec.begin_render_pass(
+                &self.render_pass,
+                &self.framebuffers[write as usize],
+                &attachments,
+            )?;
+            let push = PlanePush {
+                plane: i,
+                read_layer: read,
+                depth: planes.depth(i),
+                pad: 0,
+            };
+            rec.draw_fullscreen(plane_pipeline, bytemuck::bytes_of(&push))?;
+            rec.end_render_pass();
+            for (b, plane, buf) in &dump_buffers {
+                if *plane == i {
+                    rec.copy_image_to_buffer(&self.states[b.index()].image, write, buf);
+                }
+            }
+        }
+        rec.end_scope();
+
+        rec.begin_scope("composite");
+        let last = (planes.count - 1) % 2;
+        rec.transition_many(&self.state_layers(0..2, Access::SampledGeneral));
+        rec.transition_all(&self.output.image, Access::ComputeStorage);
+        rec.dispatch(
+            &self.composite,
+            &self.composite_set,
+            &last.to_le_bytes(),
+            groups,
+        )?;
+        rec.end_scope();
+        Ok(SweepRecording {
+            stats: SweepStats {
+                planes,
+                bytes_per_plane: self
+                    .bytes_per_plane(sweep.light.softness > 0.0, sweep.specular > 0.0),
             },
-            dumps,
-            stats,
-        ))
+            dumps: dump_buffers,
+        })
     }
 }

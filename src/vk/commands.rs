@@ -197,6 +197,70 @@ impl Recorder<'_> {
         }
     }
 
+    /// Write `bytes` into a uniform buffer (made with [`Buffer::uniform`]) as part of the
+    /// command stream, between a barrier after every earlier shader read of it and one
+    /// before every later read. Parameters written this way belong to the submission that
+    /// records them, so several submissions may be in flight (the viewer) without a race
+    /// between a host write and a GPU read.
+    pub fn update_uniform(&mut self, buffer: &Buffer, bytes: &[u8]) -> Result<()> {
+        if bytes.is_empty() || bytes.len() % 4 != 0 || bytes.len() > 65536 {
+            bail!(
+                "uniform update of {} bytes: must be a non-zero multiple of 4, at most 65536",
+                bytes.len()
+            );
+        }
+        if bytes.len() as u64 > buffer.size() {
+            bail!(
+                "uniform update of {} bytes overruns a {}-byte buffer",
+                bytes.len(),
+                buffer.size()
+            );
+        }
+        let shaders = vk::PipelineStageFlags2::VERTEX_SHADER
+            | vk::PipelineStageFlags2::FRAGMENT_SHADER
+            | vk::PipelineStageFlags2::COMPUTE_SHADER;
+        let barrier = |src_stage, src_access, dst_stage, dst_access| {
+            vk::BufferMemoryBarrier2::default()
+                .src_stage_mask(src_stage)
+                .src_access_mask(src_access)
+                .dst_stage_mask(dst_stage)
+                .dst_access_mask(dst_access)
+                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .buffer(buffer.raw)
+                .offset(0)
+                .size(vk::WHOLE_SIZE)
+        };
+        // Write-after-read: earlier reads (this or an earlier submission) finish first.
+        let before = [barrier(
+            shaders,
+            vk::AccessFlags2::UNIFORM_READ,
+            vk::PipelineStageFlags2::COPY,
+            vk::AccessFlags2::TRANSFER_WRITE,
+        )];
+        let after = [barrier(
+            vk::PipelineStageFlags2::COPY,
+            vk::AccessFlags2::TRANSFER_WRITE,
+            shaders,
+            vk::AccessFlags2::UNIFORM_READ,
+        )];
+        // SAFETY: recording; the buffer was created with TRANSFER_DST usage (Buffer::uniform)
+        // and the size and alignment were checked above.
+        unsafe {
+            let d = self.device();
+            d.cmd_pipeline_barrier2(
+                self.cmd,
+                &vk::DependencyInfo::default().buffer_memory_barriers(&before),
+            );
+            d.cmd_update_buffer(self.cmd, buffer.raw, 0, bytes);
+            d.cmd_pipeline_barrier2(
+                self.cmd,
+                &vk::DependencyInfo::default().buffer_memory_barriers(&after),
+            );
+        }
+        Ok(())
+    }
+
     /// Bind a compute pipeline with its set, push constants, and dispatch `groups`.
     pub fn dispatch(
         &mut self,
@@ -415,6 +479,101 @@ fn buffer_image_copy(image: &Image, layer: u32) -> vk::BufferImageCopy {
     }
 }
 
+/// The timestamp scopes of a finished recording, resolved into [`Timings`] once the
+/// submission has completed ([`PendingTimings::resolve`]).
+pub struct PendingTimings {
+    scopes: Vec<Scope>,
+    used: u32,
+}
+
+impl PendingTimings {
+    /// Read the timestamps from `queries` (the pool the recording used). Call only after
+    /// the submission has completed.
+    pub(crate) fn resolve(self, ctx: &Context, queries: Option<vk::QueryPool>) -> Result<Timings> {
+        let mut timings = Timings::default();
+        let (Some(q), true) = (queries, self.used > 0) else {
+            return Ok(timings);
+        };
+        let mut raw = vec![0u64; self.used as usize];
+        // SAFETY: `used` queries were written and the work has completed.
+        unsafe {
+            ctx.device().get_query_pool_results(
+                q,
+                0,
+                &mut raw,
+                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+            )
+        }?;
+        let period = ctx.info().limits.timestamp_period as f64;
+        for s in self.scopes {
+            if let (Some(e), true) = (s.end, s.begin != u32::MAX) {
+                let ticks = raw[e as usize].saturating_sub(raw[s.begin as usize]);
+                timings.scopes.push((s.name, ticks as f64 * period * 1e-6));
+            }
+        }
+        Ok(timings)
+    }
+}
+
+/// A timestamp query pool large enough for one recording's scopes (None when the device
+/// has no timestamps).
+pub(crate) fn create_query_pool(ctx: &Context) -> Result<Option<vk::QueryPool>> {
+    if !ctx.info().timestamps {
+        return Ok(None);
+    }
+    let info = vk::QueryPoolCreateInfo::default()
+        .query_type(vk::QueryType::TIMESTAMP)
+        .query_count(MAX_QUERIES);
+    // SAFETY: valid device.
+    Ok(Some(unsafe {
+        ctx.device().create_query_pool(&info, None)
+    }?))
+}
+
+impl<'a> Recorder<'a> {
+    /// Begin recording into `cmd` (a reset or fresh primary command buffer of this
+    /// context's pool), resetting `queries` for the scopes.
+    pub(crate) fn begin(
+        ctx: &'a Context,
+        cmd: vk::CommandBuffer,
+        queries: Option<vk::QueryPool>,
+    ) -> Result<Self> {
+        let device = ctx.device();
+        // SAFETY: the caller owns `cmd` and it is not in use by the GPU.
+        unsafe {
+            device.begin_command_buffer(
+                cmd,
+                &vk::CommandBufferBeginInfo::default()
+                    .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+            )?;
+            if let Some(q) = queries {
+                device.cmd_reset_query_pool(cmd, q, 0, MAX_QUERIES);
+            }
+        }
+        Ok(Recorder {
+            ctx,
+            cmd,
+            queries,
+            next_query: 0,
+            scopes: Vec::new(),
+            open: Vec::new(),
+        })
+    }
+
+    /// Close any open scopes and end the command buffer, ready for submission.
+    pub(crate) fn finish(mut self) -> Result<PendingTimings> {
+        while !self.open.is_empty() {
+            self.end_scope();
+        }
+        // SAFETY: recording, every scope closed.
+        unsafe { self.device().end_command_buffer(self.cmd) }?;
+        Ok(PendingTimings {
+            scopes: std::mem::take(&mut self.scopes),
+            used: self.next_query,
+        })
+    }
+}
+
 impl Context {
     /// Record a command buffer with `record`, submit it, wait for it, and return the GPU
     /// time of each scope the recording opened.
@@ -432,44 +591,21 @@ impl Context {
             // SAFETY: the pool lock is held.
             unsafe { device.allocate_command_buffers(&alloc) }?[0]
         };
-        let queries = if self.info().timestamps {
-            let info = vk::QueryPoolCreateInfo::default()
-                .query_type(vk::QueryType::TIMESTAMP)
-                .query_count(MAX_QUERIES);
-            // SAFETY: valid device.
-            Some(unsafe { device.create_query_pool(&info, None) }?)
-        } else {
-            None
+        let queries = match create_query_pool(self) {
+            Ok(q) => q,
+            Err(e) => {
+                let _guard = self.shared.command_pool.lock().unwrap();
+                // SAFETY: never submitted.
+                unsafe { device.free_command_buffers(pool, &[cmd]) };
+                return Err(e);
+            }
         };
         let result = (|| -> Result<Timings> {
-            // SAFETY: fresh command buffer.
-            unsafe {
-                device.begin_command_buffer(
-                    cmd,
-                    &vk::CommandBufferBeginInfo::default()
-                        .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
-                )?;
-                if let Some(q) = queries {
-                    device.cmd_reset_query_pool(cmd, q, 0, MAX_QUERIES);
-                }
-            }
-            let mut rec = Recorder {
-                ctx: self,
-                cmd,
-                queries,
-                next_query: 0,
-                scopes: Vec::new(),
-                open: Vec::new(),
-            };
+            let mut rec = Recorder::begin(self, cmd, queries)?;
             record(&mut rec)?;
-            while !rec.open.is_empty() {
-                rec.end_scope();
-            }
-            let used = rec.next_query;
-            let scopes = std::mem::take(&mut rec.scopes);
+            let pending = rec.finish()?;
             // SAFETY: recording finished; fence waited before anything is read or freed.
             unsafe {
-                device.end_command_buffer(cmd)?;
                 let fence = device.create_fence(&vk::FenceCreateInfo::default(), None)?;
                 let cmd_infos = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
                 let submit = vk::SubmitInfo2::default().command_buffer_infos(&cmd_infos);
@@ -482,27 +618,7 @@ impl Context {
                 device.destroy_fence(fence, None);
                 waited.context("GPU submission failed (device lost?)")?;
             }
-            let mut timings = Timings::default();
-            if let (Some(q), true) = (queries, used > 0) {
-                let mut raw = vec![0u64; used as usize];
-                // SAFETY: `used` queries were written and the work has completed.
-                unsafe {
-                    device.get_query_pool_results(
-                        q,
-                        0,
-                        &mut raw,
-                        vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
-                    )
-                }?;
-                let period = self.info().limits.timestamp_period as f64;
-                for s in scopes {
-                    if let (Some(e), true) = (s.end, s.begin != u32::MAX) {
-                        let ticks = raw[e as usize].saturating_sub(raw[s.begin as usize]);
-                        timings.scopes.push((s.name, ticks as f64 * period * 1e-6));
-                    }
-                }
-            }
-            Ok(timings)
+            pending.resolve(self, queries)
         })();
         // SAFETY: the submission (if any) has completed or failed; nothing references these.
         unsafe {

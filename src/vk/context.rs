@@ -1,8 +1,11 @@
 //! Instance, physical-device choice, logical device, allocator and the validation messenger.
 //!
-//! Everything is headless: no surface extension is requested here, so the same code runs on a
-//! machine with no window system (CI on lavapipe). A [`Context`] is a cheap handle (an `Arc`);
-//! every resource keeps one, so the device outlives whatever was made from it.
+//! Headless by default: no surface extension is requested, so the same code runs on a machine
+//! with no window system (CI on lavapipe). With [`ContextDesc::window`] the instance gets the
+//! window system's surface extensions, the surface is made with the instance, only devices
+//! that can present to it are considered, and the device enables VK_KHR_swapchain (the
+//! swapchain itself is `super::swapchain`). A [`Context`] is a cheap handle (an `Arc`); every
+//! resource keeps one, so the device outlives whatever was made from it.
 
 use std::ffi::{c_void, CStr, CString};
 use std::mem::ManuallyDrop;
@@ -11,16 +14,36 @@ use std::sync::{Arc, Mutex};
 use anyhow::{anyhow, bail, Context as _, Result};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+use raw_window_handle::{HasDisplayHandle, HasWindowHandle};
 
 const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
 
+/// A window the context presents to: anything with raw display and window handles (a
+/// winit `Window`). The context keeps it alive until its surface is destroyed.
+pub trait WindowSource: HasDisplayHandle + HasWindowHandle + Send + Sync {}
+impl<T: HasDisplayHandle + HasWindowHandle + Send + Sync> WindowSource for T {}
+
 /// How to build a [`Context`].
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Default)]
 pub struct ContextDesc {
     /// Turn on VK_LAYER_KHRONOS_validation with synchronization validation.
     pub validate: bool,
     /// Device name (case-insensitive substring) or index into the enumeration order.
     pub device: Option<String>,
+    /// Present to this window: enables the surface instance extensions it needs
+    /// (ash-window) and VK_KHR_swapchain, creates its surface, and chooses only among
+    /// devices whose graphics+compute queue can present to it. None = headless.
+    pub window: Option<Arc<dyn WindowSource>>,
+}
+
+impl std::fmt::Debug for ContextDesc {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ContextDesc")
+            .field("validate", &self.validate)
+            .field("device", &self.device)
+            .field("window", &self.window.is_some())
+            .finish()
+    }
 }
 
 impl ContextDesc {
@@ -32,6 +55,7 @@ impl ContextDesc {
         Self {
             validate: validate || env,
             device,
+            window: None,
         }
     }
 }
@@ -96,6 +120,15 @@ fn type_rank(t: vk::PhysicalDeviceType) -> u32 {
     }
 }
 
+/// The window surface of a presenting context, destroyed before the instance.
+pub(crate) struct SurfaceState {
+    pub(crate) loader: ash::khr::surface::Instance,
+    pub(crate) raw: vk::SurfaceKHR,
+    pub(crate) swapchain_loader: ash::khr::swapchain::Device,
+    // Keeps the window alive as long as the surface exists.
+    _window: Arc<dyn WindowSource>,
+}
+
 pub(crate) struct Shared {
     _entry: ash::Entry,
     pub(crate) instance: ash::Instance,
@@ -112,6 +145,8 @@ pub(crate) struct Shared {
     validation: Arc<ValidationLog>,
     pub(crate) info: DeviceInfo,
     loader_version: u32,
+    pub(crate) queue_family: u32,
+    pub(crate) surface: Option<SurfaceState>,
 }
 
 /// A Vulkan 1.3 device with one graphics+compute queue.
@@ -167,7 +202,7 @@ impl Context {
     /// List the devices the loader sees, in enumeration order.
     pub fn list_devices() -> Result<Vec<DeviceInfo>> {
         let entry = load_entry()?;
-        let instance = create_instance(&entry, false, false)?;
+        let instance = create_instance(&entry, false, false, &[])?;
         let result = (|| {
             // SAFETY: valid instance.
             let physicals = unsafe { instance.enumerate_physical_devices() }?;
@@ -209,7 +244,31 @@ impl Context {
             );
         }
 
-        let instance = create_instance(&entry, desc.validate, have_debug_utils)?;
+        let window_exts: &[*const std::ffi::c_char] = match &desc.window {
+            Some(w) => {
+                let display = w
+                    .display_handle()
+                    .map_err(|e| anyhow!("the window has no display handle: {e}"))?;
+                ash_window::enumerate_required_extensions(display.as_raw()).context(
+                    "this window system has no Vulkan surface extension (X11 and Wayland do)",
+                )?
+            }
+            None => &[],
+        };
+        for &ext in window_exts {
+            // SAFETY: ash-window returns pointers to static NUL-terminated names.
+            let name = unsafe { CStr::from_ptr(ext) };
+            if !exts
+                .iter()
+                .any(|e| e.extension_name_as_c_str().ok() == Some(name))
+            {
+                bail!(
+                    "the Vulkan loader lacks the instance extension {} needed to show a window",
+                    name.to_string_lossy()
+                );
+            }
+        }
+        let instance = create_instance(&entry, desc.validate, have_debug_utils, window_exts)?;
         let validation = Arc::new(ValidationLog::default());
         let (debug_instance, messenger) = if have_debug_utils {
             let di = ash::ext::debug_utils::Instance::new(&entry, &instance);
@@ -233,8 +292,33 @@ impl Context {
             (None, vk::DebugUtilsMessengerEXT::null())
         };
 
-        let built = Self::create_device(&instance, desc);
-        let (physical, info, device, queue_family) = match built {
+        let surface_loader = ash::khr::surface::Instance::new(&entry, &instance);
+        let surface = match &desc.window {
+            // SAFETY: the handles come from a live window that the context keeps alive (in
+            // SurfaceState) until the surface is destroyed; the instance has the extensions
+            // ash-window asked for.
+            Some(w) => match (w.display_handle(), w.window_handle()) {
+                (Ok(d), Ok(h)) => unsafe {
+                    ash_window::create_surface(&entry, &instance, d.as_raw(), h.as_raw(), None)
+                }
+                .context("creating the window's Vulkan surface"),
+                (Err(e), _) | (_, Err(e)) => Err(anyhow!("the window has no handle: {e}")),
+            }
+            .map(Some),
+            None => Ok(None),
+        };
+        let built = surface.and_then(|surface| {
+            let target = surface.map(|s| (&surface_loader, s));
+            Self::create_device(&instance, desc, target)
+                .map(|d| (d, surface))
+                .inspect_err(|_| {
+                    if let Some(s) = surface {
+                        // SAFETY: nothing else uses the surface yet.
+                        unsafe { surface_loader.destroy_surface(s, None) };
+                    }
+                })
+        });
+        let ((physical, info, device, queue_family), surface) = match built {
             Ok(v) => v,
             Err(e) => {
                 // SAFETY: nothing else was created from the instance.
@@ -246,6 +330,15 @@ impl Context {
                 }
                 return Err(e);
             }
+        };
+        let surface = match (surface, &desc.window) {
+            (Some(raw), Some(window)) => Some(SurfaceState {
+                loader: surface_loader,
+                raw,
+                swapchain_loader: ash::khr::swapchain::Device::new(&instance, &device),
+                _window: window.clone(),
+            }),
+            _ => None,
         };
         // SAFETY: family index was chosen from this device's queue families.
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
@@ -281,6 +374,8 @@ impl Context {
                 validation,
                 info,
                 loader_version,
+                queue_family,
+                surface,
             }),
         })
     }
@@ -288,6 +383,7 @@ impl Context {
     fn create_device(
         instance: &ash::Instance,
         desc: &ContextDesc,
+        surface: Option<(&ash::khr::surface::Instance, vk::SurfaceKHR)>,
     ) -> Result<(vk::PhysicalDevice, DeviceInfo, ash::Device, u32)> {
         // SAFETY: valid instance.
         let physicals = unsafe { instance.enumerate_physical_devices() }?;
@@ -302,16 +398,40 @@ impl Context {
             .enumerate()
             .map(|(i, &p)| query_info(instance, p, i))
             .collect();
+        // With a window, a device qualifies only if its graphics+compute family can present
+        // to the surface and it has VK_KHR_swapchain.
+        let presents = |i: usize| -> bool {
+            let Some((loader, surface)) = surface else {
+                return true;
+            };
+            queue_family(instance, physicals[i], Some((loader, surface))).is_some()
+                && has_device_extension(instance, physicals[i], ash::khr::swapchain::NAME)
+        };
         let chosen = match &desc.device {
-            Some(sel) => select_device(&infos, sel)?,
+            Some(sel) => {
+                let i = select_device(&infos, sel)?;
+                if !presents(i) {
+                    bail!(
+                        "device '{}' cannot present to this window (no queue with graphics, \
+                         compute and presentation, or no VK_KHR_swapchain)",
+                        infos[i].name
+                    );
+                }
+                i
+            }
             None => infos
                 .iter()
-                .filter(|i| i.api_version >= vk::API_VERSION_1_3)
+                .filter(|i| i.api_version >= vk::API_VERSION_1_3 && presents(i.index))
                 .max_by_key(|i| (type_rank(i.device_type), usize::MAX - i.index))
                 .map(|i| i.index)
                 .ok_or_else(|| {
                     anyhow!(
-                        "no Vulkan 1.3 device found; devices seen: {}",
+                        "no Vulkan 1.3 device{} found; devices seen: {}",
+                        if surface.is_some() {
+                            " that can present to this window"
+                        } else {
+                            ""
+                        },
                         device_list(&infos)
                     )
                 })?,
@@ -327,14 +447,8 @@ impl Context {
         let physical = physicals[chosen];
         // SAFETY: valid physical device.
         let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
-        let family = families
-            .iter()
-            .position(|f| {
-                f.queue_flags
-                    .contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE)
-            })
-            .ok_or_else(|| anyhow!("device '{}' has no graphics+compute queue", info.name))?
-            as u32;
+        let family = queue_family(instance, physical, surface)
+            .ok_or_else(|| anyhow!("device '{}' has no graphics+compute queue", info.name))?;
         let mut info = info;
         info.timestamps = info.limits.timestamp_compute_and_graphics == vk::TRUE
             && families[family as usize].timestamp_valid_bits > 0;
@@ -355,8 +469,14 @@ impl Context {
         let mut enable13 = vk::PhysicalDeviceVulkan13Features::default()
             .synchronization2(true)
             .maintenance4(true);
+        let device_exts: Vec<*const std::ffi::c_char> = if surface.is_some() {
+            vec![ash::khr::swapchain::NAME.as_ptr()]
+        } else {
+            vec![]
+        };
         let device_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_infos)
+            .enabled_extension_names(&device_exts)
             .push_next(&mut enable13);
         // SAFETY: create info references locals that outlive the call.
         let device = unsafe { instance.create_device(physical, &device_info, None) }
@@ -427,6 +547,10 @@ impl Drop for Shared {
             self.device
                 .destroy_command_pool(*self.command_pool.get_mut().unwrap(), None);
             self.device.destroy_device(None);
+            // Every swapchain holds a Context, so none is left on the surface.
+            if let Some(s) = &self.surface {
+                s.loader.destroy_surface(s.raw, None);
+            }
             if let Some(di) = &self.debug_instance {
                 di.destroy_debug_utils_messenger(self.messenger, None);
             }
@@ -435,7 +559,12 @@ impl Drop for Shared {
     }
 }
 
-fn create_instance(entry: &ash::Entry, validate: bool, debug_utils: bool) -> Result<ash::Instance> {
+fn create_instance(
+    entry: &ash::Entry,
+    validate: bool,
+    debug_utils: bool,
+    extra_extensions: &[*const std::ffi::c_char],
+) -> Result<ash::Instance> {
     let app = vk::ApplicationInfo::default()
         .application_name(c"refrakt")
         .engine_name(c"refrakt")
@@ -449,6 +578,7 @@ fn create_instance(entry: &ash::Entry, validate: bool, debug_utils: bool) -> Res
     if debug_utils {
         exts.push(ash::ext::debug_utils::NAME.as_ptr());
     }
+    exts.extend_from_slice(extra_extensions);
     // Synchronization validation is off by default in the layer; it is the check that
     // vouches for our barriers (plane sweep, compute passes), so it is always on with
     // --validate.
@@ -463,6 +593,46 @@ fn create_instance(entry: &ash::Entry, validate: bool, debug_utils: bool) -> Res
     }
     // SAFETY: create info references locals that outlive the call.
     unsafe { entry.create_instance(&info, None) }.context("creating the Vulkan instance")
+}
+
+/// The first queue family with graphics and compute (and presentation to `surface`, if
+/// given).
+fn queue_family(
+    instance: &ash::Instance,
+    physical: vk::PhysicalDevice,
+    surface: Option<(&ash::khr::surface::Instance, vk::SurfaceKHR)>,
+) -> Option<u32> {
+    // SAFETY: valid physical device.
+    let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
+    families.iter().enumerate().find_map(|(i, f)| {
+        let i = i as u32;
+        let usable = f
+            .queue_flags
+            .contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE);
+        let presents = match surface {
+            // SAFETY: valid physical device, family index and surface of this instance.
+            Some((loader, s)) => {
+                unsafe { loader.get_physical_device_surface_support(physical, i, s) }
+                    .unwrap_or(false)
+            }
+            None => true,
+        };
+        (usable && presents).then_some(i)
+    })
+}
+
+fn has_device_extension(
+    instance: &ash::Instance,
+    physical: vk::PhysicalDevice,
+    name: &CStr,
+) -> bool {
+    // SAFETY: valid physical device.
+    unsafe { instance.enumerate_device_extension_properties(physical) }
+        .map(|exts| {
+            exts.iter()
+                .any(|e| e.extension_name_as_c_str().ok() == Some(name))
+        })
+        .unwrap_or(false)
 }
 
 fn query_info(instance: &ash::Instance, p: vk::PhysicalDevice, index: usize) -> DeviceInfo {

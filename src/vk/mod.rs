@@ -3,24 +3,28 @@
 //!
 //! Safety model: every object holds a [`Context`] (an `Arc` of the device), so the device
 //! outlives its objects; every submission is waited for before [`Context::execute`]
-//! returns, so dropping a resource after use never races the GPU.
+//! returns, so dropping a resource after use never races the GPU. The one exception is
+//! [`Swapchain::frame`], which returns with the frame in flight: its caller keeps what the
+//! frame uses alive and calls [`Swapchain::wait_idle`] before freeing any of it.
 
 mod commands;
 mod context;
 mod graphics;
 mod pipeline;
 mod resources;
+mod swapchain;
 
 pub use ash::vk::Format;
 pub use commands::{Recorder, Timings};
 pub use context::{
-    device_type_name, version_string, Context, ContextDesc, DeviceInfo, ValidationLog,
+    device_type_name, version_string, Context, ContextDesc, DeviceInfo, ValidationLog, WindowSource,
 };
 pub use graphics::{Framebuffer, GraphicsPipeline, RenderPass};
 pub use pipeline::{Binding, ComputePipeline, DescriptorSet};
 pub use resources::{
     format_size, Access, Buffer, Filter, Image, ImageDesc, ImageKind, LayerView, Memory, Sampler,
 };
+pub use swapchain::{FrameStatus, Swapchain, SwapchainDesc, FRAMES_IN_FLIGHT};
 
 /// Usage flags re-exported so callers need not import ash.
 pub mod usage {

@@ -13,6 +13,17 @@ use gpu_allocator::MemoryLocation;
 
 use super::Context;
 
+/// The stage at which a frame waits for its swapchain image to be acquired; the first
+/// barrier on an [`Access::Acquired`] image starts from it.
+pub(crate) const ACQUIRE_WAIT_STAGE: vk::PipelineStageFlags2 =
+    vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT;
+
+static NEXT_IMAGE_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+
+fn next_image_id() -> u64 {
+    NEXT_IMAGE_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+}
+
 /// Where a buffer lives.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Memory {
@@ -84,13 +95,14 @@ impl Buffer {
         })
     }
 
-    /// A host-written uniform buffer for one `T` (std140 layout is the caller's business).
+    /// A device-local uniform buffer for one `T` (std140 layout is the caller's business),
+    /// written in the command stream with [`crate::vk::Recorder::update_uniform`].
     pub fn uniform<T>(ctx: &Context, name: &str) -> Result<Self> {
         Self::new(
             ctx,
             std::mem::size_of::<T>() as u64,
-            vk::BufferUsageFlags::UNIFORM_BUFFER,
-            Memory::Upload,
+            vk::BufferUsageFlags::UNIFORM_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            Memory::Gpu,
             name,
         )
     }
@@ -178,6 +190,13 @@ pub enum Access {
     AttachmentGeneral,
     /// Sampled from a fragment or compute shader, in GENERAL layout.
     SampledGeneral,
+    /// A swapchain image just acquired: its old contents are discarded (UNDEFINED layout),
+    /// and the stage is the one the acquire semaphore is waited at, so the first barrier
+    /// chains with that wait.
+    Acquired,
+    /// Handed to the presentation engine (PRESENT_SRC_KHR); the submission's signal
+    /// semaphore, not a pipeline stage, orders what comes after.
+    Present,
 }
 
 impl Access {
@@ -190,6 +209,8 @@ impl Access {
             Access::ComputeStorage => vk::ImageLayout::GENERAL,
             Access::ColorAttachment => vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
             Access::AttachmentGeneral | Access::SampledGeneral => vk::ImageLayout::GENERAL,
+            Access::Acquired => vk::ImageLayout::UNDEFINED,
+            Access::Present => vk::ImageLayout::PRESENT_SRC_KHR,
         }
     }
     pub(crate) fn stage(self) -> vk::PipelineStageFlags2 {
@@ -205,6 +226,8 @@ impl Access {
             Access::SampledGeneral => {
                 vk::PipelineStageFlags2::COMPUTE_SHADER | vk::PipelineStageFlags2::FRAGMENT_SHADER
             }
+            Access::Acquired => ACQUIRE_WAIT_STAGE,
+            Access::Present => vk::PipelineStageFlags2::NONE,
         }
     }
     pub(crate) fn access(self) -> vk::AccessFlags2 {
@@ -223,12 +246,17 @@ impl Access {
                 vk::AccessFlags2::COLOR_ATTACHMENT_WRITE | vk::AccessFlags2::COLOR_ATTACHMENT_READ
             }
             Access::SampledGeneral => vk::AccessFlags2::SHADER_SAMPLED_READ,
+            Access::Acquired | Access::Present => vk::AccessFlags2::NONE,
         }
     }
     pub(crate) fn writes(self) -> bool {
         !matches!(
             self,
-            Access::Sampled | Access::TransferSrc | Access::Undefined
+            Access::Sampled
+                | Access::TransferSrc
+                | Access::Undefined
+                | Access::Acquired
+                | Access::Present
         )
     }
 }
@@ -259,6 +287,10 @@ pub struct Image {
     pub(crate) desc: ImageDesc,
     pub(crate) layer_state: Mutex<Vec<Access>>,
     name: String,
+    /// Unique for the process, never reused (unlike Vulkan handles).
+    id: u64,
+    /// False for swapchain images: the swapchain owns them, only the view is ours.
+    owned: bool,
 }
 
 /// Bytes per texel of the formats refrakt uses.
@@ -266,7 +298,13 @@ pub fn format_size(format: vk::Format) -> Result<u32> {
     Ok(match format {
         vk::Format::R8_UNORM => 1,
         vk::Format::R16_UNORM | vk::Format::R16_SFLOAT => 2,
-        vk::Format::R32_SFLOAT | vk::Format::R8G8B8A8_UNORM | vk::Format::R8G8B8A8_SRGB => 4,
+        vk::Format::R32_SFLOAT
+        | vk::Format::R8G8B8A8_UNORM
+        | vk::Format::R8G8B8A8_SRGB
+        | vk::Format::B8G8R8A8_UNORM
+        | vk::Format::B8G8R8A8_SRGB
+        | vk::Format::A8B8G8R8_UNORM_PACK32
+        | vk::Format::A8B8G8R8_SRGB_PACK32 => 4,
         vk::Format::R16G16B16A16_SFLOAT | vk::Format::R32G32_SFLOAT => 8,
         vk::Format::R32G32B32A32_SFLOAT => 16,
         other => bail!("format {other:?} has no known texel size"),
@@ -353,7 +391,55 @@ impl Image {
             desc,
             layer_state: Mutex::new(vec![Access::Undefined; layers]),
             name: name.to_owned(),
+            id: next_image_id(),
+            owned: true,
         })
+    }
+
+    /// Wrap an image the swapchain owns: a view is created (and destroyed with the
+    /// wrapper), the image and its memory are left to the swapchain.
+    pub(crate) fn from_swapchain(
+        ctx: &Context,
+        raw: vk::Image,
+        format: vk::Format,
+        extent: [u32; 2],
+        usage: vk::ImageUsageFlags,
+        name: &str,
+    ) -> Result<Self> {
+        let view = create_view(ctx, raw, vk::ImageViewType::TYPE_2D, format, 0, 1)?;
+        ctx.set_name(raw, name);
+        ctx.set_name(view, name);
+        Ok(Self {
+            ctx: ctx.clone(),
+            raw,
+            view,
+            allocation: None,
+            desc: ImageDesc {
+                kind: ImageKind::D2,
+                format,
+                extent: [extent[0], extent[1], 1],
+                layers: 1,
+                usage,
+            },
+            layer_state: Mutex::new(vec![Access::Undefined]),
+            name: name.to_owned(),
+            id: next_image_id(),
+            owned: false,
+        })
+    }
+
+    /// An identity that is never reused in this process, for caches keyed by image (a
+    /// Vulkan handle can come back for a new image after the old one is destroyed).
+    pub fn id(&self) -> u64 {
+        self.id
+    }
+
+    /// Record that every layer is now in `access` without a barrier: for images whose
+    /// state changed outside any recording (a swapchain image when it is acquired).
+    pub(crate) fn reset_state(&self, access: Access) {
+        for s in self.layer_state.lock().unwrap().iter_mut() {
+            *s = access;
+        }
     }
 
     pub fn desc(&self) -> &ImageDesc {
@@ -424,7 +510,9 @@ impl Drop for Image {
         // SAFETY: GPU work using the image has been waited for (all submissions are).
         unsafe {
             self.ctx.device().destroy_image_view(self.view, None);
-            self.ctx.device().destroy_image(self.raw, None);
+            if self.owned {
+                self.ctx.device().destroy_image(self.raw, None);
+            }
         }
         if let Some(a) = self.allocation.take() {
             let _ = self.ctx.shared.allocator.lock().unwrap().free(a);

@@ -15,6 +15,7 @@ pub fn context() -> Context {
     Context::new(&ContextDesc {
         validate: true,
         device: std::env::var("REFRAKT_DEVICE").ok(),
+        ..Default::default()
     })
     .expect("creating a validated Vulkan context (is scripts/setup.sh run?)")
 }

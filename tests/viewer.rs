@@ -1,0 +1,379 @@
+//! `refrakt view` (issue 8). The GPU tone-map pass the window shows must equal the PNG
+//! path's CPU tone mapping (headless, always runs), and the viewer itself, in a real X11
+//! window under Xvfb with validation on, must run frames, survive a resize and take a
+//! screenshot equal to the headless render of the same scene and camera within 1/255.
+//!
+//! The window test starts its own `Xvfb` (a free display picked by Xvfb itself,
+//! `-displayfd`) when DISPLAY is unset, and kills it at the end. Without Xvfb it prints a
+//! skip line, or fails when REFRAKT_REQUIRE_DISPLAY=1 (CI sets up Xvfb with
+//! scripts/setup.sh).
+
+mod common;
+
+use std::io::{BufRead, BufReader};
+use std::path::Path;
+use std::process::{Child, Command, Output, Stdio};
+
+use refrakt::output::{self, ToneMap, ToneOperator};
+use refrakt::render::{Camera, Model, RenderOptions, Renderer, ToneMapPass};
+use refrakt::transfer::TransferFunctions;
+use refrakt::vk::{self, Framebuffer, Image, ImageDesc, ImageKind};
+use refrakt::volume::procedural;
+
+/// Tone map `frame` with the GPU pass into an RGBA8 UNORM image and read it back.
+fn gpu_tonemap(
+    ctx: &vk::Context,
+    renderer: &mut Renderer,
+    model: Model,
+    camera: &Camera,
+    opts: &RenderOptions,
+    tone: &ToneMap,
+) -> (Vec<u8>, Vec<[f32; 4]>) {
+    let target = Image::new(
+        ctx,
+        ImageDesc {
+            kind: ImageKind::D2,
+            format: vk::Format::R8G8B8A8_UNORM,
+            extent: [opts.width, opts.height, 1],
+            layers: 1,
+            usage: vk::usage::COLOR_ATTACHMENT | vk::usage::TRANSFER_SRC,
+        },
+        "tonemap target",
+    )
+    .unwrap();
+    let mut pass = ToneMapPass::new(ctx, vk::Format::R8G8B8A8_UNORM, false).unwrap();
+    let view = target.layer_view(0).unwrap();
+    let fb = Framebuffer::new(
+        ctx,
+        pass.render_pass(),
+        &[&view],
+        opts.width,
+        opts.height,
+        "tonemap fb",
+    )
+    .unwrap();
+    let linear = renderer.render(model, camera, opts).unwrap().pixels;
+    ctx.execute(|rec| {
+        let out = renderer.record(rec, model, camera, opts)?;
+        pass.record(rec, out.image, &target, &fb, tone)
+    })
+    .unwrap();
+    (ctx.read_image(&target, 0).unwrap(), linear)
+}
+
+fn max_difference(a: &[u8], b: &[u8]) -> (u8, usize) {
+    assert_eq!(a.len(), b.len());
+    let mut worst = (0u8, 0usize);
+    for (i, (x, y)) in a.iter().zip(b).enumerate() {
+        let d = x.abs_diff(*y);
+        if d > worst.0 {
+            worst = (d, i);
+        }
+    }
+    worst
+}
+
+#[test]
+fn gpu_tone_mapping_matches_the_png_path() {
+    common::with_context(|ctx| {
+        let volume = procedural::sphere_on_floor(24).unwrap();
+        let tf = TransferFunctions::load("glass-floor").unwrap();
+        let mut renderer = Renderer::new(ctx, &volume, &tf).unwrap();
+        let env = refrakt::environment::EnvironmentMap::procedural(256).unwrap();
+        renderer.set_environment(Some(&env)).unwrap();
+        let camera = Camera::default();
+        let opts = RenderOptions {
+            width: 48,
+            height: 40,
+            ..Default::default()
+        };
+        // Every operator, and exposures that push much of the image past 1 and far below.
+        for tone in [
+            ToneMap::default(),
+            ToneMap {
+                exposure: 1.5,
+                operator: ToneOperator::Reinhard,
+            },
+            ToneMap {
+                exposure: -2.0,
+                operator: ToneOperator::None,
+            },
+            ToneMap {
+                exposure: 3.0,
+                operator: ToneOperator::Aces,
+            },
+        ] {
+            for model in [Model::Refract, Model::Ea] {
+                let (gpu, linear) = gpu_tonemap(ctx, &mut renderer, model, &camera, &opts, &tone);
+                let frame = refrakt::render::Frame {
+                    width: opts.width,
+                    height: opts.height,
+                    pixels: linear,
+                    timings: Default::default(),
+                    max_steps: 0,
+                    dumps: Vec::new(),
+                    sweep: None,
+                };
+                let cpu = output::to_srgb8(&frame, &tone);
+                let (d, at) = max_difference(&gpu, &cpu);
+                assert!(
+                    d <= 1,
+                    "{tone:?} {model:?}: GPU {} vs CPU {} at byte {at} (pixel {:?})",
+                    gpu[at],
+                    cpu[at],
+                    frame.pixels[at / 4]
+                );
+            }
+        }
+    });
+}
+
+#[test]
+fn recorded_frames_equal_rendered_frames() {
+    // Renderer::record (the viewer's path) leaves in its image exactly what render reads
+    // back, also when several recordings share a submission.
+    common::with_context(|ctx| {
+        let volume = procedural::sphere(20, 0.35, 1.0).unwrap();
+        let tf = TransferFunctions::load("glass").unwrap();
+        let mut renderer = Renderer::new(ctx, &volume, &tf).unwrap();
+        let camera = Camera::default();
+        let opts = RenderOptions {
+            width: 24,
+            height: 20,
+            ..Default::default()
+        };
+        let expected = renderer.render(Model::Refract, &camera, &opts).unwrap();
+        let readback = vk::Buffer::readback(ctx, 24 * 20 * 16, "readback").unwrap();
+        ctx.execute(|rec| {
+            renderer.record(rec, Model::Ea, &camera, &opts)?;
+            renderer.record(rec, Model::Refract, &camera, &opts)?;
+            let out = renderer.record(rec, Model::Refract, &camera, &opts)?;
+            rec.copy_image_to_buffer(out.image, 0, &readback);
+            Ok(())
+        })
+        .unwrap();
+        let got: Vec<[f32; 4]> = readback.read_values(24 * 20).unwrap();
+        assert_eq!(got, expected.pixels);
+    });
+}
+
+/// An Xvfb this test started; killed (and reaped) on drop.
+struct Xvfb {
+    child: Child,
+    display: String,
+}
+
+impl Drop for Xvfb {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// The display to use: $DISPLAY, else a fresh Xvfb. None (after a skip line) when there
+/// is neither and REFRAKT_REQUIRE_DISPLAY is not 1.
+fn display() -> Option<(String, Option<Xvfb>)> {
+    if let Ok(d) = std::env::var("DISPLAY") {
+        if !d.is_empty() {
+            return Some((d, None));
+        }
+    }
+    let spawned = Command::new("Xvfb")
+        .args([
+            "-displayfd",
+            "1",
+            "-screen",
+            "0",
+            "1024x768x24",
+            "-nolisten",
+            "tcp",
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn();
+    let mut child = match spawned {
+        Ok(c) => c,
+        Err(e) => {
+            let required = std::env::var("REFRAKT_REQUIRE_DISPLAY").as_deref() == Ok("1");
+            assert!(
+                !required,
+                "REFRAKT_REQUIRE_DISPLAY=1 but Xvfb cannot be started ({e}); install it \
+                 (Debian package xvfb) with scripts/setup.sh"
+            );
+            println!(
+                "skipped: no DISPLAY and no Xvfb ({e}); install xvfb (scripts/setup.sh) to \
+                 test the viewer"
+            );
+            return None;
+        }
+    };
+    // Xvfb writes the display number it chose once it accepts connections.
+    let mut line = String::new();
+    let stdout = child.stdout.take().expect("piped");
+    BufReader::new(stdout)
+        .read_line(&mut line)
+        .expect("reading Xvfb's display number");
+    let n: u32 = line
+        .trim()
+        .parse()
+        .unwrap_or_else(|_| panic!("Xvfb printed '{line}' instead of a display number"));
+    let display = format!(":{n}");
+    Some((
+        display.clone(),
+        Some(Xvfb {
+            child,
+            display: display.clone(),
+        }),
+    ))
+}
+
+fn refrakt(args: &[&str], display: &str) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_refrakt"))
+        .args(args)
+        .env("REFRAKT_VALIDATE", "1")
+        .env("DISPLAY", display)
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .expect("running refrakt")
+}
+
+fn read_png(path: &Path) -> (u32, u32, Vec<u8>) {
+    let img = image::open(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .to_rgba8();
+    (img.width(), img.height(), img.into_raw())
+}
+
+#[test]
+fn viewer_runs_resizes_and_shows_the_headless_image() {
+    let Some((display, xvfb)) = display() else {
+        return;
+    };
+    if let Some(x) = &xvfb {
+        println!("started Xvfb on {}", x.display);
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let shot = dir.path().join("view.png");
+    let headless = dir.path().join("headless.png");
+    // A refractive scene (glass sphere over a floor, the sky behind): sweep, caustic,
+    // environment and tone mapping all show up in the comparison.
+    let scene = [
+        "--volume-size",
+        "32",
+        "--azimuth",
+        "40",
+        "--elevation",
+        "25",
+    ];
+    let mut args = vec![
+        "view",
+        "glass-floor",
+        "--width",
+        "96",
+        "--height",
+        "64",
+        "--frames",
+        "5",
+        "--resize",
+        "120x80@2",
+        "--screenshot",
+        shot.to_str().unwrap(),
+    ];
+    args.extend(scene);
+    let o = refrakt(&args, &display);
+    let out = String::from_utf8_lossy(&o.stdout);
+    let err = String::from_utf8_lossy(&o.stderr);
+    println!("{out}{err}");
+    assert!(
+        o.status.success(),
+        "view failed ({}; 3 = validation messages):\n{err}",
+        o.status
+    );
+    assert!(!err.contains("validation"), "{err}");
+    assert!(out.contains("swapchain"), "{out}");
+    for n in 0..5 {
+        assert!(
+            out.contains(&format!("frame {n}: ")),
+            "frame {n} missing:\n{out}"
+        );
+    }
+    assert!(
+        out.contains("ms GPU, sweep") && out.contains("planes"),
+        "{out}"
+    );
+
+    let mut args = vec![
+        "render",
+        "--scene",
+        "glass-floor",
+        "--width",
+        "120",
+        "--height",
+        "80",
+        "-o",
+        headless.to_str().unwrap(),
+    ];
+    args.extend(scene);
+    let o = refrakt(&args, &display);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+
+    let (w, h, shown) = read_png(&shot);
+    assert_eq!(
+        (w, h),
+        (120, 80),
+        "the screenshot has the resized window's size"
+    );
+    let (_, _, expected) = read_png(&headless);
+    let (d, at) = max_difference(&shown, &expected);
+    assert!(
+        d <= 1,
+        "viewer and headless differ by {d}/255 at pixel ({}, {}) channel {}: {} vs {}",
+        (at / 4) as u32 % w,
+        (at / 4) as u32 / w,
+        at % 4,
+        shown[at],
+        expected[at]
+    );
+    assert!(
+        dir.path().join("view.exr").is_file(),
+        "the linear EXR of the screenshot"
+    );
+    drop(xvfb);
+}
+
+#[test]
+fn view_options_and_a_missing_display_are_clear_errors() {
+    let run = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_refrakt"))
+            .args(args)
+            .env_remove("DISPLAY")
+            .env_remove("WAYLAND_DISPLAY")
+            .output()
+            .expect("running refrakt")
+    };
+    for (args, needle) in [
+        (
+            &["view", "--resize", "12@3", "--volume-size", "8"][..],
+            "expected WIDTHxHEIGHT@FRAME",
+        ),
+        (
+            &["view", "--frames", "0", "--volume-size", "8"][..],
+            "at least 1",
+        ),
+        (&["view", "--screenshot", "x.png"][..], "--frames"),
+        (
+            &["view", "sphere", "--scene", "box"][..],
+            "cannot be used with",
+        ),
+        (
+            &["view", "sphere", "--volume-size", "8"][..],
+            "needs a display",
+        ),
+    ] {
+        let o = run(args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{args:?} succeeded");
+        assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
+        assert!(err.contains(needle), "{args:?}: no '{needle}' in: {err}");
+    }
+}
