@@ -1,7 +1,7 @@
 //! Benchmark mode: the protocol of the thesis' Tables 6.1 and 6.2 on the local device
 //! (`refrakt bench thesis`), and how the sweep's cost scales with planes and pixels
-//! (`refrakt bench scaling`). Every time is a GPU timestamp difference; the "frame" time is
-//! the whole frame's command buffer (passes, barriers and the copy of the image out).
+//! (`refrakt bench scaling`). Every time is a GPU timestamp difference; a frame's time is
+//! the `render` scope of `Renderer::record` (all passes and barriers of the frame).
 //! docs/BENCH.md documents the protocol and the CSV/JSON schema.
 
 use std::path::{Path, PathBuf};
@@ -205,7 +205,7 @@ pub fn select_rows(names: &[String]) -> Result<Vec<&'static Dataset>> {
 
 fn frame_ms(f: &Frame) -> Result<f64> {
     f.timings
-        .get("frame")
+        .get("render")
         .context("the device reports no timestamps; the benchmark needs them")
 }
 

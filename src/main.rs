@@ -449,7 +449,7 @@ fn info(desc: &ContextDesc) -> Result<ExitCode> {
 /// GPU time of a frame's rendering passes, without the one-off builds (preintegration
 /// table, environment SAT) that happen only when their inputs change.
 fn main_pass_ms(frame: &refrakt::render::Frame) -> f64 {
-    frame.timings.get("frame").unwrap_or(0.0)
+    frame.timings.get("render").unwrap_or(0.0)
 }
 
 fn parse_floats<const N: usize>(flag: &str, s: &str) -> Result<[f32; N]> {
@@ -825,10 +825,10 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
         println!("GPU timings: this device has no timestamp queries");
     } else {
         println!("GPU time per pass:");
-        for (name, ms) in frame.timings.scopes.iter().filter(|(n, _)| n != "frame") {
+        for (name, ms) in frame.timings.scopes.iter().filter(|(n, _)| n != "render") {
             println!("  {name:<16} {ms:9.3} ms");
         }
-        if let Some(ms) = frame.timings.get("frame") {
+        if let Some(ms) = frame.timings.get("render") {
             println!(
                 "  {:<16} {ms:9.3} ms (the whole frame: passes and barriers)",
                 "frame"

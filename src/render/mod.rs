@@ -497,7 +497,7 @@ impl Renderer {
         }
         // The benchmark's frame time: every pass and barrier of the frame, without a table
         // rebuild (only when the transfer functions change) and without the copy out.
-        rec.begin_scope("frame");
+        rec.begin_scope("render");
         let recorded = self.record_passes(rec, model, camera, opts);
         rec.end_scope();
         recorded
