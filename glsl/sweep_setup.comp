@@ -13,6 +13,8 @@ layout(set = 0, binding = 6, rgba32f) uniform writeonly image2DArray view_positi
 layout(set = 0, binding = 7, rgba32f) uniform writeonly image2DArray view_direction;
 layout(set = 0, binding = 8, rgba32f) uniform writeonly image2DArray colour_opacity;
 layout(set = 0, binding = 9, rgba32f) uniform writeonly image2DArray medium;
+layout(set = 0, binding = 10, rgba32f) uniform writeonly image2DArray irradiance;
+layout(set = 0, binding = 11, rgba32f) uniform writeonly image2DArray irradiance_direction;
 
 void main() {
     ivec2 id = ivec2(gl_GlobalInvocationID.xy);
@@ -25,10 +27,24 @@ void main() {
     float s_prev = value_at_tex(to_tex(ray * (d0 - ds)));
     float eta = eta_of(s_prev);
     vec3 vd = normalize(ray) * eta;              // v = eta dx/ds (eq. 4.2)
+    // Light. Backward transport: the light colour and direction on "plane -1" per pixel.
+    // Forward transport: one light ray per texel on a regular grid over the launch plane
+    // (plane -1), carrying the flux of its cell (irradiance x cell area, so that the
+    // splat of unobstructed rays reads the light colour), its position in .w.
+    vec4 lc = vec4(P.light_colour.rgb, 0.0);
+    vec4 ld = vec4(P.light_dir.xyz, 0.0);
+    if (P.transport.x > 0.5) {
+        vec2 pos = P.light_grid.xy + (vec2(id) + 0.5) * P.light_grid.zw;
+        float eta_l = eta_of(value_at_tex(to_tex(vec3(pos, d0 - ds))));
+        lc = vec4(P.light_colour.rgb * (P.light_grid.z * P.light_grid.w), pos.x);
+        ld = vec4(P.light_dir.xyz * eta_l, pos.y);
+    }
+    imageStore(irradiance, ivec3(id, 0), vec4(P.light_colour.rgb, 0.0));
+    imageStore(irradiance_direction, ivec3(id, 0), vec4(P.light_dir.xyz, 1.0));
     for (int layer = 0; layer < 2; ++layer) {
         ivec3 at = ivec3(id, layer);
-        imageStore(light_colour, at, vec4(P.light_colour.rgb, 0.0));
-        imageStore(light_direction, at, vec4(P.light_dir.xyz, 0.0));
+        imageStore(light_colour, at, lc);
+        imageStore(light_direction, at, ld);
         imageStore(view_position, at, vec4(vp, s_prev));
         imageStore(view_direction, at, vec4(vd, eta));
         imageStore(colour_opacity, at, vec4(0.0));

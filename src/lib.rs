@@ -12,6 +12,7 @@ pub mod shaders {
 pub mod bench;
 pub mod environment;
 pub mod output;
+pub mod photons;
 pub mod render;
 pub mod scene;
 pub mod transfer;

@@ -1,13 +1,13 @@
 //! `refrakt` command line: `info` and `render`.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{bail, ensure, Context as _, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
 use refrakt::output;
-use refrakt::render::{Model, Renderer, StateBuffer};
+use refrakt::render::{Camera, Model, Renderer, StateBuffer};
 use refrakt::scene::{self, EnvSource, LoadedScene, Scene, TransferSource, VolumeSource};
 use refrakt::viewer::{self, ViewOptions};
 use refrakt::vk::{self, Context, ContextDesc};
@@ -232,16 +232,21 @@ struct SceneArgs {
     /// Camera azimuth in degrees around the vertical axis [scene default].
     #[arg(long, allow_negative_numbers = true)]
     azimuth: Option<f32>,
-    /// Camera elevation in degrees [scene default].
+    /// Camera elevation in degrees, -90 (looking straight up) to 90 (straight down)
+    /// [scene default].
     #[arg(long, allow_negative_numbers = true)]
     elevation: Option<f32>,
-    /// Camera distance from the volume centre (the volume's longest side is 1) [scene
-    /// default].
+    /// Camera distance from the target, the volume centre unless --target (the volume's
+    /// longest side is 1) [scene default].
     #[arg(long, allow_negative_numbers = true)]
     distance: Option<f32>,
     /// Vertical field of view in degrees [default: 35].
     #[arg(long, allow_negative_numbers = true)]
     fov: Option<f32>,
+    /// World-space point "x,y,z" the camera orbits and looks at; --azimuth, --elevation
+    /// and --distance are taken around it [scene default: 0,0,0, the volume centre].
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    target: Option<String>,
     /// Background colour behind the volume, linear "r,g,b" or "r,g,b,a" (seen with
     /// --env none) [default: 0.08,0.08,0.1,1].
     #[arg(long, allow_hyphen_values = true)]
@@ -268,13 +273,18 @@ struct SceneArgs {
     /// refraction off, 1 is the transfer function's eta (refract) [default: 1].
     #[arg(long, allow_negative_numbers = true)]
     eta_scale: Option<f32>,
+    /// How light travels from plane to plane (refract): "backward" is the thesis'
+    /// semi-Lagrangian step (one direction per pixel, gain bounded per plane);
+    /// "forward" (experimental) advances every light ray on its own and splats its flux
+    /// onto each plane, so crossing rays stay apart and caustics stay compact
+    /// [default: backward].
+    #[arg(long, value_name = "forward|backward")]
+    light_transport: Option<String>,
     /// Clipping plane "nx,ny,nz,offset" in world space: opacity is zero where
     /// n·p > offset, the medium and refraction stay (refract, thesis Fig. 6.6); "none"
     /// removes a scene's plane.
     #[arg(long, value_name = "NX,NY,NZ,D|none", allow_hyphen_values = true)]
     clip: Option<String>,
-    /// Write state buffers after given planes as EXR: "BUFFER@PLANE[,...]" with BUFFER one
-    /// of light-colour, light-direction, view-position, view-direction, colour-opacity,
     /// Environment map behind the volume (refract): an equirectangular .exr or .hdr
     /// (linear), .png or .jpg (sRGB), twice as wide as high; "sky" for the built-in sky,
     /// sun and checkered ground; "none" for the flat --background [default: sky].
@@ -301,7 +311,10 @@ struct RenderArgs {
     /// Output image; the extension picks the format: .png (8-bit sRGB) or .exr (linear).
     #[arg(short, long, default_value = "refrakt.png")]
     output: PathBuf,
-    /// medium (refract). Files go to --dump-dir as BUFFER-PLANE.exr.
+    /// Write state buffers after given planes as EXR: "BUFFER@PLANE[,...]" with BUFFER one
+    /// of light-colour, light-direction, view-position, view-direction, colour-opacity,
+    /// medium (refract). Files go to --dump-dir as BUFFER-PLANE.exr; each header (and the
+    /// log) gives the plane's view depth and world-space plane n·p = d and the camera.
     #[arg(long, value_name = "BUFFER@PLANE,...")]
     dump: Option<String>,
     /// Folder for --dump files (default: the output image's folder).
@@ -592,10 +605,17 @@ fn scene_from_args(args: &SceneArgs) -> Result<Scene> {
     set!(s.camera.elevation, args.elevation);
     set!(s.camera.distance, args.distance);
     set!(s.camera.fov_y, args.fov);
+    if let Some(t) = &args.target {
+        s.camera.target = glam::Vec3::from(parse_floats::<3>("--target", t)?);
+    }
     set!(s.softness, args.softness);
     set!(s.roughness, args.roughness);
     set!(s.specular, args.specular);
     set!(s.eta_scale, args.eta_scale);
+    if let Some(t) = &args.light_transport {
+        s.light_transport =
+            refrakt::render::LightTransport::parse(t).context("--light-transport")?;
+    }
     set!(s.env_rotation, args.env_rotation);
     if let Some(e) = args.exposure {
         ensure!(
@@ -845,6 +865,16 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
         if let Some(ms) = frame.timings.get("sweep") {
             println!("  {:.3} ms per plane", ms / planes as f64);
         }
+        let c = stats.clamps;
+        println!(
+            "light transport: {}; clamps (pixel-planes): light direction {}, light rays \
+             turned back and dropped {}, viewing direction {}, gain {}",
+            stats.light_transport.name(),
+            c.light_direction,
+            c.light_dropped,
+            c.view_direction,
+            c.gain
+        );
     }
     if args.with_baseline {
         let main_ms = main_pass_ms(&frame);
@@ -859,19 +889,66 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
             );
         }
     }
-    for d in &frame.dumps {
-        let path = dump_dir.join(format!("{}-{}.exr", d.buffer.name(), d.plane));
-        output::write_pixels(d.width, d.height, &d.pixels, &path)?;
-        println!(
-            "dumped {} after plane {} to {}",
-            d.buffer.name(),
-            d.plane,
-            path.display()
-        );
-    }
+    write_dumps(&frame, &camera, &dump_dir)?;
     println!("wrote {}", args.output.display());
     drop(renderer);
     finish(ctx)
+}
+
+/// Writes the --dump state buffers as EXR. Each file's header says where the buffer lives:
+/// the plane's index and view depth, the world-space plane `n·p = d` (n the camera's
+/// forward, d = n·eye + depth) and the camera; the log line says the same.
+fn write_dumps(frame: &refrakt::render::Frame, camera: &Camera, dir: &Path) -> Result<()> {
+    use output::HeaderValue::{Text, Vec3 as V3, F32, I32};
+    if frame.dumps.is_empty() {
+        return Ok(());
+    }
+    let (eye, forward, _, _) = camera.frame();
+    let t = camera.target;
+    // (+ 0.0 turns -0 into 0 for the log.)
+    let v = |v: glam::Vec3| format!("({:.4},{:.4},{:.4})", v.x + 0.0, v.y + 0.0, v.z + 0.0);
+    println!(
+        "dump camera: eye {} target {} vertical fov {}°",
+        v(eye),
+        v(t),
+        camera.fov_y
+    );
+    let spacing = frame.sweep.as_ref().map(|s| s.planes.spacing);
+    for d in &frame.dumps {
+        let path = dir.join(format!("{}-{}.exr", d.buffer.name(), d.plane));
+        let offset = forward.dot(eye) + d.depth;
+        let mut attrs = vec![
+            ("refrakt.buffer", Text(d.buffer.name().into())),
+            ("refrakt.plane", I32(d.plane as i32)),
+            ("refrakt.viewDepth", F32(d.depth)),
+            ("refrakt.planeNormal", V3(forward.to_array())),
+            ("refrakt.planeOffset", F32(offset)),
+            ("refrakt.cameraEye", V3(eye.to_array())),
+            ("refrakt.cameraTarget", V3(t.to_array())),
+            ("refrakt.cameraFovY", F32(camera.fov_y)),
+        ];
+        // The pass for plane k leaves the viewing rays on plane k+1 (see Dump::depth).
+        let mut next = String::new();
+        if let (StateBuffer::ViewPosition, Some(s)) = (d.buffer, spacing) {
+            let depth = d.depth + s;
+            attrs.push(("refrakt.positionsViewDepth", F32(depth)));
+            attrs.push(("refrakt.positionsPlaneOffset", F32(offset + s)));
+            next = format!(
+                "; positions on the next plane: view depth {depth:.4}, d={:.4}",
+                offset + s
+            );
+        }
+        output::write_pixels_with_attributes(d.width, d.height, &d.pixels, &path, &attrs)?;
+        println!(
+            "dumped {} after plane {} (view depth {:.4}, world plane n={} d={offset:.4}{next}) to {}",
+            d.buffer.name(),
+            d.plane,
+            d.depth,
+            v(forward),
+            path.display()
+        );
+    }
+    Ok(())
 }
 
 /// "WxH@N" of --resize.

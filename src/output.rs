@@ -143,3 +143,53 @@ pub fn write_pixels(width: u32, height: u32, pixels: &[[f32; 4]], path: &Path) -
     })
     .map_err(|e| anyhow::anyhow!("writing {}: {e}", path.display()))
 }
+
+/// A value for an EXR header attribute written by [`write_pixels_with_attributes`].
+#[derive(Clone, Debug, PartialEq)]
+pub enum HeaderValue {
+    /// Latin-1 text (`string` attribute).
+    Text(String),
+    /// `float` attribute.
+    F32(f32),
+    /// `int` attribute.
+    I32(i32),
+    /// `v3f` attribute.
+    Vec3([f32; 3]),
+}
+
+/// [`write_pixels`] with extra attributes in the header of the file's layer (read back
+/// with e.g. `exr::meta::MetaData::read_from_file`: `headers[0].own_attributes.other`).
+/// Names and text must be one byte per character (Latin-1).
+pub fn write_pixels_with_attributes(
+    width: u32,
+    height: u32,
+    pixels: &[[f32; 4]],
+    path: &Path,
+    attributes: &[(&str, HeaderValue)],
+) -> Result<()> {
+    use exr::meta::attribute::{AttributeValue, Text};
+    use exr::prelude::*;
+    let text = |s: &str| {
+        Text::new_or_none(s)
+            .with_context(|| format!("EXR header attribute '{s}' has characters beyond Latin-1"))
+    };
+    let w = width as usize;
+    let channels = SpecificChannels::rgba(|Vec2(x, y): Vec2<usize>| {
+        let p = pixels[y * w + x];
+        (p[0], p[1], p[2], p[3])
+    });
+    let mut image = Image::from_channels((w, height as usize), channels);
+    for (name, value) in attributes {
+        let value = match value {
+            HeaderValue::Text(t) => AttributeValue::Text(text(t)?),
+            HeaderValue::F32(v) => AttributeValue::F32(*v),
+            HeaderValue::I32(v) => AttributeValue::I32(*v),
+            HeaderValue::Vec3(v) => AttributeValue::FloatVec3((v[0], v[1], v[2])),
+        };
+        image.layer_data.attributes.other.insert(text(name)?, value);
+    }
+    image
+        .write()
+        .to_file(path)
+        .map_err(|e| anyhow::anyhow!("writing {}: {e}", path.display()))
+}

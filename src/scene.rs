@@ -14,7 +14,7 @@ use serde::Deserialize;
 
 use crate::environment::EnvironmentMap;
 use crate::output::{ToneMap, ToneOperator};
-use crate::render::{Camera, Light, Model, RenderOptions, SweepOptions};
+use crate::render::{Camera, Light, LightTransport, Model, RenderOptions, SweepOptions};
 use crate::transfer::TransferFunctions;
 use crate::volume::{procedural, standins, Volume};
 
@@ -75,6 +75,8 @@ pub struct Scene {
     pub specular: f32,
     /// Refractive-index scale k: η' = 1 + k (η_tf − 1); 0 turns refraction off.
     pub eta_scale: f32,
+    /// How light travels between the sweep's planes.
+    pub light_transport: LightTransport,
     pub clip: Option<(Vec3, f32)>,
     pub exposure: f32,
     pub tonemap: ToneOperator,
@@ -136,6 +138,7 @@ impl Default for Scene {
             roughness: 0.3,
             specular: 1.0,
             eta_scale: 1.0,
+            light_transport: LightTransport::Backward,
             clip: None,
             exposure: 0.0,
             tonemap: ToneOperator::Aces,
@@ -308,6 +311,7 @@ impl Scene {
                         elevation: 15.0,
                         distance: 1.8,
                         fov_y: 35.0,
+                        target: Vec3::ZERO,
                     };
                 }
                 _ => {
@@ -316,6 +320,7 @@ impl Scene {
                         elevation: 15.0,
                         distance: 2.1,
                         fov_y: 35.0,
+                        target: Vec3::ZERO,
                     };
                     s.clip = Some((Vec3::new(1.0, 0.0, 0.0), 0.0));
                 }
@@ -344,6 +349,7 @@ impl Scene {
             elevation,
             distance,
             fov_y: 35.0,
+            target: Vec3::ZERO,
         };
         match d.name {
             "supernova" => s.camera = cam(30.0, 15.0, 2.1),
@@ -455,6 +461,7 @@ impl Scene {
                 roughness: self.roughness,
                 specular: self.specular,
                 eta_scale: self.eta_scale,
+                light_transport: self.light_transport,
                 clip: self.clip,
                 env_rotation: self.env_rotation,
                 ..Default::default()
@@ -655,6 +662,7 @@ struct RenderTable {
     roughness: Option<f32>,
     specular: Option<f32>,
     eta_scale: Option<f32>,
+    light_transport: Option<String>,
     clip: Option<[f32; 4]>,
     exposure: Option<f32>,
     tonemap: Option<String>,
@@ -820,27 +828,35 @@ impl SceneFile {
             }
         }
         if let Some(c) = self.camera {
+            if let Some(t) = c.target {
+                let target = Vec3::from(t);
+                ensure!(
+                    target.is_finite(),
+                    "[camera] target {t:?} must be finite numbers"
+                );
+                s.camera.target = target;
+            }
             if let Some(eye) = c.eye {
                 ensure!(
                     c.azimuth.is_none() && c.elevation.is_none() && c.distance.is_none(),
                     "[camera]: give eye (and target) or azimuth/elevation/distance, not both"
                 );
-                let target = Vec3::from(c.target.unwrap_or([0.0; 3]));
-                ensure!(
-                    target == Vec3::ZERO,
-                    "[camera] target {target}: the camera orbits the volume centre; only [0, 0, 0] is supported"
-                );
-                let e = Vec3::from(eye) - target;
+                let eye = Vec3::from(eye);
+                ensure!(eye.is_finite(), "[camera] eye {eye} must be finite numbers");
+                // The camera orbits the target (the origin unless given) and looks at it.
+                let e = eye - s.camera.target;
                 let d = e.length();
                 ensure!(
                     d > 0.0 && d.is_finite(),
                     "[camera] eye must differ from target"
                 );
                 s.camera.distance = d;
-                s.camera.elevation = (e.y / d).asin().to_degrees();
+                s.camera.elevation = (e.y / d)
+                    .clamp(-1.0, 1.0)
+                    .asin()
+                    .to_degrees()
+                    .clamp(-90.0, 90.0);
                 s.camera.azimuth = e.x.atan2(e.z).to_degrees();
-            } else {
-                ensure!(c.target.is_none(), "[camera] target needs eye");
             }
             if let Some(a) = c.azimuth {
                 s.camera.azimuth = a;
@@ -905,6 +921,9 @@ impl SceneFile {
             }
             if let Some(x) = r.eta_scale {
                 s.eta_scale = x;
+            }
+            if let Some(t) = &r.light_transport {
+                s.light_transport = LightTransport::parse(t).context("[render] light_transport")?;
             }
             if let Some(c) = r.clip {
                 s.clip = Some((Vec3::new(c[0], c[1], c[2]), c[3]));

@@ -117,6 +117,180 @@ fn ea_model_and_dumps_from_the_command_line() {
     }
 }
 
+/// The number after `key` in `line` (up to a space, comma or parenthesis).
+fn number_after(line: &str, key: &str) -> f64 {
+    let rest = &line[line
+        .find(key)
+        .unwrap_or_else(|| panic!("no '{key}' in {line}"))
+        + key.len()..];
+    let end = rest.find([' ', ',', ')', ';']).unwrap_or(rest.len());
+    rest[..end]
+        .parse()
+        .unwrap_or_else(|e| panic!("'{}' after '{key}': {e}", &rest[..end]))
+}
+
+#[test]
+fn dumps_carry_their_plane_in_world_space() {
+    use exr::meta::attribute::{AttributeValue, Text};
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("s.png");
+    let (az, el, dist) = (35.0f64, 25.0f64, 2.4f64);
+    let target = [0.05f64, -0.1, 0.08];
+    let o = refrakt(&[
+        "render",
+        "-o",
+        out.to_str().unwrap(),
+        "--width",
+        "16",
+        "--height",
+        "12",
+        "--volume-size",
+        "16",
+        "--azimuth",
+        "35",
+        "--elevation",
+        "25",
+        "--distance",
+        "2.4",
+        "--fov",
+        "30",
+        "--target",
+        "0.05,-0.1,0.08",
+        "--dump",
+        "light-colour@3,view-position@3",
+    ]);
+    let log = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(log.contains("(16x16x16,"), "{log}");
+
+    // The camera, independently of the renderer: it orbits the target, and the planes
+    // start at the depth of the box corner nearest to it (the box is [-0.5, 0.5]^3).
+    let (a, e) = (az.to_radians(), el.to_radians());
+    let towards_eye = [a.sin() * e.cos(), e.sin(), a.cos() * e.cos()];
+    let eye: Vec<f64> = (0..3).map(|i| target[i] + dist * towards_eye[i]).collect();
+    let forward: Vec<f64> = towards_eye.iter().map(|v| -v).collect();
+    let dot = |p: &[f64], q: &[f64]| (0..3).map(|i| p[i] * q[i]).sum::<f64>();
+    let near = (0..8)
+        .map(|c| {
+            let corner: Vec<f64> = (0..3)
+                .map(|i| if c >> i & 1 == 0 { -0.5 } else { 0.5 } - eye[i])
+                .collect();
+            dot(&corner, &forward)
+        })
+        .fold(f64::INFINITY, f64::min);
+    let sweep_line = log.lines().find(|l| l.starts_with("sweep:")).unwrap();
+    let spacing = number_after(sweep_line, "spacing ");
+    assert!((spacing - 1.0 / 16.0).abs() < 1e-6, "{sweep_line}");
+    let depth = near + 3.0 * spacing;
+    let offset = dot(&forward, &eye) + depth;
+
+    let attributes = |name: &str| {
+        let path = dir.path().join(name);
+        let meta = exr::meta::MetaData::read_from_file(&path, false).unwrap();
+        meta.headers[0].own_attributes.other.clone()
+    };
+    let f32_attr = |attrs: &std::collections::HashMap<Text, AttributeValue>, key: &str| match attrs
+        .get(&Text::from(key))
+    {
+        Some(AttributeValue::F32(v)) => *v as f64,
+        v => panic!("{key}: {v:?}"),
+    };
+    let v3_attr = |attrs: &std::collections::HashMap<Text, AttributeValue>, key: &str| match attrs
+        .get(&Text::from(key))
+    {
+        Some(AttributeValue::FloatVec3((x, y, z))) => [*x as f64, *y as f64, *z as f64],
+        v => panic!("{key}: {v:?}"),
+    };
+    let close = |a: f64, b: f64, tol: f64, what: &str| {
+        assert!((a - b).abs() <= tol, "{what}: {a} vs {b}");
+    };
+
+    let light = attributes("light-colour-3.exr");
+    let line = log
+        .lines()
+        .find(|l| l.starts_with("dumped light-colour after plane 3 "))
+        .unwrap_or_else(|| panic!("no dump line in:\n{log}"));
+    let printed_depth = number_after(line, "view depth ");
+    let printed_offset = number_after(line, " d=");
+    let attr_depth = f32_attr(&light, "refrakt.viewDepth");
+    // The header and the log agree (the log rounds to 4 decimals)...
+    close(
+        attr_depth,
+        printed_depth,
+        0.5e-4 + 1e-6,
+        "header depth vs log",
+    );
+    close(
+        f32_attr(&light, "refrakt.planeOffset"),
+        printed_offset,
+        0.5e-4 + 1e-6,
+        "log d",
+    );
+    // ...and both agree with the geometry computed here.
+    close(attr_depth, depth, 1e-4, "view depth");
+    close(
+        f32_attr(&light, "refrakt.planeOffset"),
+        offset,
+        1e-4,
+        "plane offset",
+    );
+    let n = v3_attr(&light, "refrakt.planeNormal");
+    let e = v3_attr(&light, "refrakt.cameraEye");
+    let t = v3_attr(&light, "refrakt.cameraTarget");
+    for i in 0..3 {
+        close(n[i], forward[i], 1e-5, "plane normal");
+        close(e[i], eye[i], 1e-5, "eye");
+        close(t[i], target[i], 1e-7, "target");
+    }
+    close(f32_attr(&light, "refrakt.cameraFovY"), 30.0, 0.0, "fov");
+    assert!(
+        matches!(
+            light.get(&Text::from("refrakt.plane")),
+            Some(AttributeValue::I32(3))
+        ),
+        "{light:?}"
+    );
+    assert!(!light.contains_key(&Text::from("refrakt.positionsViewDepth")));
+
+    // The view positions of plane k lie on plane k+1.
+    let pos = attributes("view-position-3.exr");
+    close(
+        f32_attr(&pos, "refrakt.viewDepth"),
+        depth,
+        1e-4,
+        "view-position depth",
+    );
+    close(
+        f32_attr(&pos, "refrakt.positionsViewDepth"),
+        depth + spacing,
+        1e-4,
+        "positions depth",
+    );
+    close(
+        f32_attr(&pos, "refrakt.positionsPlaneOffset"),
+        offset + spacing,
+        1e-4,
+        "positions offset",
+    );
+    // The buffer holds view-space points (z = view depth): check the claim against it.
+    let img = exr::prelude::read_first_rgba_layer_from_file(
+        dir.path().join("view-position-3.exr"),
+        |res, _| vec![[0f32; 4]; res.width() * res.height()],
+        |px: &mut Vec<[f32; 4]>, pos, (r, g, b, a): (f32, f32, f32, f32)| {
+            px[pos.y() * 16 + pos.x()] = [r, g, b, a];
+        },
+    )
+    .unwrap();
+    for p in &img.layer_data.channel_data.pixels {
+        close(
+            p[2] as f64,
+            depth + spacing,
+            1e-4,
+            "view-space z of a view position",
+        );
+    }
+}
+
 #[test]
 fn bad_sweep_options_are_clear_errors() {
     assert_clean_failure(
@@ -251,7 +425,19 @@ fn bad_sample_distances_are_clear_errors() {
 #[test]
 fn bad_camera_and_sizes_are_clear_errors() {
     assert_clean_failure(&["render", "--width", "0", "-o", "x.png"], "image size");
-    assert_clean_failure(&["render", "--elevation", "90", "-o", "x.png"], "elevation");
+    assert_clean_failure(
+        &["render", "--elevation", "90.5", "-o", "x.png"],
+        "elevation",
+    );
+    assert_clean_failure(
+        &["render", "--elevation", "-91", "-o", "x.png"],
+        "elevation",
+    );
+    assert_clean_failure(&["render", "--target", "1,2", "-o", "x.png"], "--target");
+    assert_clean_failure(
+        &["render", "--target", "0,NaN,0", "-o", "x.png"],
+        "--target '0,NaN,0': 'NaN' is not a finite number",
+    );
     assert_clean_failure(
         &["render", "--volume-size", "1", "-o", "x.png"],
         "volume size",

@@ -174,6 +174,7 @@ mod composite {
             elevation: 0.0,
             distance: 2.5,
             fov_y: 20.0,
+            ..Default::default()
         }
     }
 
@@ -269,6 +270,7 @@ mod composite {
                 elevation: 10.0,
                 distance: 2.2,
                 fov_y: 35.0,
+                ..Default::default()
             };
             let (w, h) = (64u32, 64u32);
             let mut r = Renderer::new(ctx, &vol, &tf).unwrap();

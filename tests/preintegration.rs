@@ -258,6 +258,7 @@ opacity = [[0.0, 0.0], [0.49, 0.0], [0.5, 0.9], [0.51, 0.0], [1.0, 0.0]]
             elevation: 10.0,
             distance: 2.0,
             fov_y: 40.0,
+            ..Default::default()
         };
         let base = RenderOptions {
             width: 64,

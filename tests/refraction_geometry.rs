@@ -136,6 +136,7 @@ fn measure(ctx: &refrakt::vk::Context, slab: &Slab, n: u32, ramp: f32) -> Errors
         elevation: 0.0,
         distance: 4.0,
         fov_y: 8.0,
+        ..Default::default()
     };
     let (w, h) = (32u32, 32u32);
     let (eye, fwd, right, up) = cam.frame();

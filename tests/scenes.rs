@@ -89,6 +89,100 @@ fn scene_file_sets_everything_and_flags_override_it() {
     assert_eq!(img.get_pixel(0, 0).0, [0, 255, 0]);
 }
 
+/// Mean pixel position (x, y) of the opaque red sphere of [`SMALL`].
+fn red_centroid(path: &Path) -> (f64, f64) {
+    let img = image::open(path).unwrap().to_rgb8();
+    let (mut n, mut sx, mut sy) = (0.0, 0.0, 0.0);
+    for (x, y, p) in img.enumerate_pixels() {
+        if p.0[0] > 150 {
+            n += 1.0;
+            sx += x as f64 + 0.5;
+            sy += y as f64 + 0.5;
+        }
+    }
+    assert!(n > 20.0, "{}: only {n} red pixels", path.display());
+    (sx / n, sy / n)
+}
+
+fn render_ok(args: &[&str]) {
+    let o = refrakt(args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+#[test]
+fn the_camera_looks_at_its_target_from_flags_and_scene_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write(dir.path(), "tiny.toml", SMALL);
+    let png = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    // SMALL: 24x20 pixels, fov 30, eye 2.5 in front of the sphere at the origin; 0.1 world
+    // units at the sphere's depth are 10 / (2.5 tan 15°) / 10 = 1.49 pixels.
+    let px_per_unit = 10.0 / (2.5 * 15f64.to_radians().tan());
+    render_ok(&["render", &scene, "-o", &png("origin.png")]);
+    let (x0, y0) = red_centroid(Path::new(&png("origin.png")));
+
+    // Looking at a point right of the sphere: the camera moves with its target, so the
+    // sphere moves left in the image, as far as the target is from it.
+    render_ok(&[
+        "render",
+        &scene,
+        "--target",
+        "0.3,0,0",
+        "-o",
+        &png("flag.png"),
+    ]);
+    let (x1, y1) = red_centroid(Path::new(&png("flag.png")));
+    assert!((x1 - (x0 - 0.3 * px_per_unit)).abs() < 1.0, "{x0} -> {x1}");
+    assert!((y1 - y0).abs() < 0.5, "{y0} -> {y1}");
+
+    // The same camera from a scene file, with eye and target or angles and target.
+    let flag = std::fs::read(png("flag.png")).unwrap();
+    for (i, camera) in [
+        "eye = [0.3, 0.0, 2.5]\ntarget = [0.3, 0.0, 0.0]",
+        "azimuth = 0\nelevation = 0\ndistance = 2.5\ntarget = [0.3, 0, 0]",
+    ]
+    .iter()
+    .enumerate()
+    {
+        let file = write(
+            dir.path(),
+            &format!("t{i}.toml"),
+            &SMALL.replace("eye = [0.0, 0.0, 2.5]", camera),
+        );
+        render_ok(&["render", &file, "-o", &png(&format!("t{i}.png"))]);
+        assert!(
+            std::fs::read(png(&format!("t{i}.png"))).unwrap() == flag,
+            "scene file camera {camera:?} renders differently from --target"
+        );
+    }
+
+    // Straight down (elevation 90) at a target 0.2 in front of the sphere (+z): at azimuth
+    // 0 screen-up is -z, so the sphere lies above the image centre.
+    render_ok(&[
+        "render",
+        &scene,
+        "--elevation",
+        "90",
+        "--target",
+        "0,0,0.2",
+        "-o",
+        &png("down.png"),
+    ]);
+    let (x2, y2) = red_centroid(Path::new(&png("down.png")));
+    assert!((x2 - x0).abs() < 0.5, "{x0} -> {x2}");
+    assert!((y2 - (10.0 - 0.2 * px_per_unit)).abs() < 1.0, "{y2}");
+    // An eye straight above the target is the same view.
+    let file = write(
+        dir.path(),
+        "above.toml",
+        &SMALL.replace(
+            "eye = [0.0, 0.0, 2.5]",
+            "eye = [0.0, 2.5, 0.2]\ntarget = [0.0, 0.0, 0.2]",
+        ),
+    );
+    render_ok(&["render", &file, "-o", &png("above.png")]);
+    assert!(std::fs::read(png("above.png")).unwrap() == std::fs::read(png("down.png")).unwrap());
+}
+
 #[test]
 fn bad_scene_files_are_one_line_errors_naming_the_file() {
     let dir = tempfile::tempdir().unwrap();
@@ -142,6 +236,26 @@ fn bad_scene_files_are_one_line_errors_naming_the_file() {
         &["render", &bad_camera, "-o", o],
         &out,
         &["cam.toml", "eye"],
+    );
+    let bad_target = write(
+        dir.path(),
+        "target.toml",
+        &SMALL.replace("fov = 30", "fov = 30\ntarget = [0.0, nan, 0.0]"),
+    );
+    fails_with(
+        &["render", &bad_target, "-o", o],
+        &out,
+        &["target.toml", "[camera] target", "finite"],
+    );
+    let short_target = write(
+        dir.path(),
+        "short.toml",
+        &SMALL.replace("fov = 30", "fov = 30\ntarget = [0.0, 1.0]"),
+    );
+    fails_with(
+        &["render", &short_target, "-o", o],
+        &out,
+        &["short.toml", "target"],
     );
     fails_with(
         &["render", "no-such-scene", "-o", o],

@@ -12,27 +12,7 @@ use refrakt::render::{
 };
 use refrakt::transfer::{Piecewise, TransferFunctions};
 use refrakt::vk::Context;
-use refrakt::volume::{procedural, Volume, Voxels};
-
-fn f32_volume(n: u32, f: impl Fn([f32; 3]) -> f32) -> Volume {
-    let mut v = Vec::new();
-    for z in 0..n {
-        for y in 0..n {
-            for x in 0..n {
-                let p = [x, y, z].map(|i| (i as f32 + 0.5) / n as f32 - 0.5);
-                v.push(f(p).clamp(0.0, 1.0));
-            }
-        }
-    }
-    let mut vol = Volume::new([n; 3], [1.0; 3], Voxels::F32(v)).unwrap();
-    vol.range = Some((0.0, 1.0));
-    vol
-}
-
-/// Value 1 inside a ball of radius r, 0 outside, a one-voxel linear ramp on the surface.
-fn ball(n: u32, r: f32) -> Volume {
-    f32_volume(n, |p| 0.5 + (r - Vec3::from(p).length()) * n as f32)
-}
+use refrakt::volume::{procedural, Volume};
 
 fn sweep(
     ctx: &Context,
@@ -94,6 +74,7 @@ fn equals_ea_baseline_without_refraction_or_lighting() {
             elevation: 15.0,
             distance: 2.2,
             fov_y: 35.0,
+            ..Default::default()
         };
         let mut opts = RenderOptions {
             width: 48,
@@ -151,6 +132,7 @@ fn light_through_a_slab_follows_beer_lambert_and_the_medium_filter() {
             elevation: 0.0,
             distance: 2.5,
             fov_y: 20.0,
+            ..Default::default()
         };
         let sigma = 0.08f32; // extinction per voxel at s = 1
         let m0 = [0.9f32, 0.75, 0.97];
@@ -224,6 +206,7 @@ fn ball_lens_focus(ctx: &Context, n_index: f32, diameter: f32) -> (f32, f32) {
         elevation: 0.0,
         distance: 2.0,
         fov_y: 16.0,
+        ..Default::default()
     };
     let (w, h) = (128u32, 128u32);
     let planes = Planes::for_box(&cam, Vec3::splat(0.5), vox).unwrap();
@@ -311,6 +294,7 @@ fn weak_lens_conserves_light_power() {
             elevation: 0.0,
             distance: 2.0,
             fov_y: 30.0,
+            ..Default::default()
         };
         let (w, h) = (96u32, 96u32);
         // Sample distance 0.5: at 1 the loss is 2.0 % (measured), at 0.5 about 0.5 %.
@@ -361,6 +345,7 @@ fn shadow(ctx: &Context, angle: f32, softness: f32) -> (f32, f32, f32) {
         elevation: 0.0,
         distance: 2.0,
         fov_y: 30.0,
+        ..Default::default()
     };
     let (w, h) = (128u32, 64u32);
     let planes = Planes::for_box(&cam, Vec3::splat(0.5), 1.0 / n as f32).unwrap();
@@ -460,6 +445,7 @@ fn total_internal_reflection_keeps_rays_inside_a_dense_block() {
             elevation: 0.0,
             distance: 2.0,
             fov_y: 20.0,
+            ..Default::default()
         };
         let (w, h) = (64u32, 64u32);
         let spacing = 0.5 / n as f32;
@@ -553,6 +539,7 @@ fn clipping_removes_opacity_but_keeps_the_medium() {
             elevation: 0.0,
             distance: 2.5,
             fov_y: 20.0,
+            ..Default::default()
         };
         let mut opts = RenderOptions {
             width: 32,
@@ -647,6 +634,7 @@ fn plano_convex_lens_focuses_at_its_back_focal_distance() {
             elevation: 0.0,
             distance: 2.0,
             fov_y: 16.0,
+            ..Default::default()
         };
         let (w, h) = (128u32, 128u32);
         for flat_first in [true, false] {

@@ -24,10 +24,18 @@ use super::{Camera, FrameTarget, RenderOptions, VolumeInfo};
 use crate::shaders;
 use crate::vk::{
     self, Access, Binding, Buffer, ComputePipeline, Context, DescriptorSet, Framebuffer,
-    GraphicsPipeline, Image, ImageDesc, ImageKind, LayerView, Recorder, RenderPass, Sampler,
+    GraphicsPipeline, Image, ImageDesc, ImageKind, LayerView, Primitives, Recorder, RenderPass,
+    Sampler,
 };
 
-/// The six state buffers, in attachment order.
+/// The six state buffers, in attachment order, and what else a plane can be dumped as.
+///
+/// With the forward light transport `LightColour` and `LightDirection` dump the plane's
+/// light as the viewing rays see it (the splatted irradiance, and the luminance-weighted
+/// sum of light directions with the weight in w), and `LightRays` / `LightRayDirections`
+/// the light rays themselves (flux rgb + view x on the plane; v = η dx/ds + view y), one ray
+/// per texel of the grid in [`SweepStats::light_grid`]. With the backward transport the
+/// latter two are the same images as the former.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum StateBuffer {
     LightColour,
@@ -36,6 +44,8 @@ pub enum StateBuffer {
     ViewDirection,
     ColourOpacity,
     Medium,
+    LightRays,
+    LightRayDirections,
 }
 
 impl StateBuffer {
@@ -48,6 +58,18 @@ impl StateBuffer {
         StateBuffer::Medium,
     ];
 
+    /// Everything `--dump` accepts.
+    pub const DUMPABLE: [StateBuffer; 8] = [
+        StateBuffer::LightColour,
+        StateBuffer::LightDirection,
+        StateBuffer::ViewPosition,
+        StateBuffer::ViewDirection,
+        StateBuffer::ColourOpacity,
+        StateBuffer::Medium,
+        StateBuffer::LightRays,
+        StateBuffer::LightRayDirections,
+    ];
+
     pub fn name(self) -> &'static str {
         match self {
             StateBuffer::LightColour => "light-colour",
@@ -56,21 +78,28 @@ impl StateBuffer {
             StateBuffer::ViewDirection => "view-direction",
             StateBuffer::ColourOpacity => "colour-opacity",
             StateBuffer::Medium => "medium",
+            StateBuffer::LightRays => "light-rays",
+            StateBuffer::LightRayDirections => "light-ray-directions",
         }
     }
 
     pub fn parse(s: &str) -> Result<Self> {
-        Self::ALL
+        Self::DUMPABLE
             .into_iter()
             .find(|b| b.name() == s)
             .ok_or_else(|| {
-                let names: Vec<_> = Self::ALL.iter().map(|b| b.name()).collect();
+                let names: Vec<_> = Self::DUMPABLE.iter().map(|b| b.name()).collect();
                 anyhow::anyhow!("unknown state buffer '{s}'; one of {}", names.join(", "))
             })
     }
 
+    /// The state image this buffer lives in.
     fn index(self) -> usize {
-        self as usize
+        match self {
+            StateBuffer::LightRays => 0,
+            StateBuffer::LightRayDirections => 1,
+            b => b as usize,
+        }
     }
 }
 
@@ -102,6 +131,43 @@ impl Default for Light {
         }
     }
 }
+
+/// How light is carried from plane to plane.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LightTransport {
+    /// Light rays advanced forward one by one (each texel of the light state is a ray with
+    /// its own position, direction and flux), their flux splatted onto each plane with a
+    /// normalised tent (glsl/light_splat.*). Conserves flux through focal crossings.
+    /// Experimental: rays that meet an exit surface near the critical angle are totally
+    /// reflected more often than they should be and dropped (1.5-2.5 % of the power behind
+    /// a strong lens, measured; docs/NOTES.md), so it is not the default yet.
+    Forward,
+    /// The thesis' backward (semi-Lagrangian) step with the intensity law (eqs. 4.4–4.8):
+    /// one direction per pixel, gain bounded per plane. The default.
+    Backward,
+}
+
+impl LightTransport {
+    pub fn name(self) -> &'static str {
+        match self {
+            LightTransport::Forward => "forward",
+            LightTransport::Backward => "backward",
+        }
+    }
+
+    pub fn parse(s: &str) -> Result<Self> {
+        match s {
+            "forward" => Ok(LightTransport::Forward),
+            "backward" => Ok(LightTransport::Backward),
+            _ => bail!("unknown light transport '{s}'; one of forward, backward"),
+        }
+    }
+}
+
+/// Largest half-width, in pixels, of one light ray's splat (its cell on the plane): a ray
+/// whose neighbours have spread further deposits its flux over this many pixels at most
+/// (still all of it: the tent is normalised).
+pub const MAX_SPLAT_HALF_WIDTH: f32 = 16.0;
 
 /// Light and viewing rays may deviate at most this much (cosine) from the sweep direction;
 /// see MIN_FORWARD in glsl/sweep_common.glsl.
@@ -140,6 +206,8 @@ pub struct SweepOptions {
     /// Refractive-index scale k: the sweep uses η' = 1 + k (η_tf − 1), so 0 turns refraction
     /// off and 1 (default) is the transfer function's η.
     pub eta_scale: f32,
+    /// How light travels between planes.
+    pub light_transport: LightTransport,
     /// Benchmark baseline: run every plane with glsl/sweep_floor.frag, which only carries
     /// the state forward (same passes, barriers, attachments and reads). The image is not
     /// a rendering; the time is the floor the sweep's optics add to.
@@ -160,6 +228,7 @@ impl Default for SweepOptions {
             env_rotation: 0.0,
             env_footprint: true,
             eta_scale: 1.0,
+            light_transport: LightTransport::Backward,
             floor: false,
         }
     }
@@ -233,6 +302,8 @@ struct SweepParams {
     clip: [f32; 4],
     background: [f32; 4],
     refraction: [f32; 4],
+    light_grid: [f32; 4],
+    transport: [f32; 4],
 }
 
 /// std140 mirror of `EnvParams` in glsl/sweep_composite.comp.
@@ -347,9 +418,22 @@ pub(super) fn check(
 pub(super) struct SweepRecording {
     pub stats: SweepStats,
     pub dumps: Vec<(StateBuffer, u32, Buffer)>,
+    clamp_readback: Buffer,
 }
 
 impl SweepRecording {
+    /// The clamp counters, once the submission has completed.
+    pub fn read_clamps(&mut self) -> Result<()> {
+        let c: Vec<u32> = self.clamp_readback.read_values(4)?;
+        self.stats.clamps = Clamps {
+            light_direction: c[0] as u64,
+            light_dropped: c[1] as u64,
+            view_direction: c[2] as u64,
+            gain: c[3] as u64,
+        };
+        Ok(())
+    }
+
     /// The dumps, once the submission has completed.
     pub fn read_dumps(&self, width: u32, height: u32) -> Result<Vec<Dump>> {
         let count = width as usize * height as usize;
@@ -389,11 +473,48 @@ pub struct SweepStats {
     /// State-buffer bytes read and written per plane (render-pass loads, sampled reads
     /// including filter taps, attachment writes), over the whole viewport.
     pub bytes_per_plane: u64,
+    /// How light travelled.
+    pub light_transport: LightTransport,
+    /// Forward transport: the light rays' grid on the launch plane (one spacing before
+    /// plane 0): view x, y of ray (0, 0)'s cell corner, cell width and height; ray (i, j)
+    /// starts at the centre of its cell.
+    pub light_grid: [f32; 4],
+    /// How often physics was bent, summed over pixels and planes (read back after the
+    /// frame; zero for recorded frames that were not read back): see [`Clamps`].
+    pub clamps: Clamps,
+}
+
+/// Pixel-planes at which the sweep had to depart from its model (glsl/sweep_light.glsl).
+/// None of them creates light: clamped directions keep their flux, dropped rays lose it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Clamps {
+    /// Light directions bent back to 84° from the sweep direction.
+    pub light_direction: u64,
+    /// Light rays turned back against the sweep (total internal reflection): dropped.
+    pub light_dropped: u64,
+    /// Viewing-ray directions bent back to 84°.
+    pub view_direction: u64,
+    /// Backward transport: intensity gains bounded per plane.
+    pub gain: u64,
+}
+
+impl Clamps {
+    pub fn total(&self) -> u64 {
+        self.light_direction + self.light_dropped + self.view_direction + self.gain
+    }
 }
 
 struct StateImage {
     image: Image,
     layers: [LayerView; 2],
+}
+
+/// The forward transport's irradiance of the current plane (rgb) and its light direction
+/// (luminance-weighted sum of unit directions, weight in w): one layer each, accumulated by
+/// the splat pass and sampled by the next plane's viewing rays.
+struct IrradianceImage {
+    image: Image,
+    view: LayerView,
 }
 
 pub(super) struct SweepPass {
@@ -409,9 +530,24 @@ pub(super) struct SweepPass {
     setup: ComputePipeline,
     sweep: GraphicsPipeline,
     floor: GraphicsPipeline,
+    forward: Option<ForwardPipelines>,
+    irradiance: [IrradianceImage; 2],
+    splat_pass: RenderPass,
+    splat_framebuffer: Framebuffer,
+    counters: Buffer,
     composite: ComputePipeline,
     output: FrameTarget,
     env_params: Buffer,
+}
+
+/// The forward transport's pipelines, all on the plane set's layout so that switching
+/// between them leaves the descriptor set bound.
+struct ForwardPipelines {
+    plane: GraphicsPipeline,
+    plane_soft: GraphicsPipeline,
+    splat: GraphicsPipeline,
+    /// Largest splat half-width the device's point sizes allow.
+    max_half_width: f32,
 }
 
 impl SweepPass {
@@ -473,6 +609,52 @@ impl SweepPass {
         };
         let framebuffers = [fb(0)?, fb(1)?];
 
+        let irradiance_image = |name: &str| -> Result<IrradianceImage> {
+            let image = Image::new(
+                ctx,
+                ImageDesc {
+                    kind: ImageKind::D2Array,
+                    format: STATE_FORMAT,
+                    extent: [width, height, 1],
+                    layers: 1,
+                    usage: vk::usage::COLOR_ATTACHMENT
+                        | vk::usage::SAMPLED
+                        | vk::usage::STORAGE
+                        | vk::usage::TRANSFER_SRC,
+                },
+                name,
+            )?;
+            let view = image.layer_view(0)?;
+            Ok(IrradianceImage { image, view })
+        };
+        let irradiance = [
+            irradiance_image("irradiance")?,
+            irradiance_image("irradiance direction")?,
+        ];
+        let splat_pass = RenderPass::cleared(
+            ctx,
+            &[STATE_FORMAT; 2],
+            Access::AttachmentGeneral,
+            "light splat",
+        )?;
+        let splat_framebuffer = Framebuffer::new(
+            ctx,
+            &splat_pass,
+            &[&irradiance[0].view, &irradiance[1].view],
+            width,
+            height,
+            "light splat",
+        )?;
+        let counters = Buffer::new(
+            ctx,
+            16,
+            vk::usage::STORAGE_BUFFER
+                | vk::usage::BUFFER_TRANSFER_DST
+                | vk::usage::BUFFER_TRANSFER_SRC,
+            vk::Memory::Gpu,
+            "sweep clamp counters",
+        )?;
+
         let common = [
             Binding::Uniform(&params),
             Binding::Texture(volume, sampler),
@@ -485,7 +667,16 @@ impl SweepPass {
                 sampled.push(Binding::LayerTexture(view, sampler, Access::SampledGeneral));
             }
         }
-        let sweep_set = DescriptorSet::new(ctx, &sampled, "sweep")?;
+        let mut plane_bindings = sampled.clone();
+        for irr in &irradiance {
+            plane_bindings.push(Binding::LayerTexture(
+                &irr.view,
+                sampler,
+                Access::SampledGeneral,
+            ));
+        }
+        plane_bindings.push(Binding::Storage(&counters));
+        let sweep_set = DescriptorSet::new(ctx, &plane_bindings, "sweep")?;
         let output = FrameTarget::new(ctx, width, height, "sweep frame")?;
         let env_params = Buffer::uniform::<EnvParams>(ctx, "environment params")?;
         let mut composite_bindings = sampled.clone();
@@ -497,6 +688,9 @@ impl SweepPass {
         let mut setup_bindings: Vec<Binding> = common.to_vec();
         for s in &states {
             setup_bindings.push(Binding::StorageImage(&s.image));
+        }
+        for irr in &irradiance {
+            setup_bindings.push(Binding::StorageImage(&irr.image));
         }
         let setup_set = DescriptorSet::new(ctx, &setup_bindings, "sweep setup")?;
 
@@ -520,6 +714,40 @@ impl SweepPass {
             std::mem::size_of::<PlanePush>() as u32,
             "sweep floor plane",
         )?;
+        let forward = if ctx.info().large_points && ctx.info().fragment_atomics {
+            let plane = |fs: &[u8], name: &str| {
+                GraphicsPipeline::fullscreen(
+                    ctx,
+                    shaders::FULLSCREEN_VERT,
+                    fs,
+                    &render_pass,
+                    &sweep_set,
+                    std::mem::size_of::<PlanePush>() as u32,
+                    name,
+                )
+            };
+            let largest_point = ctx.info().limits.point_size_range[1];
+            Some(ForwardPipelines {
+                plane: plane(shaders::SWEEP_FORWARD_FRAG, "sweep plane (forward light)")?,
+                plane_soft: plane(
+                    shaders::SWEEP_FORWARD_SOFT_FRAG,
+                    "sweep plane (forward soft light)",
+                )?,
+                splat: GraphicsPipeline::new(
+                    ctx,
+                    shaders::LIGHT_SPLAT_VERT,
+                    shaders::LIGHT_SPLAT_FRAG,
+                    &splat_pass,
+                    &sweep_set,
+                    std::mem::size_of::<PlanePush>() as u32,
+                    Primitives::AdditivePoints,
+                    "light splat",
+                )?,
+                max_half_width: MAX_SPLAT_HALF_WIDTH.min(((largest_point - 2.0) / 2.0).floor()),
+            })
+        } else {
+            None
+        };
         let composite = ComputePipeline::new(
             ctx,
             shaders::SWEEP_COMPOSITE_COMP,
@@ -540,6 +768,11 @@ impl SweepPass {
             setup,
             sweep,
             floor,
+            forward,
+            irradiance,
+            splat_pass,
+            splat_framebuffer,
+            counters,
             composite,
             output,
             env_params,
@@ -611,6 +844,30 @@ impl SweepPass {
             .clip
             .map(|(n, o)| (n.normalize(), o))
             .unwrap_or((Vec3::ZERO, 0.0));
+        let forward = match (sweep.light_transport, &self.forward) {
+            (LightTransport::Backward, _) => None,
+            (LightTransport::Forward, Some(f)) => Some(f),
+            (LightTransport::Forward, None) => bail!(
+                "the forward light transport needs point sizes above 1 and fragment-shader \
+                 atomics (largePoints, fragmentStoresAndAtomics), which device '{}' lacks; \
+                 use --light-transport backward",
+                ctx.info().name
+            ),
+        };
+        let tan_half = (camera.fov_y.to_radians() * 0.5).tan();
+        let aspect = self.width as f32 / self.height as f32;
+        let grid = light_grid(
+            &planes,
+            light_view,
+            tan_half,
+            aspect,
+            [self.width, self.height],
+        );
+        let soft = sweep.light.softness > 0.0;
+        let (diffusion_w, diffusion_stride) = diffusion(
+            sweep.light.softness * info.ref_step,
+            (grid[2] * grid[3]).sqrt(),
+        );
         let p = SweepParams {
             view_to_tex: view_to_tex.to_cols_array(),
             view_to_world: view_to_world.to_cols_array(),
@@ -648,6 +905,13 @@ impl SweepPass {
             clip: [clip_n.x, clip_n.y, clip_n.z, clip_o],
             background: opts.background,
             refraction: [sweep.eta_scale, 0.0, 0.0, 0.0],
+            light_grid: grid,
+            transport: [
+                if forward.is_some() { 1.0 } else { 0.0 },
+                diffusion_w,
+                diffusion_stride as f32,
+                forward.map_or(MAX_SPLAT_HALF_WIDTH, |f| f.max_half_width),
+            ],
         };
         let e = EnvParams {
             info: [
@@ -659,6 +923,7 @@ impl SweepPass {
             mean: env.mean,
         };
 
+        let clamp_readback = Buffer::readback(ctx, 16, "sweep clamp counters readback")?;
         let dump_buffers: Vec<(StateBuffer, u32, Buffer)> = sweep
             .dumps
             .iter()
@@ -679,18 +944,29 @@ impl SweepPass {
             rec.transition_all(img, Access::Sampled);
         }
         rec.begin_scope("sweep setup");
-        rec.transition_many(&self.state_layers(0..2, Access::ComputeStorage));
+        rec.clear_storage(&self.counters);
+        let mut storage = self.state_layers(0..2, Access::ComputeStorage);
+        for irr in &self.irradiance {
+            storage.push((&irr.image, 0..1, Access::ComputeStorage));
+        }
+        rec.transition_many(&storage);
         rec.dispatch(&self.setup, &self.setup_set, &[], groups)?;
         // Both layers become sampled: every draw's set names both (see module docs).
-        rec.transition_many(&self.state_layers(0..2, Access::SampledGeneral));
+        let mut sampled = self.state_layers(0..2, Access::SampledGeneral);
+        for irr in &self.irradiance {
+            sampled.push((&irr.image, 0..1, Access::SampledGeneral));
+        }
+        rec.transition_many(&sampled);
         rec.end_scope();
 
         rec.begin_scope("sweep");
-        // Bound once: between planes only push constants change.
-        let plane_pipeline = if sweep.floor {
-            &self.floor
-        } else {
-            &self.sweep
+        // Bound once: between planes only push constants change, and the forward
+        // transport switches pipelines (same layout, so the set stays bound).
+        let plane_pipeline = match (sweep.floor, forward) {
+            (true, _) => &self.floor,
+            (false, Some(f)) if soft => &f.plane_soft,
+            (false, Some(f)) => &f.plane,
+            (false, None) => &self.sweep,
         };
         rec.bind_graphics(plane_pipeline, &self.sweep_set, self.width, self.height);
         for i in 0..planes.count {
@@ -704,7 +980,11 @@ impl SweepPass {
                     rec.assume_without_barrier(&s.image, read..read + 1, Access::SampledGeneral);
                 }
             } else {
-                rec.transition_many(&self.state_layers(read..read + 1, Access::SampledGeneral));
+                let mut items = self.state_layers(read..read + 1, Access::SampledGeneral);
+                for irr in &self.irradiance {
+                    items.push((&irr.image, 0..1, Access::SampledGeneral));
+                }
+                rec.transition_many(&items);
             }
             let attachments: Vec<(&Image, u32)> =
                 self.states.iter().map(|s| (&s.image, write)).collect();
@@ -721,9 +1001,61 @@ impl SweepPass {
             };
             rec.draw_fullscreen(plane_pipeline, bytemuck::bytes_of(&push))?;
             rec.end_render_pass();
+            let splat = forward.filter(|_| !sweep.floor);
+            if let Some(f) = splat {
+                // The rays just advanced to plane i deposit their flux on it. The light
+                // layer just written becomes sampled (by the splat's vertex shader); the
+                // irradiance images become attachments (begin_render_pass), after the
+                // viewing rays of this plane read them.
+                rec.transition_many(&[
+                    (
+                        &self.states[StateBuffer::LightColour.index()].image,
+                        write..write + 1,
+                        Access::SampledGeneral,
+                    ),
+                    (
+                        &self.states[StateBuffer::LightDirection.index()].image,
+                        write..write + 1,
+                        Access::SampledGeneral,
+                    ),
+                ]);
+                rec.begin_render_pass(
+                    &self.splat_pass,
+                    &self.splat_framebuffer,
+                    &[
+                        (&self.irradiance[0].image, 0),
+                        (&self.irradiance[1].image, 0),
+                    ],
+                )?;
+                rec.bind_pipeline(&f.splat);
+                let push = PlanePush {
+                    plane: i,
+                    read_layer: write,
+                    depth: planes.depth(i),
+                    pad: 0,
+                };
+                rec.draw(
+                    &f.splat,
+                    bytemuck::bytes_of(&push),
+                    self.width * self.height,
+                )?;
+                rec.end_render_pass();
+                rec.bind_pipeline(plane_pipeline);
+            }
             for (b, plane, buf) in &dump_buffers {
-                if *plane == i {
-                    rec.copy_image_to_buffer(&self.states[b.index()].image, write, buf);
+                if *plane != i {
+                    continue;
+                }
+                // With the forward transport the light buffers hold rays; what a plane's
+                // light is, is the splatted irradiance.
+                match (splat.is_some(), b) {
+                    (true, StateBuffer::LightColour) => {
+                        rec.copy_image_to_buffer(&self.irradiance[0].image, 0, buf)
+                    }
+                    (true, StateBuffer::LightDirection) => {
+                        rec.copy_image_to_buffer(&self.irradiance[1].image, 0, buf)
+                    }
+                    _ => rec.copy_image_to_buffer(&self.states[b.index()].image, write, buf),
                 }
             }
         }
@@ -740,13 +1072,67 @@ impl SweepPass {
             groups,
         )?;
         rec.end_scope();
+        rec.copy_storage_to_host(&self.counters, &clamp_readback);
         Ok(SweepRecording {
             stats: SweepStats {
                 planes,
-                bytes_per_plane: self
-                    .bytes_per_plane(sweep.light.softness > 0.0, sweep.specular > 0.0),
+                bytes_per_plane: self.bytes_per_plane(soft, sweep.specular > 0.0),
+                light_transport: sweep.light_transport,
+                light_grid: grid,
+                clamps: Clamps::default(),
             },
             dumps: dump_buffers,
+            clamp_readback,
         })
     }
+}
+
+/// The forward transport's grid of light rays on the launch plane (one spacing before plane
+/// 0), as (x, y of the grid's corner, cell width, cell height) in view units: every point of
+/// every plane's view rectangle traced back along the (unrefracted) light lands inside it,
+/// so no plane has a region that no ray could reach, plus two cells of margin for the
+/// splats at the border. One ray per pixel of the `size` grid.
+fn light_grid(
+    planes: &Planes,
+    light: Vec3,
+    tan_half: f32,
+    aspect: f32,
+    size: [u32; 2],
+) -> [f32; 4] {
+    let launch = planes.first_depth - planes.spacing;
+    let last = planes.depth(planes.count.saturating_sub(1));
+    let (mut lo, mut hi) = (
+        glam::Vec2::splat(f32::INFINITY),
+        glam::Vec2::splat(f32::NEG_INFINITY),
+    );
+    let slope = glam::Vec2::new(light.x, light.y) / light.z;
+    for z in [launch, last] {
+        for (sx, sy) in [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)] {
+            let corner = glam::Vec2::new(sx * z * tan_half * aspect, sy * z * tan_half);
+            let back = corner - slope * (z - launch);
+            lo = lo.min(back);
+            hi = hi.max(back);
+        }
+    }
+    let n = glam::Vec2::new(size[0] as f32, size[1] as f32);
+    // Two cells of margin on each side: cell = extent / (n - 4).
+    let cell = (hi - lo) / (n - 4.0).max(glam::Vec2::ONE);
+    let corner = lo - 2.0 * cell;
+    [corner.x, corner.y, cell.x, cell.y]
+}
+
+/// Softness as diffusion between neighbouring light rays: the weight each ray hands to each
+/// of its 4 neighbours `stride` rays away, so that every plane adds the per-axis variance
+/// of the thesis' soft-shadow kernel (3 taps on a circle of radius `radius` world units:
+/// radius²/2) for rays `cell` world units apart. The weight stays at most 0.2 (a larger
+/// variance takes a longer stride), keeping every ray's own share positive.
+fn diffusion(radius: f32, cell: f32) -> (f32, u32) {
+    if !(radius > 0.0 && cell > 0.0) {
+        return (0.0, 1);
+    }
+    // Per axis, the 5-point exchange adds 2 w stride² cells² of variance.
+    let cells2 = 0.5 * radius * radius / (cell * cell);
+    let w_stride2 = 0.5 * cells2;
+    let stride = (w_stride2 / 0.2).sqrt().ceil().max(1.0);
+    (w_stride2 / (stride * stride), stride as u32)
 }

@@ -89,6 +89,12 @@ pub struct DeviceInfo {
     /// (bytes, device-local) per heap.
     pub memory_heaps: Vec<(u64, bool)>,
     pub timestamps: bool,
+    /// Point sizes above 1 (the `largePoints` feature), enabled when offered: the plane
+    /// sweep's forward light transport splats each light ray as one point.
+    pub large_points: bool,
+    /// Storage-buffer atomics in fragment shaders (`fragmentStoresAndAtomics`), enabled
+    /// when offered: the plane sweep counts its clamps with them.
+    pub fragment_atomics: bool,
 }
 
 pub fn version_string(v: u32) -> String {
@@ -457,9 +463,15 @@ impl Context {
         let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut f13);
         // SAFETY: valid physical device and a well-formed pNext chain.
         unsafe { instance.get_physical_device_features2(physical, &mut f2) };
+        let core = f2.features;
         if f13.synchronization2 != vk::TRUE {
             bail!("device '{}' lacks synchronization2", info.name);
         }
+        info.large_points = core.large_points == vk::TRUE;
+        info.fragment_atomics = core.fragment_stores_and_atomics == vk::TRUE;
+        let core_features = vk::PhysicalDeviceFeatures::default()
+            .large_points(info.large_points)
+            .fragment_stores_and_atomics(info.fragment_atomics);
         let priorities = [1.0f32];
         let queue_infos = [vk::DeviceQueueCreateInfo::default()
             .queue_family_index(family)
@@ -477,6 +489,7 @@ impl Context {
         let device_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_infos)
             .enabled_extension_names(&device_exts)
+            .enabled_features(&core_features)
             .push_next(&mut enable13);
         // SAFETY: create info references locals that outlive the call.
         let device = unsafe { instance.create_device(physical, &device_info, None) }
@@ -666,6 +679,8 @@ fn query_info(instance: &ash::Instance, p: vk::PhysicalDevice, index: usize) -> 
         limits: props.limits,
         memory_heaps: heaps,
         timestamps: props.limits.timestamp_compute_and_graphics == vk::TRUE,
+        large_points: false,
+        fragment_atomics: false,
     }
 }
 

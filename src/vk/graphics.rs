@@ -18,6 +18,8 @@ pub struct RenderPass {
     pub(crate) raw: vk::RenderPass,
     pub(crate) attachments: usize,
     pub(crate) access: Access,
+    /// The pass clears its attachments to zero when it begins (accumulation targets).
+    pub(crate) clears: bool,
 }
 
 impl RenderPass {
@@ -26,6 +28,27 @@ impl RenderPass {
     /// `Access::AttachmentGeneral` for image arrays whose layers are rendered to and sampled
     /// in alternation.
     pub fn new(ctx: &Context, formats: &[vk::Format], access: Access, name: &str) -> Result<Self> {
+        Self::create(ctx, formats, access, false, name)
+    }
+
+    /// Like [`RenderPass::new`], but every attachment is cleared to zero when the pass
+    /// begins: for passes that accumulate into their attachments with additive blending.
+    pub fn cleared(
+        ctx: &Context,
+        formats: &[vk::Format],
+        access: Access,
+        name: &str,
+    ) -> Result<Self> {
+        Self::create(ctx, formats, access, true, name)
+    }
+
+    fn create(
+        ctx: &Context,
+        formats: &[vk::Format],
+        access: Access,
+        clears: bool,
+        name: &str,
+    ) -> Result<Self> {
         ensure!(
             matches!(access, Access::ColorAttachment | Access::AttachmentGeneral),
             "render pass attachments must be in ColorAttachment or AttachmentGeneral state"
@@ -48,7 +71,11 @@ impl RenderPass {
                     // descriptor set statically uses the views of both layers, so the layer
                     // being written would be reported as read-after-write (measured with the
                     // Debian layer 1.3.239). On immediate-mode GPUs and lavapipe LOAD is free.
-                    .load_op(vk::AttachmentLoadOp::LOAD)
+                    .load_op(if clears {
+                        vk::AttachmentLoadOp::CLEAR
+                    } else {
+                        vk::AttachmentLoadOp::LOAD
+                    })
                     .store_op(vk::AttachmentStoreOp::STORE)
                     .stencil_load_op(vk::AttachmentLoadOp::DONT_CARE)
                     .stencil_store_op(vk::AttachmentStoreOp::DONT_CARE)
@@ -78,6 +105,7 @@ impl RenderPass {
             raw,
             attachments: formats.len(),
             access,
+            clears,
         })
     }
 }
@@ -137,13 +165,24 @@ impl Drop for Framebuffer {
     }
 }
 
-/// A graphics pipeline that draws one full-screen triangle (vertex shader generates it
-/// from gl_VertexIndex; no vertex buffers), with dynamic viewport and scissor, no blending.
+/// How a [`GraphicsPipeline`] assembles and blends what its vertex shader generates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Primitives {
+    /// Triangles written over the attachments (no blending): full-screen passes.
+    Triangles,
+    /// Points (the vertex shader writes gl_PointSize; sizes above 1 need the device's
+    /// `largePoints`) added onto the attachments: ONE + ONE blending of every channel.
+    AdditivePoints,
+}
+
+/// A graphics pipeline without vertex buffers (the vertex shader generates its geometry
+/// from gl_VertexIndex), with dynamic viewport and scissor.
 pub struct GraphicsPipeline {
     pub(crate) core: PipelineCore,
 }
 
 impl GraphicsPipeline {
+    /// One full-screen triangle per draw, no blending.
     pub fn fullscreen(
         ctx: &Context,
         vertex: &[u8],
@@ -151,6 +190,33 @@ impl GraphicsPipeline {
         pass: &RenderPass,
         set: &DescriptorSet,
         push_size: u32,
+        name: &str,
+    ) -> Result<Self> {
+        Self::new(
+            ctx,
+            vertex,
+            fragment,
+            pass,
+            set,
+            push_size,
+            Primitives::Triangles,
+            name,
+        )
+    }
+
+    /// Pipelines made from the same descriptor set and push size have compatible layouts:
+    /// [`crate::vk::Recorder::bind_pipeline`] switches between them without rebinding the
+    /// set (on lavapipe a set bind per plane costs ~4 ms and 3 MB; a pipeline switch with
+    /// the set left bound costs almost nothing, measured).
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        ctx: &Context,
+        vertex: &[u8],
+        fragment: &[u8],
+        pass: &RenderPass,
+        set: &DescriptorSet,
+        push_size: u32,
+        primitives: Primitives,
         name: &str,
     ) -> Result<Self> {
         let device = ctx.device();
@@ -178,8 +244,11 @@ impl GraphicsPipeline {
                 .name(c"main"),
         ];
         let vertex_input = vk::PipelineVertexInputStateCreateInfo::default();
-        let assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
-            .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+        let assembly =
+            vk::PipelineInputAssemblyStateCreateInfo::default().topology(match primitives {
+                Primitives::Triangles => vk::PrimitiveTopology::TRIANGLE_LIST,
+                Primitives::AdditivePoints => vk::PrimitiveTopology::POINT_LIST,
+            });
         let viewport = vk::PipelineViewportStateCreateInfo::default()
             .viewport_count(1)
             .scissor_count(1);
@@ -192,9 +261,19 @@ impl GraphicsPipeline {
             .rasterization_samples(vk::SampleCountFlags::TYPE_1);
         let blend_attachments: Vec<_> = (0..pass.attachments)
             .map(|_| {
-                vk::PipelineColorBlendAttachmentState::default()
-                    .blend_enable(false)
-                    .color_write_mask(vk::ColorComponentFlags::RGBA)
+                let state = vk::PipelineColorBlendAttachmentState::default()
+                    .color_write_mask(vk::ColorComponentFlags::RGBA);
+                match primitives {
+                    Primitives::Triangles => state.blend_enable(false),
+                    Primitives::AdditivePoints => state
+                        .blend_enable(true)
+                        .src_color_blend_factor(vk::BlendFactor::ONE)
+                        .dst_color_blend_factor(vk::BlendFactor::ONE)
+                        .color_blend_op(vk::BlendOp::ADD)
+                        .src_alpha_blend_factor(vk::BlendFactor::ONE)
+                        .dst_alpha_blend_factor(vk::BlendFactor::ONE)
+                        .alpha_blend_op(vk::BlendOp::ADD),
+                }
             })
             .collect();
         let blend =

@@ -178,7 +178,7 @@ pub enum Access {
     Undefined,
     TransferDst,
     TransferSrc,
-    /// Sampled (texture()) from a compute or fragment shader.
+    /// Sampled (texture()) from a compute, vertex or fragment shader.
     Sampled,
     /// Read and written as a storage image from a compute shader.
     ComputeStorage,
@@ -188,7 +188,7 @@ pub enum Access {
     /// image array be rendered to and sampled layer by layer (the plane sweep's ping-pong)
     /// with memory barriers only: descriptors of both layers stay valid at every draw.
     AttachmentGeneral,
-    /// Sampled from a fragment or compute shader, in GENERAL layout.
+    /// Sampled from a compute, vertex or fragment shader, in GENERAL layout.
     SampledGeneral,
     /// A swapchain image just acquired: its old contents are discarded (UNDEFINED layout),
     /// and the stage is the one the acquire semaphore is waited at, so the first barrier
@@ -218,13 +218,17 @@ impl Access {
             Access::Undefined => vk::PipelineStageFlags2::NONE,
             Access::TransferDst | Access::TransferSrc => vk::PipelineStageFlags2::COPY,
             Access::Sampled => {
-                vk::PipelineStageFlags2::COMPUTE_SHADER | vk::PipelineStageFlags2::FRAGMENT_SHADER
+                vk::PipelineStageFlags2::COMPUTE_SHADER
+                    | vk::PipelineStageFlags2::FRAGMENT_SHADER
+                    | vk::PipelineStageFlags2::VERTEX_SHADER
             }
             Access::ComputeStorage => vk::PipelineStageFlags2::COMPUTE_SHADER,
             Access::ColorAttachment => vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
             Access::AttachmentGeneral => vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
             Access::SampledGeneral => {
-                vk::PipelineStageFlags2::COMPUTE_SHADER | vk::PipelineStageFlags2::FRAGMENT_SHADER
+                vk::PipelineStageFlags2::COMPUTE_SHADER
+                    | vk::PipelineStageFlags2::FRAGMENT_SHADER
+                    | vk::PipelineStageFlags2::VERTEX_SHADER
             }
             Access::Acquired => ACQUIRE_WAIT_STAGE,
             Access::Present => vk::PipelineStageFlags2::NONE,

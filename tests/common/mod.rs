@@ -7,7 +7,7 @@ use std::sync::Arc;
 use refrakt::render::{Camera, Frame, Model, RenderOptions, Renderer};
 use refrakt::transfer::TransferFunctions;
 use refrakt::vk::{Context, ContextDesc, ValidationLog};
-use refrakt::volume::Volume;
+use refrakt::volume::{Volume, Voxels};
 
 /// A context with validation and synchronization validation on. Honours REFRAKT_DEVICE so
 /// the suite can be pointed at a real GPU.
@@ -49,6 +49,7 @@ pub fn face_on(distance: f32, fov_y: f32) -> Camera {
         elevation: 0.0,
         distance,
         fov_y,
+        ..Default::default()
     }
 }
 
@@ -83,4 +84,34 @@ pub fn refrakt_command(args: &[&str]) -> std::process::Command {
 /// Runs `refrakt` with validation on and returns its output.
 pub fn refrakt(args: &[&str]) -> std::process::Output {
     refrakt_command(args).output().expect("running refrakt")
+}
+
+/// An n³ volume of f32 values f(p), p the voxel centre in [-0.5, 0.5]³, clamped to [0, 1]
+/// and mapped to [0, 1] unchanged.
+pub fn f32_volume(n: u32, f: impl Fn([f32; 3]) -> f32) -> Volume {
+    let mut v = Vec::new();
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                let p = [x, y, z].map(|i| (i as f32 + 0.5) / n as f32 - 0.5);
+                v.push(f(p).clamp(0.0, 1.0));
+            }
+        }
+    }
+    let mut vol = Volume::new([n; 3], [1.0; 3], Voxels::F32(v)).unwrap();
+    vol.range = Some((0.0, 1.0));
+    vol
+}
+
+/// Value 1 inside a ball of radius r centred at `c`, 0 outside, a one-voxel linear ramp
+/// on the surface.
+pub fn ball_at(n: u32, r: f32, c: [f32; 3]) -> Volume {
+    f32_volume(n, |p| {
+        0.5 + (r - (glam::Vec3::from(p) - glam::Vec3::from(c)).length()) * n as f32
+    })
+}
+
+/// [`ball_at`] the centre.
+pub fn ball(n: u32, r: f32) -> Volume {
+    ball_at(n, r, [0.0; 3])
 }

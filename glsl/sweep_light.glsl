@@ -1,0 +1,23 @@
+// What the plane passes share beyond the state buffers: the irradiance of the current
+// plane splatted from the forward transport's light rays, and the clamp counters.
+#ifndef REFRAKT_SWEEP_LIGHT_GLSL
+#define REFRAKT_SWEEP_LIGHT_GLSL
+
+// rgb = irradiance (flux per unit plane area, relative to the unobstructed light: an
+// unobstructed beam reads the light colour), a unused.
+layout(set = 0, binding = 16) uniform sampler2D irradiance;
+// xyz = sum of luminance-weighted unit light directions, w = sum of the weights.
+layout(set = 0, binding = 17) uniform sampler2D irradiance_direction;
+
+// How often the sweep had to bend physics, summed over pixels and planes (read back and
+// printed): 0 = light direction clamped to MIN_FORWARD, 1 = light ray turned back and
+// dropped, 2 = viewing-ray direction clamped, 3 = backward step's intensity gain clamped.
+layout(set = 0, binding = 18, std430) buffer Counters {
+    uint clamps[4];
+} counters;
+
+void count_clamp(uint which) {
+    atomicAdd(counters.clamps[which], 1u);
+}
+
+#endif

@@ -1,0 +1,326 @@
+// One plane of the refractive plane sweep (thesis ch. 4, Algorithm 1): a full-screen draw
+// per plane; reads the previous plane's state from layer `read_layer` and writes this
+// plane's into the other layer (the render pass's attachments). Included by sweep.frag
+// (FORWARD_LIGHT 0: the thesis' backward light step) and sweep_forward.frag
+// (FORWARD_LIGHT 1: light rays advanced forward, their flux splatted by light_splat.*).
+#ifndef FORWARD_LIGHT
+#error "define FORWARD_LIGHT before including sweep_plane.glsl"
+#endif
+#ifndef LIGHT_SUBSTEPS
+#define LIGHT_SUBSTEPS 2
+#endif
+#include "sweep_common.glsl"
+#include "sweep_buffers.glsl"
+#include "sweep_light.glsl"
+
+layout(push_constant) uniform Push {
+    uint plane;
+    uint read_layer;
+    float depth;   // depth of this plane
+    uint pad;
+} pc;
+
+layout(location = 0) out vec4 out_light_colour;
+layout(location = 1) out vec4 out_light_direction;
+layout(location = 2) out vec4 out_view_position;
+layout(location = 3) out vec4 out_view_direction;
+layout(location = 4) out vec4 out_colour_opacity;
+layout(location = 5) out vec4 out_medium;
+
+const float PI = 3.14159265358979;
+
+// Light colour and direction at `uv` of the read layer, bilinearly interpolated with the
+// directions weighted by the light they carry: where lit and fully absorbed rays meet (a
+// shadow edge, a stopped-down aperture, rays crossing in a caustic), the direction of light
+// that is not there must not bend the light that is. Where no light arrives at all, plain
+// bilinear weights keep the direction field defined.
+void light_at(vec2 uv, uint layer, out vec3 light, out vec3 dir) {
+    ivec2 size = textureSize(light_colour_0, 0);
+    vec2 x = uv * vec2(size) - 0.5;
+    ivec2 i = ivec2(floor(x));
+    vec2 t = x - vec2(i);
+    ivec2 hi = size - 1;
+    light = vec3(0.0);
+    vec3 d_plain = vec3(0.0);
+    vec3 d_lit = vec3(0.0);
+    float lit = 0.0;
+    for (int k = 0; k < 4; ++k) {
+        ivec2 o = ivec2(k & 1, k >> 1);
+        ivec2 c = clamp(i + o, ivec2(0), hi);
+        float w = (o.x == 1 ? t.x : 1.0 - t.x) * (o.y == 1 ? t.y : 1.0 - t.y);
+        vec3 l = READ_PIXEL(light_colour, layer, c).rgb;
+        vec3 d = READ_PIXEL(light_direction, layer, c).xyz;
+        float lum = dot(l, vec3(0.2126, 0.7152, 0.0722));
+        light += w * l;
+        d_plain += w * d;
+        d_lit += w * lum * d;
+        lit += w * lum;
+    }
+    dir = lit > 1e-6 ? d_lit / lit : d_plain;
+}
+
+float hash(uvec3 v) {
+    uint h = v.x * 0x8da6b343u ^ v.y * 0xd8163841u ^ v.z * 0xcb1ab31fu;
+    h ^= h >> 13; h *= 0x5bd1e995u; h ^= h >> 15;
+    return float(h & 0xffffu) / 65536.0;
+}
+
+// Preintegrated segment from value a to value b, `ratio` reference steps long:
+// premultiplied colour, opacity (eq. 3.19), medium (power rule).
+void segment(float a, float b, float ratio, bool clip, out vec3 colour, out float alpha,
+             out vec3 m) {
+    vec2 c = preint_coord(a, b);
+    vec4 ca = textureLod(preint, vec3(c, 0.0), 0.0);
+    m = correct_medium(textureLod(preint, vec3(c, 1.0), 0.0).rgb, ratio);
+    alpha = correct_opacity(ca.a, ratio);
+    colour = ca.a > 1e-6 ? ca.rgb * (alpha / ca.a) : ca.rgb * ratio;
+    if (clip) { alpha = 0.0; colour = vec3(0.0); }  // clipping keeps the medium (Fig. 6.6)
+}
+
+// Cook-Torrance Fresnel for unpolarised light (eq. 4.12; the thesis prints the bracket's
+// square and (g+c) as (g+2) wrongly). eta_ratio = eta_t / eta_i; total reflection where g
+// would be imaginary.
+float fresnel(float c, float eta_ratio) {
+    float g2 = eta_ratio * eta_ratio - 1.0 + c * c;
+    if (g2 <= 0.0) return 1.0;
+    float g = sqrt(g2);
+    float a = (g - c) / (g + c);
+    float b = (c * (g + c) - 1.0) / (c * (g - c) + 1.0);
+    return 0.5 * a * a * (1.0 + b * b);
+}
+
+// Cook-Torrance specular (eqs. 4.9-4.11): GGX D with alpha = roughness^2, Smith-Schlick G
+// with k = (roughness + 1)^2 / 8. Returns the reflected fraction of the incident light
+// (R_s times n.l).
+float specular_term(vec3 n, vec3 l, vec3 v, float eta_ratio) {
+    float nl = dot(n, l), nv = dot(n, v);
+    if (nl <= 0.0 || nv <= 0.0) return 0.0;
+    vec3 h = normalize(l + v);
+    float nh = max(dot(n, h), 0.0);
+    float r = P.specular.x;
+    float a2 = r * r * r * r;
+    float den = nh * nh * (a2 - 1.0) + 1.0;
+    float D = a2 / (PI * den * den);
+    float k = (r + 1.0) * (r + 1.0) / 8.0;
+    float G = (nl / (nl * (1.0 - k) + k)) * (nv / (nv * (1.0 - k) + k));
+    float F = fresnel(max(dot(v, h), 0.0), eta_ratio);
+    return D * F * G / (4.0 * nv);
+}
+
+void main() {
+    vec2 size = P.camera.zw;
+    vec2 uv = gl_FragCoord.xy / size;
+    uint R = pc.read_layer;
+    float ds = P.planes.y;
+    float ref_step = P.planes.w;
+    ivec2 pixel = ivec2(gl_FragCoord.xy);
+
+#if FORWARD_LIGHT
+    // ---- light propagation, forward (Lagrangian) --------------------------------------
+    // Each texel of the light state is one light ray: flux (rgb) and its position on the
+    // previous plane (.w of both buffers), direction v = eta dx/ds (eq. 4.2). The ray is
+    // advanced to this plane on its own; no neighbour's direction bends it, so rays cross
+    // through a focus as they do physically (thesis ch. 7's bright spots came from the
+    // backward step's one direction per pixel). Irradiance is made from the rays
+    // afterwards by light_splat.*, which conserves their flux.
+    ivec2 ray = pixel;
+    vec4 lc = READ_PIXEL(light_colour, R, ray);
+    vec4 lv = READ_PIXEL(light_direction, R, ray);
+    vec3 flux = lc.rgb;
+#if SOFT_LIGHT
+    // Softness as diffusion of flux between neighbouring rays: each ray hands the fraction
+    // w of its flux to each of its four neighbours `stride` rays away and receives theirs.
+    // The same w everywhere makes the exchange symmetric, so the total is conserved
+    // exactly; a missing neighbour (grid edge) hands the share back to the ray itself.
+    // Per plane this adds the variance of the thesis' soft-shadow kernel (sect. 5.2), so
+    // penumbrae widen with the distance behind an occluder.
+    {
+        float w = P.transport.y;
+        int stride = int(P.transport.z);
+        ivec2 hi = ivec2(P.camera.zw) - 1;
+        vec3 gathered = vec3(0.0);
+        for (int k = 0; k < 4; ++k) {
+            ivec2 o = (k < 2 ? ivec2(k == 0 ? stride : -stride, 0)
+                             : ivec2(0, k == 2 ? stride : -stride));
+            ivec2 c = ray + o;
+            bool inside = all(greaterThanEqual(c, ivec2(0))) && all(lessThanEqual(c, hi));
+            gathered += inside ? READ_PIXEL(light_colour, R, c).rgb : flux;
+        }
+        flux = (1.0 - 4.0 * w) * flux + w * gathered;
+    }
+#endif
+    vec3 p_old = vec3(lc.w, lv.w, pc.depth - ds);
+    vec3 v_old = lv.xyz;
+    float eta_old = length(v_old);
+    vec3 d_old = v_old / eta_old;
+    vec3 p_new = p_old + d_old * (ds / d_old.z);
+    float f_old = value_at_tex(to_tex(p_old));
+    float f_new = value_at_tex(to_tex(p_new));
+    float step_len = length(p_new - p_old);
+    vec3 seg_c; float seg_a; vec3 seg_m;
+    segment(f_old, f_new, step_len / ref_step, clipped(p_new), seg_c, seg_a, seg_m);
+    flux *= (1.0 - seg_a) * seg_m;                                          // eq. 4.4
+    // The direction in LIGHT_SUBSTEPS Snell steps, each with the interface normal at its
+    // own midpoint: a curved interface crossed within one plane spacing turns the ray
+    // by the normals along its way, not by one (rays grazing a sphere's rim otherwise
+    // meet a normal several degrees off and are totally reflected, measured).
+    vec3 v_new = v_old;
+    for (int k = 0; k < LIGHT_SUBSTEPS; ++k) {
+        float t0 = float(k) / float(LIGHT_SUBSTEPS), t1 = float(k + 1) / float(LIGHT_SUBSTEPS);
+        // The interface normal is the value's gradient: refract_step needs only its
+        // direction (either sign), and level sets of the value are where eta changes.
+        vec3 normal = value_gradient(mix(p_old, p_new, 0.5 * (t0 + t1)));
+        float f_end = k + 1 == LIGHT_SUBSTEPS ? f_new : value_at_tex(to_tex(mix(p_old, p_new, t1)));
+        v_new = refract_step(v_new, eta_of(f_end), normal);
+    }
+    float fwd = v_new.z / length(v_new);
+    if (!(fwd > 0.0)) {
+        // Turned back (total internal reflection against the sweep): this light leaves
+        // the sweep. Dropped, counted, never re-aimed.
+        count_clamp(1u);
+        flux = vec3(0.0);
+        v_new = v_old;
+    } else if (fwd < MIN_FORWARD) {
+        count_clamp(0u);
+        v_new = limit_direction(v_new);
+    }
+    if (any(isnan(flux)) || any(isinf(flux))) flux = vec3(0.0);
+    vec3 light = flux;
+    vec3 light_dir = v_new;
+
+#else
+    // ---- light propagation (sect. 4.2, 5.2) -------------------------------------------
+    vec3 p = plane_point(uv, pc.depth);
+    vec3 ld_here = READ_PIXEL(light_direction, R, pixel).xyz;
+    // Backward (semi-Lagrangian) step: follow the light direction back to plane i-1.
+    vec3 lp = p - ld_here * (ds / ld_here.z);
+    vec2 uv_lp = project(lp);
+
+    // Elliptical 3-tap kernel (after Patel et al.): a disc of radius `softness` reference
+    // steps perpendicular to the light, projected onto the previous plane (stretched along
+    // the light's lateral direction), with a per-pixel, per-plane random rotation. Applied
+    // at every plane, the blur accumulates (incremental convolution): penumbrae widen with
+    // distance behind the occluder and with softness.
+    vec3 light_prev = vec3(0.0);
+    vec3 dir_prev = vec3(0.0);
+    float softness = P.light_dir.w;
+    if (softness > 0.0) {
+        vec3 dn = normalize(ld_here);
+        float radius = softness * ref_step;                          // world units
+        vec2 lateral = length(dn.xy) > 1e-6 ? normalize(dn.xy) : vec2(1.0, 0.0);
+        vec2 across = vec2(-lateral.y, lateral.x);
+        float world_per_uv_y = 2.0 * (pc.depth - ds) * P.camera.x;  // plane i-1 height
+        vec2 to_uv = vec2(1.0 / (world_per_uv_y * P.camera.y), -1.0 / world_per_uv_y);
+        float rot = 2.0 * PI * hash(uvec3(gl_FragCoord.xy, pc.plane));
+        for (int k = 0; k < 3; ++k) {
+            float phi = rot + float(k) * (2.0 * PI / 3.0);
+            vec2 offset = radius * (cos(phi) / dn.z * lateral + sin(phi) * across);
+            vec3 l, d;
+            light_at(uv_lp + offset * to_uv, R, l, d);
+            light_prev += l;
+            dir_prev += d;
+        }
+        light_prev /= 3.0;
+        dir_prev /= 3.0;
+    } else {
+        light_at(uv_lp, R, light_prev, dir_prev);
+    }
+
+    // Intensity law (eqs. 4.6-4.8): I = S_{i-1} / S_i, the areas of this pixel's footprint
+    // on this plane and of the light's origin on the previous one. Areas from the cross
+    // product of the screen-space derivatives (exact for sheared footprints).
+    float s_here = length(cross(dFdxFine(p), dFdyFine(p)));
+    float s_prev = length(cross(dFdxFine(lp), dFdyFine(lp)));
+    float gain = s_prev / s_here;
+    // Chapter 7's bright spots: neighbours with very different directions give huge
+    // footprints. Bound the gain per plane (P.light_colour.w) and never let NaN/Inf through.
+    if (!(gain >= 0.0) || isinf(gain)) gain = 1.0;
+    if (gain > P.light_colour.w) {
+        count_clamp(3u);
+        gain = P.light_colour.w;
+    }
+
+    float f_p, f_lp;
+    vec3 grad_f_p, grad_eta_p;
+    sample_field(p, f_p, grad_f_p, grad_eta_p);
+    f_lp = value_at_tex(to_tex(lp));
+    float light_len = length(p - lp);
+    vec3 seg_c; float seg_a; vec3 seg_m;
+    segment(f_lp, f_p, light_len / ref_step, clipped(p), seg_c, seg_a, seg_m);
+    vec3 light = light_prev * gain * (1.0 - seg_a) * seg_m;               // eq. 4.4
+    vec3 light_dir = dir_prev + light_len * grad_eta_p;                  // eq. 4.5
+    if (light_dir.z < MIN_FORWARD * length(light_dir)) count_clamp(0u);
+    light_dir = limit_direction(light_dir);
+    if (any(isnan(light)) || any(isinf(light))) light = vec3(0.0);
+
+#endif
+    // ---- viewing rays (sect. 4.3, 5.2) ------------------------------------------------
+    vec4 vp4 = READ_PIXEL(view_position, R, pixel);
+    vec4 vd4 = READ_PIXEL(view_direction, R, pixel);
+    vec4 CA = READ_PIXEL(colour_opacity, R, pixel);
+    vec4 M4 = READ_PIXEL(medium, R, pixel);
+    vec3 vp = vp4.xyz;
+    vec3 vd = vd4.xyz;
+    vec3 C = CA.rgb;
+    float A = CA.a;
+    vec3 M = M4.rgb;
+
+    float f_v;
+    vec3 grad_f, grad_eta;
+    sample_field(vp, f_v, grad_f, grad_eta);
+    float eta_here = eta_of(f_v);
+    vec3 dir = normalize(vd);
+    float seg_len = ds / dir.z;   // arc length from plane i-1 to this plane
+
+    if (A < P.specular.z) {
+        vec2 uv_v = project(vp);
+#if FORWARD_LIGHT
+        vec3 i_d = bilinear(irradiance, uv_v).rgb;
+#else
+        vec3 i_d = READ_BUFFER(light_colour, R, uv_v).rgb;
+#endif
+        vec3 i_s = vec3(0.0);
+        bool unlit = P.volume_dims.w > 0.5;
+        if (unlit) {
+            i_d = vec3(1.0);
+        } else if (P.specular.y > 0.0 && dot(grad_f, grad_f) > 1e-8) {
+#if FORWARD_LIGHT
+            vec4 ls = bilinear(irradiance_direction, uv_v);
+            vec3 l = -normalize(ls.w > 0.0 ? ls.xyz : P.light_dir.xyz);
+#else
+            vec3 l = -normalize(READ_BUFFER(light_direction, R, uv_v).xyz);
+#endif
+            vec3 v = -dir;
+            vec3 n = normalize(grad_f);
+            if (dot(n, v) < 0.0) n = -n;
+            i_s = P.specular.y * specular_term(n, l, v, eta_here / vd4.w) * i_d;
+        }
+        vec3 c; float a; vec3 m;
+        segment(vp4.w, f_v, seg_len / ref_step, clipped(vp), c, a, m);
+        // Oddy-Willis compositing (eq. 4.13): the medium factor once, specular not
+        // multiplied by opacity.
+        C += (1.0 - A) * M * (c * i_d + i_s);
+        A += (1.0 - A) * a;
+        M *= m;
+    }
+    // Bend (eq. 4.3) and advance to the next plane.
+    vd += seg_len * grad_eta;
+    if (vd.z < MIN_FORWARD * length(vd)) {
+        count_clamp(2u);
+        vd = limit_direction(vd);
+    }
+    vec3 next_dir = normalize(vd);
+    vec3 vp_next = vp + next_dir * (ds / next_dir.z);
+
+#if FORWARD_LIGHT
+    out_light_colour = vec4(light, p_new.x);
+    out_light_direction = vec4(light_dir, p_new.y);
+#else
+    out_light_colour = vec4(light, 0.0);
+    out_light_direction = vec4(light_dir, 0.0);
+#endif
+    out_view_position = vec4(vp_next, f_v);
+    out_view_direction = vec4(vd, eta_here);
+    out_colour_opacity = vec4(C, A);
+    out_medium = vec4(M, 0.0);
+}
