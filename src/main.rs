@@ -54,6 +54,10 @@ enum Command {
     /// right-drag or the arrow keys move the light, H prints every key. Takes the same
     /// scene options as `render`.
     View(Box<ViewArgs>),
+    /// Reference CPU photon tracer: the irradiance of the scene's light on one plane of
+    /// the sweep (--plane K, as `render --dump light-colour@K`) or at a view depth,
+    /// written as linear EXR; the oracle for the sweep's caustics, shadows and power.
+    Photons(Box<PhotonsArgs>),
     /// Generate (and cache) thesis stand-ins ahead of time, printing the time each took;
     /// `render` and `bench` generate missing ones themselves.
     Generate(GenerateArgs),
@@ -377,6 +381,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Info => info(&desc),
         Command::Render(args) => render(&desc, &args),
         Command::View(args) => view(&desc, *args),
+        Command::Photons(args) => photons(&args),
         Command::Generate(args) => generate(&args),
         Command::Bench(BenchCommand::Thesis(args)) => bench_thesis(&desc, &args),
         Command::Bench(BenchCommand::Scaling(args)) => bench_scaling(&desc, &args),
@@ -1002,5 +1007,95 @@ fn view(desc: &ContextDesc, args: ViewArgs) -> Result<ExitCode> {
         );
         return Ok(ExitCode::from(3));
     }
+    Ok(ExitCode::SUCCESS)
+}
+
+#[derive(Args)]
+struct PhotonsArgs {
+    /// Plane of the sweep (0-based, with the scene's --sample-distance), as in
+    /// `render --dump light-colour@K`.
+    #[arg(
+        long,
+        value_name = "K",
+        required_unless_present = "depth",
+        conflicts_with = "depth"
+    )]
+    plane: Option<u32>,
+    /// View depth of the plane instead of a plane number.
+    #[arg(long, value_name = "Z")]
+    depth: Option<f32>,
+    /// Output image (.exr only: rgb = irradiance, a = 0, the layout of the dumps).
+    #[arg(short, long, default_value = "photons.exr")]
+    output: PathBuf,
+    /// Photons per pixel of the plane (round(sqrt(N)) per axis).
+    #[arg(long, default_value_t = 64)]
+    photons_per_pixel: u32,
+    /// RK4 step in voxels.
+    #[arg(long, default_value_t = 0.1)]
+    step: f32,
+    /// Jitter photons within their launch cells (stratified) instead of a regular grid.
+    #[arg(long)]
+    jitter: bool,
+    /// Seed of the jitter.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Worker threads [default: all cores].
+    #[arg(long)]
+    threads: Option<usize>,
+    #[command(flatten)]
+    scene: SceneArgs,
+}
+
+fn photons(args: &PhotonsArgs) -> Result<ExitCode> {
+    use refrakt::photons::{self, PhotonOptions};
+    let ext = args.output.extension().and_then(|e| e.to_str());
+    if !ext.is_some_and(|e| e.eq_ignore_ascii_case("exr")) {
+        bail!(
+            "{}: the photon tracer writes linear EXR only; use a .exr file name",
+            args.output.display()
+        );
+    }
+    output::format_for(&args.output)?;
+    let popts = PhotonOptions {
+        photons_per_pixel: args.photons_per_pixel,
+        step: args.step,
+        seed: args.seed,
+        jitter: args.jitter,
+        threads: args.threads.unwrap_or(0),
+    };
+    popts.validate()?;
+    let LoadedScene {
+        name,
+        volume,
+        tf,
+        camera,
+        opts,
+        ..
+    } = build_scene(&args.scene)?;
+    let planes = photons::planes(&volume, &camera, &opts)?;
+    let depth = match (args.plane, args.depth) {
+        (Some(k), _) => photons::plane_depth(&volume, &camera, &opts, k)?,
+        (None, Some(z)) => z,
+        (None, None) => bail!("give --plane K or --depth Z"),
+    };
+    let img = photons::trace_irradiance(&volume, &tf, &camera, &opts, depth, &popts)?;
+    output::write_pixels(img.width, img.height, &img.pixels, &args.output)?;
+    println!(
+        "irradiance of the {} scene ({}x{}x{}, transfer functions {}) on the plane at view \
+         depth {depth:.5}{}, {}x{}",
+        name,
+        volume.dims[0],
+        volume.dims[1],
+        volume.dims[2],
+        tf.name,
+        match args.plane {
+            Some(k) => format!(" (plane {k} of 0..{})", planes.count - 1),
+            None => String::new(),
+        },
+        img.width,
+        img.height
+    );
+    println!("{}", img.summary());
+    println!("wrote {}", args.output.display());
     Ok(ExitCode::SUCCESS)
 }

@@ -461,7 +461,7 @@ impl Renderer {
         let ctx = self.ctx.clone();
         let mut recorded = None;
         let timings = ctx.execute(|rec| {
-            let r = self.record_inner(rec, model, camera, opts)?;
+            let r = self.record_inner(rec, model, camera, opts, true)?;
             self.target(model)?.record_copy(rec);
             recorded = Some(r);
             Ok(())
@@ -507,7 +507,7 @@ impl Renderer {
             "state-buffer dumps are read back by Renderer::render, not recorded frames"
         );
         self.check(model, camera, opts)?;
-        let r = self.record_inner(rec, model, camera, opts)?;
+        let r = self.record_inner(rec, model, camera, opts, false)?;
         Ok(RecordedFrame {
             image: &self.target(model)?.image,
             max_steps: r.max_steps,
@@ -530,6 +530,7 @@ impl Renderer {
         model: Model,
         camera: &Camera,
         opts: &RenderOptions,
+        read_back: bool,
     ) -> Result<Recorded> {
         if self.tf_dirty {
             self.preint.record_build(rec, &self.tf)?;
@@ -538,7 +539,7 @@ impl Renderer {
         // The benchmark's frame time: every pass and barrier of the frame, without a table
         // rebuild (only when the transfer functions change) and without the copy out.
         rec.begin_scope("render");
-        let recorded = self.record_passes(rec, model, camera, opts);
+        let recorded = self.record_passes(rec, model, camera, opts, read_back);
         rec.end_scope();
         recorded
     }
@@ -549,6 +550,7 @@ impl Renderer {
         model: Model,
         camera: &Camera,
         opts: &RenderOptions,
+        read_back: bool,
     ) -> Result<Recorded> {
         match model {
             Model::Ea => {
@@ -606,6 +608,7 @@ impl Renderer {
                     &opts.sweep,
                     [&self.volume_tex, &self.tf_image, self.preint.image()],
                     &env,
+                    read_back,
                 )?;
                 Ok(Recorded {
                     max_steps: recording.stats.planes.count,

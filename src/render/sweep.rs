@@ -418,13 +418,18 @@ pub(super) fn check(
 pub(super) struct SweepRecording {
     pub stats: SweepStats,
     pub dumps: Vec<(StateBuffer, u32, Buffer)>,
-    clamp_readback: Buffer,
+    /// Where the clamp counters are copied to; `None` for frames that are not read back
+    /// (the viewer's): the copy would outlive this recording's buffer.
+    clamp_readback: Option<Buffer>,
 }
 
 impl SweepRecording {
     /// The clamp counters, once the submission has completed.
     pub fn read_clamps(&mut self) -> Result<()> {
-        let c: Vec<u32> = self.clamp_readback.read_values(4)?;
+        let Some(buf) = &self.clamp_readback else {
+            return Ok(());
+        };
+        let c: Vec<u32> = buf.read_values(4)?;
         self.stats.clamps = Clamps {
             light_direction: c[0] as u64,
             light_dropped: c[1] as u64,
@@ -826,6 +831,7 @@ impl SweepPass {
         sweep: &SweepOptions,
         inputs: [&Image; 3],
         env: &EnvInputs,
+        read_back: bool,
     ) -> Result<SweepRecording> {
         let (eye, forward, right, up) = camera.frame();
         let travel = -sweep.light.towards.normalize();
@@ -923,7 +929,13 @@ impl SweepPass {
             mean: env.mean,
         };
 
-        let clamp_readback = Buffer::readback(ctx, 16, "sweep clamp counters readback")?;
+        // Only frames read back by the caller (dumps are the same case) copy the counters
+        // out: a recorded frame's buffers die with the recording, before the GPU runs it.
+        let clamp_readback = if read_back {
+            Some(Buffer::readback(ctx, 16, "sweep clamp counters readback")?)
+        } else {
+            None
+        };
         let dump_buffers: Vec<(StateBuffer, u32, Buffer)> = sweep
             .dumps
             .iter()
@@ -1072,7 +1084,9 @@ impl SweepPass {
             groups,
         )?;
         rec.end_scope();
-        rec.copy_storage_to_host(&self.counters, &clamp_readback);
+        if let Some(buf) = &clamp_readback {
+            rec.copy_storage_to_host(&self.counters, buf);
+        }
         Ok(SweepRecording {
             stats: SweepStats {
                 planes,
