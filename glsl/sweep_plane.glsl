@@ -7,7 +7,7 @@
 #error "define FORWARD_LIGHT before including sweep_plane.glsl"
 #endif
 #ifndef LIGHT_SUBSTEPS
-#define LIGHT_SUBSTEPS 2
+#define LIGHT_SUBSTEPS 4
 #endif
 #include "sweep_common.glsl"
 #include "sweep_buffers.glsl"
@@ -149,40 +149,47 @@ void main() {
         flux = (1.0 - 4.0 * w) * flux + w * gathered;
     }
 #endif
-    vec3 p_old = vec3(lc.w, lv.w, pc.depth - ds);
-    vec3 v_old = lv.xyz;
-    float eta_old = length(v_old);
-    vec3 d_old = v_old / eta_old;
-    vec3 p_new = p_old + d_old * (ds / d_old.z);
-    float f_old = value_at_tex(to_tex(p_old));
-    float f_new = value_at_tex(to_tex(p_new));
-    float step_len = length(p_new - p_old);
-    vec3 seg_c; float seg_a; vec3 seg_m;
-    segment(f_old, f_new, step_len / ref_step, clipped(p_new), seg_c, seg_a, seg_m);
-    flux *= (1.0 - seg_a) * seg_m;                                          // eq. 4.4
-    // The direction in LIGHT_SUBSTEPS Snell steps, each with the interface normal at its
-    // own midpoint: a curved interface crossed within one plane spacing turns the ray
-    // by the normals along its way, not by one (rays grazing a sphere's rim otherwise
-    // meet a normal several degrees off and are totally reflected, measured).
-    vec3 v_new = v_old;
+    // LIGHT_SUBSTEPS sub-steps to this plane, each advancing depth by ds / LIGHT_SUBSTEPS
+    // along the ray's current direction: attenuated over its own length (eq. 4.4), then
+    // turned by a Snell step with the interface normal at its midpoint. A curved interface
+    // crossed within one plane spacing turns the ray by the normals along its way, and a
+    // ray totally reflected mid-plane moves on in its reflected direction, staying in the
+    // glass (advancing it along the old direction put it beyond the face, where the next
+    // sub-step reflected it back: an even number of reflections let 10 % of the light
+    // through a wedge past the critical angle, measured).
+    vec3 p_step = vec3(lc.w, lv.w, pc.depth - ds);
+    vec3 v_new = lv.xyz;
+    float f_step = value_at_tex(to_tex(p_step));
+    bool leaves = false;
+    float dz = ds / float(LIGHT_SUBSTEPS);
     for (int k = 0; k < LIGHT_SUBSTEPS; ++k) {
-        float t0 = float(k) / float(LIGHT_SUBSTEPS), t1 = float(k + 1) / float(LIGHT_SUBSTEPS);
+        vec3 d = normalize(v_new);
+        if (!(d.z >= MIN_FORWARD)) {
+            leaves = true;
+            break;
+        }
+        vec3 q = p_step + d * (dz / d.z);
+        float f_q = value_at_tex(to_tex(q));
+        vec3 seg_c; float seg_a; vec3 seg_m;
+        segment(f_step, f_q, length(q - p_step) / ref_step, clipped(q), seg_c, seg_a, seg_m);
+        flux *= (1.0 - seg_a) * seg_m;
         // The interface normal is the value's gradient: refract_step needs only its
         // direction (either sign), and level sets of the value are where eta changes.
-        vec3 normal = value_gradient(mix(p_old, p_new, 0.5 * (t0 + t1)));
-        float f_end = k + 1 == LIGHT_SUBSTEPS ? f_new : value_at_tex(to_tex(mix(p_old, p_new, t1)));
-        v_new = refract_step(v_new, eta_of(f_end), normal);
+        vec3 normal = value_gradient(0.5 * (p_step + q));
+        v_new = refract_step(v_new, eta_of(f_q), normal);
+        p_step = q;
+        f_step = f_q;
     }
-    float fwd = v_new.z / length(v_new);
-    if (!(fwd > 0.0)) {
-        // Turned back (total internal reflection against the sweep): this light leaves
-        // the sweep. Dropped, counted, never re-aimed.
-        count_clamp(1u);
+    vec3 p_new = vec3(p_step.xy, pc.depth);
+    if (leaves || !(v_new.z >= MIN_FORWARD * length(v_new))) {
+        // Turned back or more than ~84° from the sweep direction (total internal
+        // reflection, a grazing exit): this light leaves what the sweep can follow. It is
+        // dropped and counted, never re-aimed: a clamped direction would deposit its flux
+        // where it cannot go.
+        if (max(flux.r, max(flux.g, flux.b)) > 0.0) count_clamp(1u);
         flux = vec3(0.0);
-        v_new = v_old;
-    } else if (fwd < MIN_FORWARD) {
-        count_clamp(0u);
-        v_new = limit_direction(v_new);
+        v_new = lv.xyz;
+        p_new = vec3(lc.w, lv.w, pc.depth);
     }
     if (any(isnan(flux)) || any(isinf(flux))) flux = vec3(0.0);
     vec3 light = flux;

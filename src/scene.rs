@@ -138,7 +138,7 @@ impl Default for Scene {
             roughness: 0.3,
             specular: 1.0,
             eta_scale: 1.0,
-            light_transport: LightTransport::Backward,
+            light_transport: LightTransport::Forward,
             clip: None,
             exposure: 0.0,
             tonemap: ToneOperator::Aces,

@@ -8,7 +8,8 @@ mod common;
 use common::*;
 use glam::Vec3;
 use refrakt::render::{
-    Camera, Dump, Light, Model, Planes, RenderOptions, Renderer, StateBuffer, SweepOptions,
+    Camera, Dump, Light, LightTransport, Model, Planes, RenderOptions, Renderer, StateBuffer,
+    SweepOptions,
 };
 use refrakt::transfer::{Piecewise, TransferFunctions};
 use refrakt::vk::Context;
@@ -221,7 +222,9 @@ fn ball_lens_focus(ctx: &Context, n_index: f32, diameter: f32) -> (f32, f32) {
         height: h,
         ..Default::default()
     };
+    // The thesis' backward step; the forward transport's ball lens is tests/caustics.rs.
     opts.sweep = SweepOptions {
+        light_transport: LightTransport::Backward,
         light: headlight(&cam, 0.0),
         max_gain: 8.0,
         dumps,
@@ -665,7 +668,10 @@ fn plano_convex_lens_focuses_at_its_back_focal_distance() {
                     sample_distance: sd,
                     ..Default::default()
                 };
+                // The thesis' backward step: one light direction per pixel, which this
+                // test reads; the forward transport's rays are tested in caustics.rs.
                 opts.sweep = SweepOptions {
+                    light_transport: LightTransport::Backward,
                     light: headlight(&cam, 0.0),
                     dumps: vec![(StateBuffer::LightDirection, p)],
                     ..Default::default()

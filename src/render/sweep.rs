@@ -167,7 +167,7 @@ impl LightTransport {
 /// Largest half-width, in pixels, of one light ray's splat (its cell on the plane): a ray
 /// whose neighbours have spread further deposits its flux over this many pixels at most
 /// (still all of it: the tent is normalised).
-pub const MAX_SPLAT_HALF_WIDTH: f32 = 16.0;
+pub const MAX_SPLAT_HALF_WIDTH: f32 = 4.0;
 
 /// Light and viewing rays may deviate at most this much (cosine) from the sweep direction;
 /// see MIN_FORWARD in glsl/sweep_common.glsl.
@@ -228,7 +228,7 @@ impl Default for SweepOptions {
             env_rotation: 0.0,
             env_footprint: true,
             eta_scale: 1.0,
-            light_transport: LightTransport::Backward,
+            light_transport: LightTransport::Forward,
             floor: false,
         }
     }
