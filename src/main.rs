@@ -317,8 +317,11 @@ struct RenderArgs {
     output: PathBuf,
     /// Write state buffers after given planes as EXR: "BUFFER@PLANE[,...]" with BUFFER one
     /// of light-colour, light-direction, view-position, view-direction, colour-opacity,
-    /// medium (refract). Files go to --dump-dir as BUFFER-PLANE.exr; each header (and the
-    /// log) gives the plane's view depth and world-space plane n·p = d and the camera.
+    /// medium, light-rays, light-ray-directions (refract). With the forward light transport
+    /// light-colour is the plane's irradiance and light-direction its luminance-weighted
+    /// direction sum (weight in alpha); light-rays / light-ray-directions are the rays
+    /// themselves. Files go to --dump-dir as BUFFER-PLANE.exr; each header (and the log)
+    /// gives the plane's view depth and world-space plane n·p = d and the camera.
     #[arg(long, value_name = "BUFFER@PLANE,...")]
     dump: Option<String>,
     /// Folder for --dump files (default: the output image's folder).
