@@ -3,16 +3,19 @@
 #ifndef REFRAKT_SWEEP_LIGHT_GLSL
 #define REFRAKT_SWEEP_LIGHT_GLSL
 
-// rgb = irradiance (flux per unit plane area, relative to the unobstructed light: an
-// unobstructed beam reads the light colour), a unused.
-layout(set = 0, binding = 16) uniform sampler2D irradiance;
+// Irradiance of the last two planes, ping-ponged like the state (plane i in layer i % 2):
+// rgb = flux per unit plane area, relative to the unobstructed light (an unobstructed
+// beam reads the light colour), a unused.
+layout(set = 0, binding = 16) uniform sampler2D irradiance_0;
+layout(set = 0, binding = 17) uniform sampler2D irradiance_1;
 // xyz = sum of luminance-weighted unit light directions, w = sum of the weights.
-layout(set = 0, binding = 17) uniform sampler2D irradiance_direction;
+layout(set = 0, binding = 18) uniform sampler2D irradiance_direction_0;
+layout(set = 0, binding = 19) uniform sampler2D irradiance_direction_1;
 
 // How often the sweep had to bend physics, summed over pixels and planes (read back and
 // printed): 0 = light direction clamped to MIN_FORWARD, 1 = light ray turned back and
 // dropped, 2 = viewing-ray direction clamped, 3 = backward step's intensity gain clamped.
-layout(set = 0, binding = 18, std430) buffer Counters {
+layout(set = 0, binding = 20, std430) buffer Counters {
     uint clamps[4];
 } counters;
 

@@ -1,10 +1,12 @@
-// One plane of the refractive plane sweep (thesis ch. 4, Algorithm 1): a full-screen draw
-// per plane; reads the previous plane's state from layer `read_layer` and writes this
-// plane's into the other layer (the render pass's attachments). Included by sweep.frag
-// (FORWARD_LIGHT 0: the thesis' backward light step) and sweep_forward.frag
-// (FORWARD_LIGHT 1: light rays advanced forward, their flux splatted by light_splat.*).
-#ifndef FORWARD_LIGHT
-#error "define FORWARD_LIGHT before including sweep_plane.glsl"
+// One plane of the refractive plane sweep (thesis ch. 4, Algorithm 1): full-screen draws
+// that read the previous plane's state from layer `read_layer` and write this plane's
+// into the other layer (the render pass's attachments). Included by sweep.frag
+// (FORWARD_LIGHT 0, PASS 0: the thesis' backward light step, light and viewing rays in
+// one draw) and by the forward transport's two draws, sweep_light_forward.frag (PASS 1:
+// the light rays) and sweep_view_forward.frag (PASS 2: the viewing rays), between which
+// light_splat.* deposits the rays' flux on the plane.
+#if !defined(FORWARD_LIGHT) || !defined(PASS)
+#error "define FORWARD_LIGHT and PASS before including sweep_plane.glsl"
 #endif
 #ifndef LIGHT_SUBSTEPS
 #define LIGHT_SUBSTEPS 4
@@ -20,12 +22,22 @@ layout(push_constant) uniform Push {
     uint pad;
 } pc;
 
+#if PASS == 0
 layout(location = 0) out vec4 out_light_colour;
 layout(location = 1) out vec4 out_light_direction;
 layout(location = 2) out vec4 out_view_position;
 layout(location = 3) out vec4 out_view_direction;
 layout(location = 4) out vec4 out_colour_opacity;
 layout(location = 5) out vec4 out_medium;
+#elif PASS == 1
+layout(location = 0) out vec4 out_light_colour;
+layout(location = 1) out vec4 out_light_direction;
+#else
+layout(location = 0) out vec4 out_view_position;
+layout(location = 1) out vec4 out_view_direction;
+layout(location = 2) out vec4 out_colour_opacity;
+layout(location = 3) out vec4 out_medium;
+#endif
 
 const float PI = 3.14159265358979;
 
@@ -115,7 +127,7 @@ void main() {
     float ref_step = P.planes.w;
     ivec2 pixel = ivec2(gl_FragCoord.xy);
 
-#if FORWARD_LIGHT
+#if PASS == 1
     // ---- light propagation, forward (Lagrangian) --------------------------------------
     // Each texel of the light state is one light ray: flux (rgb) and its position on the
     // previous plane (.w of both buffers), direction v = eta dx/ds (eq. 4.2). The ray is
@@ -192,10 +204,9 @@ void main() {
         p_new = vec3(lc.w, lv.w, pc.depth);
     }
     if (any(isnan(flux)) || any(isinf(flux))) flux = vec3(0.0);
-    vec3 light = flux;
-    vec3 light_dir = v_new;
-
-#else
+    out_light_colour = vec4(flux, p_new.x);
+    out_light_direction = vec4(v_new, p_new.y);
+#elif PASS == 0
     // ---- light propagation (sect. 4.2, 5.2) -------------------------------------------
     vec3 p = plane_point(uv, pc.depth);
     vec3 ld_here = READ_PIXEL(light_direction, R, pixel).xyz;
@@ -261,6 +272,7 @@ void main() {
     if (any(isnan(light)) || any(isinf(light))) light = vec3(0.0);
 
 #endif
+#if PASS != 1
     // ---- viewing rays (sect. 4.3, 5.2) ------------------------------------------------
     vec4 vp4 = READ_PIXEL(view_position, R, pixel);
     vec4 vd4 = READ_PIXEL(view_direction, R, pixel);
@@ -281,8 +293,14 @@ void main() {
 
     if (A < P.specular.z) {
         vec2 uv_v = project(vp);
+        vec3 c; float a; vec3 m;
+        segment(vp4.w, f_v, seg_len / ref_step, clipped(vp), c, a, m);
 #if FORWARD_LIGHT
-        vec3 i_d = bilinear(irradiance, uv_v).rgb;
+        // The light of this plane's segment (i-1 -> i): the irradiance where the ray
+        // enters it, on plane i-1 (the segment's front, as the backward step uses).
+        vec2 uv_front = project(vp - dir * seg_len);
+        vec3 i_d = READ_BUFFER(irradiance, R, uv_front).rgb;
+        uint W = 1u - R;
 #else
         vec3 i_d = READ_BUFFER(light_colour, R, uv_v).rgb;
 #endif
@@ -292,7 +310,7 @@ void main() {
             i_d = vec3(1.0);
         } else if (P.specular.y > 0.0 && dot(grad_f, grad_f) > 1e-8) {
 #if FORWARD_LIGHT
-            vec4 ls = bilinear(irradiance_direction, uv_v);
+            vec4 ls = READ_BUFFER(irradiance_direction, W, uv_v);
             vec3 l = -normalize(ls.w > 0.0 ? ls.xyz : P.light_dir.xyz);
 #else
             vec3 l = -normalize(READ_BUFFER(light_direction, R, uv_v).xyz);
@@ -302,8 +320,6 @@ void main() {
             if (dot(n, v) < 0.0) n = -n;
             i_s = P.specular.y * specular_term(n, l, v, eta_here / vd4.w) * i_d;
         }
-        vec3 c; float a; vec3 m;
-        segment(vp4.w, f_v, seg_len / ref_step, clipped(vp), c, a, m);
         // Oddy-Willis compositing (eq. 4.13): the medium factor once, specular not
         // multiplied by opacity.
         C += (1.0 - A) * M * (c * i_d + i_s);
@@ -319,10 +335,7 @@ void main() {
     vec3 next_dir = normalize(vd);
     vec3 vp_next = vp + next_dir * (ds / next_dir.z);
 
-#if FORWARD_LIGHT
-    out_light_colour = vec4(light, p_new.x);
-    out_light_direction = vec4(light_dir, p_new.y);
-#else
+#if PASS == 0
     out_light_colour = vec4(light, 0.0);
     out_light_direction = vec4(light_dir, 0.0);
 #endif
@@ -330,4 +343,5 @@ void main() {
     out_view_direction = vec4(vd, eta_here);
     out_colour_opacity = vec4(C, A);
     out_medium = vec4(M, 0.0);
+#endif
 }

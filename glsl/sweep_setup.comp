@@ -39,10 +39,11 @@ void main() {
         lc = vec4(P.light_colour.rgb * (P.light_grid.z * P.light_grid.w), pos.x);
         ld = vec4(P.light_dir.xyz * eta_l, pos.y);
     }
-    imageStore(irradiance, ivec3(id, 0), vec4(P.light_colour.rgb, 0.0));
-    imageStore(irradiance_direction, ivec3(id, 0), vec4(P.light_dir.xyz, 1.0));
     for (int layer = 0; layer < 2; ++layer) {
         ivec3 at = ivec3(id, layer);
+        // The forward transport's irradiance of plane -1 (and a defined other layer).
+        imageStore(irradiance, at, vec4(P.light_colour.rgb, 0.0));
+        imageStore(irradiance_direction, at, vec4(P.light_dir.xyz, 1.0));
         imageStore(light_colour, at, lc);
         imageStore(light_direction, at, ld);
         imageStore(view_position, at, vec4(vp, s_prev));

@@ -514,12 +514,13 @@ struct StateImage {
     layers: [LayerView; 2],
 }
 
-/// The forward transport's irradiance of the current plane (rgb) and its light direction
-/// (luminance-weighted sum of unit directions, weight in w): one layer each, accumulated by
-/// the splat pass and sampled by the next plane's viewing rays.
+/// The forward transport's irradiance (rgb) and light direction (luminance-weighted sum
+/// of unit directions, weight in w) of the last two planes, plane i in layer i % 2:
+/// accumulated by the splat pass, sampled by the viewing rays of the segment that ends on
+/// the plane and of the one that starts there.
 struct IrradianceImage {
     image: Image,
-    view: LayerView,
+    layers: [LayerView; 2],
 }
 
 pub(super) struct SweepPass {
@@ -538,7 +539,13 @@ pub(super) struct SweepPass {
     forward: Option<ForwardPipelines>,
     irradiance: [IrradianceImage; 2],
     splat_pass: RenderPass,
-    splat_framebuffer: Framebuffer,
+    splat_framebuffers: [Framebuffer; 2],
+    /// Forward transport: the light rays' pass (the two light buffers) and the viewing
+    /// rays' pass (the other four), per written layer.
+    light_pass: RenderPass,
+    light_framebuffers: [Framebuffer; 2],
+    view_pass: RenderPass,
+    view_framebuffers: [Framebuffer; 2],
     counters: Buffer,
     composite: ComputePipeline,
     output: FrameTarget,
@@ -548,9 +555,10 @@ pub(super) struct SweepPass {
 /// The forward transport's pipelines, all on the plane set's layout so that switching
 /// between them leaves the descriptor set bound.
 struct ForwardPipelines {
-    plane: GraphicsPipeline,
-    plane_soft: GraphicsPipeline,
+    light: GraphicsPipeline,
+    light_soft: GraphicsPipeline,
     splat: GraphicsPipeline,
+    view: GraphicsPipeline,
     /// Largest splat half-width the device's point sizes allow.
     max_half_width: f32,
 }
@@ -621,7 +629,7 @@ impl SweepPass {
                     kind: ImageKind::D2Array,
                     format: STATE_FORMAT,
                     extent: [width, height, 1],
-                    layers: 1,
+                    layers: 2,
                     usage: vk::usage::COLOR_ATTACHMENT
                         | vk::usage::SAMPLED
                         | vk::usage::STORAGE
@@ -629,8 +637,8 @@ impl SweepPass {
                 },
                 name,
             )?;
-            let view = image.layer_view(0)?;
-            Ok(IrradianceImage { image, view })
+            let layers = [image.layer_view(0)?, image.layer_view(1)?];
+            Ok(IrradianceImage { image, layers })
         };
         let irradiance = [
             irradiance_image("irradiance")?,
@@ -642,14 +650,50 @@ impl SweepPass {
             Access::AttachmentGeneral,
             "light splat",
         )?;
-        let splat_framebuffer = Framebuffer::new(
+        let splat_fb = |layer: usize| {
+            Framebuffer::new(
+                ctx,
+                &splat_pass,
+                &[&irradiance[0].layers[layer], &irradiance[1].layers[layer]],
+                width,
+                height,
+                &format!("light splat layer {layer}"),
+            )
+        };
+        let splat_framebuffers = [splat_fb(0)?, splat_fb(1)?];
+        let light_pass = RenderPass::new(
             ctx,
-            &splat_pass,
-            &[&irradiance[0].view, &irradiance[1].view],
-            width,
-            height,
-            "light splat",
+            &[STATE_FORMAT; 2],
+            Access::AttachmentGeneral,
+            "sweep light rays",
         )?;
+        let view_pass = RenderPass::new(
+            ctx,
+            &[STATE_FORMAT; 4],
+            Access::AttachmentGeneral,
+            "sweep viewing rays",
+        )?;
+        let sub_fb =
+            |pass: &RenderPass, range: std::ops::Range<usize>, layer: usize, name: &str| {
+                let views: Vec<&LayerView> =
+                    states[range].iter().map(|s| &s.layers[layer]).collect();
+                Framebuffer::new(
+                    ctx,
+                    pass,
+                    &views,
+                    width,
+                    height,
+                    &format!("{name} layer {layer}"),
+                )
+            };
+        let light_framebuffers = [
+            sub_fb(&light_pass, 0..2, 0, "sweep light rays")?,
+            sub_fb(&light_pass, 0..2, 1, "sweep light rays")?,
+        ];
+        let view_framebuffers = [
+            sub_fb(&view_pass, 2..6, 0, "sweep viewing rays")?,
+            sub_fb(&view_pass, 2..6, 1, "sweep viewing rays")?,
+        ];
         let counters = Buffer::new(
             ctx,
             16,
@@ -674,11 +718,9 @@ impl SweepPass {
         }
         let mut plane_bindings = sampled.clone();
         for irr in &irradiance {
-            plane_bindings.push(Binding::LayerTexture(
-                &irr.view,
-                sampler,
-                Access::SampledGeneral,
-            ));
+            for view in &irr.layers {
+                plane_bindings.push(Binding::LayerTexture(view, sampler, Access::SampledGeneral));
+            }
         }
         plane_bindings.push(Binding::Storage(&counters));
         let sweep_set = DescriptorSet::new(ctx, &plane_bindings, "sweep")?;
@@ -720,12 +762,12 @@ impl SweepPass {
             "sweep floor plane",
         )?;
         let forward = if ctx.info().large_points && ctx.info().fragment_atomics {
-            let plane = |fs: &[u8], name: &str| {
+            let plane = |fs: &[u8], pass: &RenderPass, name: &str| {
                 GraphicsPipeline::fullscreen(
                     ctx,
                     shaders::FULLSCREEN_VERT,
                     fs,
-                    &render_pass,
+                    pass,
                     &sweep_set,
                     std::mem::size_of::<PlanePush>() as u32,
                     name,
@@ -733,10 +775,20 @@ impl SweepPass {
             };
             let largest_point = ctx.info().limits.point_size_range[1];
             Some(ForwardPipelines {
-                plane: plane(shaders::SWEEP_FORWARD_FRAG, "sweep plane (forward light)")?,
-                plane_soft: plane(
-                    shaders::SWEEP_FORWARD_SOFT_FRAG,
-                    "sweep plane (forward soft light)",
+                light: plane(
+                    shaders::SWEEP_LIGHT_FORWARD_FRAG,
+                    &light_pass,
+                    "sweep light rays",
+                )?,
+                light_soft: plane(
+                    shaders::SWEEP_LIGHT_FORWARD_SOFT_FRAG,
+                    &light_pass,
+                    "sweep light rays (soft)",
+                )?,
+                view: plane(
+                    shaders::SWEEP_VIEW_FORWARD_FRAG,
+                    &view_pass,
+                    "sweep viewing rays",
                 )?,
                 splat: GraphicsPipeline::new(
                     ctx,
@@ -776,7 +828,11 @@ impl SweepPass {
             forward,
             irradiance,
             splat_pass,
-            splat_framebuffer,
+            splat_framebuffers,
+            light_pass,
+            light_framebuffers,
+            view_pass,
+            view_framebuffers,
             counters,
             composite,
             output,
@@ -959,14 +1015,14 @@ impl SweepPass {
         rec.clear_storage(&self.counters);
         let mut storage = self.state_layers(0..2, Access::ComputeStorage);
         for irr in &self.irradiance {
-            storage.push((&irr.image, 0..1, Access::ComputeStorage));
+            storage.push((&irr.image, 0..2, Access::ComputeStorage));
         }
         rec.transition_many(&storage);
         rec.dispatch(&self.setup, &self.setup_set, &[], groups)?;
         // Both layers become sampled: every draw's set names both (see module docs).
         let mut sampled = self.state_layers(0..2, Access::SampledGeneral);
         for irr in &self.irradiance {
-            sampled.push((&irr.image, 0..1, Access::SampledGeneral));
+            sampled.push((&irr.image, 0..2, Access::SampledGeneral));
         }
         rec.transition_many(&sampled);
         rec.end_scope();
@@ -974,16 +1030,27 @@ impl SweepPass {
         rec.begin_scope("sweep");
         // Bound once: between planes only push constants change, and the forward
         // transport switches pipelines (same layout, so the set stays bound).
+        let forward = forward.filter(|_| !sweep.floor);
         let plane_pipeline = match (sweep.floor, forward) {
             (true, _) => &self.floor,
-            (false, Some(f)) if soft => &f.plane_soft,
-            (false, Some(f)) => &f.plane,
+            (false, Some(f)) if soft => &f.light_soft,
+            (false, Some(f)) => &f.light,
             (false, None) => &self.sweep,
         };
         rec.bind_graphics(plane_pipeline, &self.sweep_set, self.width, self.height);
+        let light_images = [
+            &self.states[StateBuffer::LightColour.index()].image,
+            &self.states[StateBuffer::LightDirection.index()].image,
+        ];
         for i in 0..planes.count {
             let write = i % 2;
             let read = 1 - write;
+            let push = PlanePush {
+                plane: i,
+                read_layer: read,
+                depth: planes.depth(i),
+                pad: 0,
+            };
             // The layer the previous plane wrote becomes sampled (one batched barrier
             // over the six images); begin_render_pass then makes the layer the previous
             // plane sampled an attachment (a second one). Nothing else is synchronised.
@@ -992,68 +1059,91 @@ impl SweepPass {
                     rec.assume_without_barrier(&s.image, read..read + 1, Access::SampledGeneral);
                 }
             } else {
+                // With the forward transport the previous plane's irradiance, which this
+                // plane's viewing rays read, is in the same batch (a dump may have copied
+                // it out).
                 let mut items = self.state_layers(read..read + 1, Access::SampledGeneral);
-                for irr in &self.irradiance {
-                    items.push((&irr.image, 0..1, Access::SampledGeneral));
+                if forward.is_some() {
+                    for irr in &self.irradiance {
+                        items.push((&irr.image, read..read + 1, Access::SampledGeneral));
+                    }
                 }
                 rec.transition_many(&items);
             }
-            let attachments: Vec<(&Image, u32)> =
-                self.states.iter().map(|s| (&s.image, write)).collect();
-            rec.begin_render_pass(
-                &self.render_pass,
-                &self.framebuffers[write as usize],
-                &attachments,
-            )?;
-            let push = PlanePush {
-                plane: i,
-                read_layer: read,
-                depth: planes.depth(i),
-                pad: 0,
-            };
-            rec.draw_fullscreen(plane_pipeline, bytemuck::bytes_of(&push))?;
-            rec.end_render_pass();
-            let splat = forward.filter(|_| !sweep.floor);
-            if let Some(f) = splat {
-                // The rays just advanced to plane i deposit their flux on it. The light
-                // layer just written becomes sampled (by the splat's vertex shader); the
-                // irradiance images become attachments (begin_render_pass), after the
-                // viewing rays of this plane read them.
-                rec.transition_many(&[
-                    (
-                        &self.states[StateBuffer::LightColour.index()].image,
-                        write..write + 1,
-                        Access::SampledGeneral,
-                    ),
-                    (
-                        &self.states[StateBuffer::LightDirection.index()].image,
-                        write..write + 1,
-                        Access::SampledGeneral,
-                    ),
-                ]);
-                rec.begin_render_pass(
-                    &self.splat_pass,
-                    &self.splat_framebuffer,
-                    &[
-                        (&self.irradiance[0].image, 0),
-                        (&self.irradiance[1].image, 0),
-                    ],
-                )?;
-                rec.bind_pipeline(&f.splat);
-                let push = PlanePush {
-                    plane: i,
-                    read_layer: write,
-                    depth: planes.depth(i),
-                    pad: 0,
-                };
-                rec.draw(
-                    &f.splat,
-                    bytemuck::bytes_of(&push),
-                    self.width * self.height,
-                )?;
-                rec.end_render_pass();
-                rec.bind_pipeline(plane_pipeline);
+            match forward {
+                None => {
+                    let attachments: Vec<(&Image, u32)> =
+                        self.states.iter().map(|s| (&s.image, write)).collect();
+                    rec.begin_render_pass(
+                        &self.render_pass,
+                        &self.framebuffers[write as usize],
+                        &attachments,
+                    )?;
+                    rec.draw_fullscreen(plane_pipeline, bytemuck::bytes_of(&push))?;
+                    rec.end_render_pass();
+                }
+                Some(f) => {
+                    // 1. The light rays advance to plane i.
+                    rec.begin_render_pass(
+                        &self.light_pass,
+                        &self.light_framebuffers[write as usize],
+                        &[(light_images[0], write), (light_images[1], write)],
+                    )?;
+                    rec.draw_fullscreen(plane_pipeline, bytemuck::bytes_of(&push))?;
+                    rec.end_render_pass();
+                    // 2. They deposit their flux on plane i: irradiance layer `write`
+                    // (plane i - 2's, read by no draw any more) becomes an attachment.
+                    rec.transition_many(&[
+                        (light_images[0], write..write + 1, Access::SampledGeneral),
+                        (light_images[1], write..write + 1, Access::SampledGeneral),
+                    ]);
+                    rec.begin_render_pass(
+                        &self.splat_pass,
+                        &self.splat_framebuffers[write as usize],
+                        &[
+                            (&self.irradiance[0].image, write),
+                            (&self.irradiance[1].image, write),
+                        ],
+                    )?;
+                    rec.bind_pipeline(&f.splat);
+                    let splat_push = PlanePush {
+                        read_layer: write,
+                        ..push
+                    };
+                    rec.draw(
+                        &f.splat,
+                        bytemuck::bytes_of(&splat_push),
+                        self.width * self.height,
+                    )?;
+                    rec.end_render_pass();
+                    // 3. The viewing rays cross the segment from plane i - 1 to plane i,
+                    // lit by the irradiance of both (layers `read` and `write`).
+                    rec.transition_many(&[
+                        (
+                            &self.irradiance[0].image,
+                            write..write + 1,
+                            Access::SampledGeneral,
+                        ),
+                        (
+                            &self.irradiance[1].image,
+                            write..write + 1,
+                            Access::SampledGeneral,
+                        ),
+                    ]);
+                    let views: Vec<(&Image, u32)> =
+                        self.states[2..].iter().map(|s| (&s.image, write)).collect();
+                    rec.begin_render_pass(
+                        &self.view_pass,
+                        &self.view_framebuffers[write as usize],
+                        &views,
+                    )?;
+                    rec.bind_pipeline(&f.view);
+                    rec.draw_fullscreen(&f.view, bytemuck::bytes_of(&push))?;
+                    rec.end_render_pass();
+                    rec.bind_pipeline(plane_pipeline);
+                }
             }
+            let splat = forward;
             for (b, plane, buf) in &dump_buffers {
                 if *plane != i {
                     continue;
@@ -1062,10 +1152,10 @@ impl SweepPass {
                 // light is, is the splatted irradiance.
                 match (splat.is_some(), b) {
                     (true, StateBuffer::LightColour) => {
-                        rec.copy_image_to_buffer(&self.irradiance[0].image, 0, buf)
+                        rec.copy_image_to_buffer(&self.irradiance[0].image, write, buf)
                     }
                     (true, StateBuffer::LightDirection) => {
-                        rec.copy_image_to_buffer(&self.irradiance[1].image, 0, buf)
+                        rec.copy_image_to_buffer(&self.irradiance[1].image, write, buf)
                     }
                     _ => rec.copy_image_to_buffer(&self.states[b.index()].image, write, buf),
                 }

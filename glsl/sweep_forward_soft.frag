@@ -1,8 +1,0 @@
-#version 460
-// A plane of the sweep with the forward (Lagrangian) light transport and soft light
-// (flux diffusion between neighbouring rays). A separate build rather than a runtime
-// branch: llvmpipe runs both sides of a uniform branch.
-#extension GL_GOOGLE_include_directive : require
-#define FORWARD_LIGHT 1
-#define SOFT_LIGHT 1
-#include "sweep_plane.glsl"
