@@ -68,6 +68,11 @@ fn floor_banding(
     };
     let mut r = Renderer::new(ctx, &vol, &tf).unwrap();
     let f = r.render(Model::Refract, &cam, &opts).unwrap();
+    if std::env::var("GRID").is_ok() {
+        let st = f.sweep.as_ref().unwrap();
+        let px = 2.0 * st.planes.first_depth * (cam.fov_y.to_radians() * 0.5).tan() / h as f32;
+        println!("grid {:?}, pixel at plane 0 {px}", st.light_grid);
+    }
     // Row means over the central half of the columns, for rows showing the floor.
     let mut rows = Vec::new();
     for y in 0..h {
