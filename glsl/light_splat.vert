@@ -12,6 +12,7 @@
 #extension GL_GOOGLE_include_directive : require
 #include "sweep_common.glsl"
 #include "sweep_buffers.glsl"
+#include "sweep_rays.glsl"
 
 layout(push_constant) uniform Push {
     uint plane;
@@ -25,28 +26,27 @@ layout(location = 1) flat out vec4 footprint;  // xy = centre (pixels), zw = box
 layout(location = 2) flat out vec3 direction;  // unit light direction
 
 vec2 ray_position(ivec2 c) {
-    return vec2(READ_PIXEL(light_colour, pc.read_layer, c).w,
-                READ_PIXEL(light_direction, pc.read_layer, c).w);
+    int r = ray_index(c);
+    return vec2(READ_RAY(rays_flux, pc.read_layer, r).w,
+                READ_RAY(rays_direction, pc.read_layer, r).w);
 }
 
 // The shorter of the two one-sided differences to the neighbours along `axis`: across a
 // discontinuity (a silhouette, a shadow edge) the smooth side gives the cell size.
-vec2 cell_edge(ivec2 c, vec2 here, ivec2 axis, ivec2 hi) {
+vec2 cell_edge(ivec2 c, vec2 here, ivec2 axis) {
     ivec2 a = c + axis, b = c - axis;
-    bool has_a = all(lessThanEqual(a, hi));
-    bool has_b = all(greaterThanEqual(b, ivec2(0)));
-    vec2 da = has_a ? ray_position(a) - here : vec2(1e30);
-    vec2 db = has_b ? here - ray_position(b) : vec2(1e30);
+    vec2 da = ray_exists(a) ? ray_position(a) - here : vec2(1e30);
+    vec2 db = ray_exists(b) ? here - ray_position(b) : vec2(1e30);
     return dot(da, da) <= dot(db, db) ? da : db;
 }
 
 void main() {
-    ivec2 size = ivec2(P.camera.zw);
     int index = gl_VertexIndex;
-    ivec2 c = ivec2(index % size.x, index / size.x);
-    vec4 lc = READ_PIXEL(light_colour, pc.read_layer, c);
-    vec3 v = READ_PIXEL(light_direction, pc.read_layer, c).xyz;
-    vec2 here = vec2(lc.w, READ_PIXEL(light_direction, pc.read_layer, c).w);
+    ivec2 c = ivec2(index % int(P.light_rays.x), index / int(P.light_rays.x));
+    vec4 lc = READ_RAY(rays_flux, pc.read_layer, index);
+    vec4 lv = READ_RAY(rays_direction, pc.read_layer, index);
+    vec3 v = lv.xyz;
+    vec2 here = vec2(lc.w, lv.w);
     gl_PointSize = 1.0;
     if (!(max(lc.r, max(lc.g, lc.b)) > 0.0)) {
         gl_Position = vec4(-4.0, -4.0, 0.0, 1.0);   // nothing to deposit: clipped
@@ -56,9 +56,8 @@ void main() {
     float half_h = pc.depth * P.camera.x;
     vec2 px_per_unit = vec2(P.camera.z / (2.0 * half_h * P.camera.y), P.camera.w / (2.0 * half_h));
     vec2 centre = project(vec3(here, pc.depth)) * P.camera.zw;
-    ivec2 hi = size - 1;
-    vec2 ei = cell_edge(c, here, ivec2(1, 0), hi) * px_per_unit;
-    vec2 ej = cell_edge(c, here, ivec2(0, 1), hi) * px_per_unit;
+    vec2 ei = cell_edge(c, here, ivec2(1, 0)) * px_per_unit;
+    vec2 ej = cell_edge(c, here, ivec2(0, 1)) * px_per_unit;
     // The cell's bounding box, at most 2 * transport.w pixels across (wider cells still
     // deposit all their flux, over that box).
     vec2 w = clamp(abs(ei) + abs(ej), vec2(1e-3), vec2(2.0 * P.transport.w));

@@ -25,6 +25,8 @@ layout(set = 0, binding = 0) uniform SweepParams {
     vec4 transport;      // x = 1 forward light transport, 0 backward; y = diffusion weight
                          //   per neighbour (softness); z = diffusion stride in rays;
                          //   w = largest splat half-width in pixels
+    vec4 light_rays;     // forward transport: x, y = the rays' grid (columns, rows); z, w =
+                         //   the ray images' size (ray r lives at texel (r % z, r / z))
 } P;
 
 layout(set = 0, binding = 1) uniform sampler3D volume;

@@ -14,6 +14,9 @@
 #include "sweep_common.glsl"
 #include "sweep_buffers.glsl"
 #include "sweep_light.glsl"
+#if FORWARD_LIGHT
+#include "sweep_rays.glsl"
+#endif
 
 layout(push_constant) uniform Push {
     uint plane;
@@ -135,9 +138,16 @@ void main() {
     // through a focus as they do physically (thesis ch. 7's bright spots came from the
     // backward step's one direction per pixel). Irradiance is made from the rays
     // afterwards by light_splat.*, which conserves their flux.
-    ivec2 ray = pixel;
-    vec4 lc = READ_PIXEL(light_colour, R, ray);
-    vec4 lv = READ_PIXEL(light_direction, R, ray);
+    // This draw covers the ray images; texels past the grid hold no ray.
+    int r = pixel.y * int(P.light_rays.z) + pixel.x;
+    ivec2 ray = ivec2(r % int(P.light_rays.x), r / int(P.light_rays.x));
+    if (!ray_exists(ray)) {
+        out_light_colour = vec4(0.0);
+        out_light_direction = vec4(0.0, 0.0, 1.0, 0.0);
+        return;
+    }
+    vec4 lc = READ_RAY(rays_flux, R, r);
+    vec4 lv = READ_RAY(rays_direction, R, r);
     vec3 flux = lc.rgb;
 #if SOFT_LIGHT
     // Softness as diffusion of flux between neighbouring rays: each ray hands the fraction
@@ -149,14 +159,12 @@ void main() {
     {
         float w = P.transport.y;
         int stride = int(P.transport.z);
-        ivec2 hi = ivec2(P.camera.zw) - 1;
         vec3 gathered = vec3(0.0);
         for (int k = 0; k < 4; ++k) {
             ivec2 o = (k < 2 ? ivec2(k == 0 ? stride : -stride, 0)
                              : ivec2(0, k == 2 ? stride : -stride));
             ivec2 c = ray + o;
-            bool inside = all(greaterThanEqual(c, ivec2(0))) && all(lessThanEqual(c, hi));
-            gathered += inside ? READ_PIXEL(light_colour, R, c).rgb : flux;
+            gathered += ray_exists(c) ? READ_RAY(rays_flux, R, ray_index(c)).rgb : flux;
         }
         flux = (1.0 - 4.0 * w) * flux + w * gathered;
     }

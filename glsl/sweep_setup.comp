@@ -15,30 +15,44 @@ layout(set = 0, binding = 8, rgba32f) uniform writeonly image2DArray colour_opac
 layout(set = 0, binding = 9, rgba32f) uniform writeonly image2DArray medium;
 layout(set = 0, binding = 10, rgba32f) uniform writeonly image2DArray irradiance;
 layout(set = 0, binding = 11, rgba32f) uniform writeonly image2DArray irradiance_direction;
+layout(set = 0, binding = 12, rgba32f) uniform writeonly image2DArray rays_flux;
+layout(set = 0, binding = 13, rgba32f) uniform writeonly image2DArray rays_direction;
 
 void main() {
     ivec2 id = ivec2(gl_GlobalInvocationID.xy);
-    if (any(greaterThanEqual(id, ivec2(P.camera.zw)))) return;
-    vec2 uv = (vec2(id) + 0.5) / P.camera.zw;
     float d0 = P.planes.x;
     float ds = P.planes.y;
+    // Forward transport: ray r = texel (r % image width, r / image width) of the ray
+    // images, one ray per cell of a regular grid over the launch plane (plane -1), carrying
+    // the flux of its cell (irradiance x cell area, so that the splat of unobstructed rays
+    // reads the light colour), its position in .w. Texels past the grid hold no light.
+    if (P.transport.x > 0.5 && all(lessThan(id, ivec2(P.light_rays.zw)))) {
+        int r = id.y * int(P.light_rays.z) + id.x;
+        ivec2 grid = ivec2(P.light_rays.xy);
+        ivec2 ij = ivec2(r % grid.x, r / grid.x);
+        vec4 lc = vec4(0.0);
+        vec4 ld = vec4(0.0, 0.0, 1.0, 0.0);
+        if (r < grid.x * grid.y) {
+            vec2 pos = P.light_grid.xy + (vec2(ij) + 0.5) * P.light_grid.zw;
+            float eta_l = eta_of(value_at_tex(to_tex(vec3(pos, d0 - ds))));
+            lc = vec4(P.light_colour.rgb * (P.light_grid.z * P.light_grid.w), pos.x);
+            ld = vec4(P.light_dir.xyz * eta_l, pos.y);
+        }
+        for (int layer = 0; layer < 2; ++layer) {
+            imageStore(rays_flux, ivec3(id, layer), lc);
+            imageStore(rays_direction, ivec3(id, layer), ld);
+        }
+    }
+    if (any(greaterThanEqual(id, ivec2(P.camera.zw)))) return;
+    vec2 uv = (vec2(id) + 0.5) / P.camera.zw;
     vec3 ray = plane_point(uv, 1.0);            // z = 1
     vec3 vp = ray * d0;                          // on plane 0
     float s_prev = value_at_tex(to_tex(ray * (d0 - ds)));
     float eta = eta_of(s_prev);
     vec3 vd = normalize(ray) * eta;              // v = eta dx/ds (eq. 4.2)
-    // Light. Backward transport: the light colour and direction on "plane -1" per pixel.
-    // Forward transport: one light ray per texel on a regular grid over the launch plane
-    // (plane -1), carrying the flux of its cell (irradiance x cell area, so that the
-    // splat of unobstructed rays reads the light colour), its position in .w.
+    // Backward transport: the light colour and direction on "plane -1" per pixel.
     vec4 lc = vec4(P.light_colour.rgb, 0.0);
     vec4 ld = vec4(P.light_dir.xyz, 0.0);
-    if (P.transport.x > 0.5) {
-        vec2 pos = P.light_grid.xy + (vec2(id) + 0.5) * P.light_grid.zw;
-        float eta_l = eta_of(value_at_tex(to_tex(vec3(pos, d0 - ds))));
-        lc = vec4(P.light_colour.rgb * (P.light_grid.z * P.light_grid.w), pos.x);
-        ld = vec4(P.light_dir.xyz * eta_l, pos.y);
-    }
     for (int layer = 0; layer < 2; ++layer) {
         ivec3 at = ivec3(id, layer);
         // The forward transport's irradiance of plane -1 (and a defined other layer).

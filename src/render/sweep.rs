@@ -304,6 +304,7 @@ struct SweepParams {
     refraction: [f32; 4],
     light_grid: [f32; 4],
     transport: [f32; 4],
+    light_rays: [f32; 4],
 }
 
 /// std140 mirror of `EnvParams` in glsl/sweep_composite.comp.
@@ -441,17 +442,24 @@ impl SweepRecording {
 
     /// The dumps, once the submission has completed.
     pub fn read_dumps(&self, width: u32, height: u32) -> Result<Vec<Dump>> {
-        let count = width as usize * height as usize;
         self.dumps
             .iter()
             .map(|(b, plane, buf)| {
+                // The forward transport's rays live in images of their own size.
+                let (width, height) = match (self.stats.light_transport, b) {
+                    (
+                        LightTransport::Forward,
+                        StateBuffer::LightRays | StateBuffer::LightRayDirections,
+                    ) => (self.stats.light_rays[2], self.stats.light_rays[3]),
+                    _ => (width, height),
+                };
                 Ok(Dump {
                     buffer: *b,
                     plane: *plane,
                     depth: self.stats.planes.depth(*plane),
                     width,
                     height,
-                    pixels: buf.read_values(count)?,
+                    pixels: buf.read_values(width as usize * height as usize)?,
                 })
             })
             .collect()
@@ -484,6 +492,10 @@ pub struct SweepStats {
     /// plane 0): view x, y of ray (0, 0)'s cell corner, cell width and height; ray (i, j)
     /// starts at the centre of its cell.
     pub light_grid: [f32; 4],
+    /// Forward transport: the grid's columns and rows, and the ray images' width and
+    /// height. Ray r = j * columns + i is texel (r % width, r / width) of the
+    /// `light-rays` / `light-ray-directions` dumps.
+    pub light_rays: [u32; 4],
     /// How often physics was bent, summed over pixels and planes (read back after the
     /// frame; zero for recorded frames that were not read back): see [`Clamps`].
     pub clamps: Clamps,
@@ -538,6 +550,9 @@ pub(super) struct SweepPass {
     floor: GraphicsPipeline,
     forward: Option<ForwardPipelines>,
     irradiance: [IrradianceImage; 2],
+    /// The forward transport's light rays (flux + view x; v + view y), `RAY_IMAGE_SCALE`
+    /// times the screen per axis.
+    rays: [StateImage; 2],
     splat_pass: RenderPass,
     splat_framebuffers: [Framebuffer; 2],
     /// Forward transport: the light rays' pass (the two light buffers) and the viewing
@@ -644,6 +659,25 @@ impl SweepPass {
             irradiance_image("irradiance")?,
             irradiance_image("irradiance direction")?,
         ];
+        let ray_image = |name: &str| -> Result<StateImage> {
+            let image = Image::new(
+                ctx,
+                ImageDesc {
+                    kind: ImageKind::D2Array,
+                    format: STATE_FORMAT,
+                    extent: [width * RAY_IMAGE_SCALE, height * RAY_IMAGE_SCALE, 1],
+                    layers: 2,
+                    usage: vk::usage::COLOR_ATTACHMENT
+                        | vk::usage::SAMPLED
+                        | vk::usage::STORAGE
+                        | vk::usage::TRANSFER_SRC,
+                },
+                name,
+            )?;
+            let layers = [image.layer_view(0)?, image.layer_view(1)?];
+            Ok(StateImage { image, layers })
+        };
+        let rays = [ray_image("light rays")?, ray_image("light ray directions")?];
         let splat_pass = RenderPass::cleared(
             ctx,
             &[STATE_FORMAT; 2],
@@ -686,10 +720,17 @@ impl SweepPass {
                     &format!("{name} layer {layer}"),
                 )
             };
-        let light_framebuffers = [
-            sub_fb(&light_pass, 0..2, 0, "sweep light rays")?,
-            sub_fb(&light_pass, 0..2, 1, "sweep light rays")?,
-        ];
+        let ray_fb = |layer: usize| {
+            Framebuffer::new(
+                ctx,
+                &light_pass,
+                &[&rays[0].layers[layer], &rays[1].layers[layer]],
+                width * RAY_IMAGE_SCALE,
+                height * RAY_IMAGE_SCALE,
+                &format!("sweep light rays layer {layer}"),
+            )
+        };
+        let light_framebuffers = [ray_fb(0)?, ray_fb(1)?];
         let view_framebuffers = [
             sub_fb(&view_pass, 2..6, 0, "sweep viewing rays")?,
             sub_fb(&view_pass, 2..6, 1, "sweep viewing rays")?,
@@ -723,6 +764,11 @@ impl SweepPass {
             }
         }
         plane_bindings.push(Binding::Storage(&counters));
+        for r in &rays {
+            for view in &r.layers {
+                plane_bindings.push(Binding::LayerTexture(view, sampler, Access::SampledGeneral));
+            }
+        }
         let sweep_set = DescriptorSet::new(ctx, &plane_bindings, "sweep")?;
         let output = FrameTarget::new(ctx, width, height, "sweep frame")?;
         let env_params = Buffer::uniform::<EnvParams>(ctx, "environment params")?;
@@ -738,6 +784,9 @@ impl SweepPass {
         }
         for irr in &irradiance {
             setup_bindings.push(Binding::StorageImage(&irr.image));
+        }
+        for r in &rays {
+            setup_bindings.push(Binding::StorageImage(&r.image));
         }
         let setup_set = DescriptorSet::new(ctx, &setup_bindings, "sweep setup")?;
 
@@ -827,6 +876,7 @@ impl SweepPass {
             floor,
             forward,
             irradiance,
+            rays,
             splat_pass,
             splat_framebuffers,
             light_pass,
@@ -918,12 +968,17 @@ impl SweepPass {
         };
         let tan_half = (camera.fov_y.to_radians() * 0.5).tan();
         let aspect = self.width as f32 / self.height as f32;
-        let grid = light_grid(
+        let ray_image = [
+            self.rays[0].image.extent()[0],
+            self.rays[0].image.extent()[1],
+        ];
+        let (grid, grid_dims) = light_grid(
             &planes,
             light_view,
             tan_half,
             aspect,
             [self.width, self.height],
+            ray_image[0] as u64 * ray_image[1] as u64,
         );
         let soft = sweep.light.softness > 0.0;
         let (diffusion_w, diffusion_stride) = diffusion(
@@ -968,6 +1023,12 @@ impl SweepPass {
             background: opts.background,
             refraction: [sweep.eta_scale, 0.0, 0.0, 0.0],
             light_grid: grid,
+            light_rays: [
+                grid_dims[0] as f32,
+                grid_dims[1] as f32,
+                ray_image[0] as f32,
+                ray_image[1] as f32,
+            ],
             transport: [
                 if forward.is_some() { 1.0 } else { 0.0 },
                 diffusion_w,
@@ -996,9 +1057,14 @@ impl SweepPass {
             .dumps
             .iter()
             .map(|&(b, plane)| {
+                let image = match (forward.is_some(), b) {
+                    (true, StateBuffer::LightRays) => &self.rays[0].image,
+                    (true, StateBuffer::LightRayDirections) => &self.rays[1].image,
+                    _ => &self.states[b.index()].image,
+                };
                 let buf = Buffer::readback(
                     ctx,
-                    self.states[b.index()].image.layer_bytes()?,
+                    image.layer_bytes()?,
                     &format!("dump {}@{plane}", b.name()),
                 )?;
                 Ok((b, plane, buf))
@@ -1014,15 +1080,27 @@ impl SweepPass {
         rec.begin_scope("sweep setup");
         rec.clear_storage(&self.counters);
         let mut storage = self.state_layers(0..2, Access::ComputeStorage);
-        for irr in &self.irradiance {
-            storage.push((&irr.image, 0..2, Access::ComputeStorage));
+        for img in self
+            .irradiance
+            .iter()
+            .map(|i| &i.image)
+            .chain(self.rays.iter().map(|r| &r.image))
+        {
+            storage.push((img, 0..2, Access::ComputeStorage));
         }
         rec.transition_many(&storage);
-        rec.dispatch(&self.setup, &self.setup_set, &[], groups)?;
+        // The setup covers the screen and the ray images (RAY_IMAGE_SCALE times larger).
+        let setup_groups = [ray_image[0].div_ceil(8), ray_image[1].div_ceil(8), 1];
+        rec.dispatch(&self.setup, &self.setup_set, &[], setup_groups)?;
         // Both layers become sampled: every draw's set names both (see module docs).
         let mut sampled = self.state_layers(0..2, Access::SampledGeneral);
-        for irr in &self.irradiance {
-            sampled.push((&irr.image, 0..2, Access::SampledGeneral));
+        for img in self
+            .irradiance
+            .iter()
+            .map(|i| &i.image)
+            .chain(self.rays.iter().map(|r| &r.image))
+        {
+            sampled.push((img, 0..2, Access::SampledGeneral));
         }
         rec.transition_many(&sampled);
         rec.end_scope();
@@ -1038,10 +1116,7 @@ impl SweepPass {
             (false, None) => &self.sweep,
         };
         rec.bind_graphics(plane_pipeline, &self.sweep_set, self.width, self.height);
-        let light_images = [
-            &self.states[StateBuffer::LightColour.index()].image,
-            &self.states[StateBuffer::LightDirection.index()].image,
-        ];
+        let light_images = [&self.rays[0].image, &self.rays[1].image];
         for i in 0..planes.count {
             let write = i % 2;
             let read = 1 - write;
@@ -1064,8 +1139,8 @@ impl SweepPass {
                 // it out).
                 let mut items = self.state_layers(read..read + 1, Access::SampledGeneral);
                 if forward.is_some() {
-                    for irr in &self.irradiance {
-                        items.push((&irr.image, read..read + 1, Access::SampledGeneral));
+                    for img in self.irradiance.iter().map(|i| &i.image).chain(light_images) {
+                        items.push((img, read..read + 1, Access::SampledGeneral));
                     }
                 }
                 rec.transition_many(&items);
@@ -1083,14 +1158,16 @@ impl SweepPass {
                     rec.end_render_pass();
                 }
                 Some(f) => {
-                    // 1. The light rays advance to plane i.
+                    // 1. The light rays advance to plane i (over the ray images).
                     rec.begin_render_pass(
                         &self.light_pass,
                         &self.light_framebuffers[write as usize],
                         &[(light_images[0], write), (light_images[1], write)],
                     )?;
+                    rec.set_viewport(ray_image[0], ray_image[1]);
                     rec.draw_fullscreen(plane_pipeline, bytemuck::bytes_of(&push))?;
                     rec.end_render_pass();
+                    rec.set_viewport(self.width, self.height);
                     // 2. They deposit their flux on plane i: irradiance layer `write`
                     // (plane i - 2's, read by no draw any more) becomes an attachment.
                     rec.transition_many(&[
@@ -1113,7 +1190,7 @@ impl SweepPass {
                     rec.draw(
                         &f.splat,
                         bytemuck::bytes_of(&splat_push),
-                        self.width * self.height,
+                        grid_dims[0] * grid_dims[1],
                     )?;
                     rec.end_render_pass();
                     // 3. The viewing rays cross the segment from plane i - 1 to plane i,
@@ -1148,17 +1225,16 @@ impl SweepPass {
                 if *plane != i {
                     continue;
                 }
-                // With the forward transport the light buffers hold rays; what a plane's
-                // light is, is the splatted irradiance.
-                match (splat.is_some(), b) {
-                    (true, StateBuffer::LightColour) => {
-                        rec.copy_image_to_buffer(&self.irradiance[0].image, write, buf)
-                    }
-                    (true, StateBuffer::LightDirection) => {
-                        rec.copy_image_to_buffer(&self.irradiance[1].image, write, buf)
-                    }
-                    _ => rec.copy_image_to_buffer(&self.states[b.index()].image, write, buf),
-                }
+                // With the forward transport what a plane's light is, is the splatted
+                // irradiance; the rays are in images of their own.
+                let image = match (splat.is_some(), b) {
+                    (true, StateBuffer::LightColour) => &self.irradiance[0].image,
+                    (true, StateBuffer::LightDirection) => &self.irradiance[1].image,
+                    (true, StateBuffer::LightRays) => &self.rays[0].image,
+                    (true, StateBuffer::LightRayDirections) => &self.rays[1].image,
+                    _ => &self.states[b.index()].image,
+                };
+                rec.copy_image_to_buffer(image, write, buf);
             }
         }
         rec.end_scope();
@@ -1183,6 +1259,7 @@ impl SweepPass {
                 bytes_per_plane: self.bytes_per_plane(soft, sweep.specular > 0.0),
                 light_transport: sweep.light_transport,
                 light_grid: grid,
+                light_rays: [grid_dims[0], grid_dims[1], ray_image[0], ray_image[1]],
                 clamps: Clamps::default(),
             },
             dumps: dump_buffers,
@@ -1191,18 +1268,27 @@ impl SweepPass {
     }
 }
 
-/// The forward transport's grid of light rays on the launch plane (one spacing before plane
-/// 0), as (x, y of the grid's corner, cell width, cell height) in view units: every point of
-/// every plane's view rectangle traced back along the (unrefracted) light lands inside it,
-/// so no plane has a region that no ray could reach, plus two cells of margin for the
-/// splats at the border. One ray per pixel of the `size` grid.
+/// Light rays the forward transport may use, per screen pixel: the ray images hold
+/// `RAY_IMAGE_SCALE`² texels per pixel.
+pub const RAY_IMAGE_SCALE: u32 = 2;
+
+/// The forward transport's grid of light rays on the launch plane (one spacing before
+/// plane 0): (x, y of the grid's corner, cell width, cell height) in view units, and its
+/// columns and rows. Every point of every plane's view rectangle traced back along the
+/// (unrefracted) light lands inside it, so no plane has a region no ray could reach; two
+/// cells of margin on each side keep the splats at the border whole. The cells are the
+/// pixel pitch of plane 0 (where pixels are smallest), so the irradiance is resolved at
+/// least as finely as the screen, unless that takes more than `budget` rays: oblique
+/// light seen through a narrow view needs rays over several screen heights (the light
+/// reaching the deepest plane comes from far aside), and then the pitch grows evenly.
 fn light_grid(
     planes: &Planes,
     light: Vec3,
     tan_half: f32,
     aspect: f32,
     size: [u32; 2],
-) -> [f32; 4] {
+    budget: u64,
+) -> ([f32; 4], [u32; 2]) {
     let launch = planes.first_depth - planes.spacing;
     let last = planes.depth(planes.count.saturating_sub(1));
     let (mut lo, mut hi) = (
@@ -1218,11 +1304,20 @@ fn light_grid(
             hi = hi.max(back);
         }
     }
-    let n = glam::Vec2::new(size[0] as f32, size[1] as f32);
-    // Two cells of margin on each side: cell = extent / (n - 4).
-    let cell = (hi - lo) / (n - 4.0).max(glam::Vec2::ONE);
+    let pitch = 2.0 * planes.first_depth * tan_half / size[1] as f32;
+    let extent = hi - lo;
+    let mut n = (extent / pitch).ceil() + 4.0;
+    let count = n.x as f64 * n.y as f64;
+    if count > budget as f64 {
+        n = (n * (budget as f64 / count).sqrt() as f32).floor();
+    }
+    let n = n.max(glam::Vec2::splat(5.0));
+    let cell = extent / (n - 4.0);
     let corner = lo - 2.0 * cell;
-    [corner.x, corner.y, cell.x, cell.y]
+    (
+        [corner.x, corner.y, cell.x, cell.y],
+        [n.x as u32, n.y as u32],
+    )
 }
 
 /// Softness as diffusion between neighbouring light rays: the weight each ray hands to each

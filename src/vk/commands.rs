@@ -358,6 +358,16 @@ impl Recorder<'_> {
                 &[set.raw],
                 &[],
             );
+        }
+        self.set_viewport(width, height);
+    }
+
+    /// Viewport and scissor of `width` × `height` for the following draws (a pass whose
+    /// attachments differ in size from the previous one's).
+    pub fn set_viewport(&mut self, width: u32, height: u32) {
+        let d = self.device();
+        // SAFETY: recording; viewport and scissor are dynamic in every graphics pipeline.
+        unsafe {
             d.cmd_set_viewport(
                 self.cmd,
                 0,

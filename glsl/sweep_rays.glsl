@@ -1,0 +1,31 @@
+// The forward transport's light rays: one per texel of two 2-layer image arrays (ping-pong
+// like the state), independent of the screen's size. Ray r = j * columns + i of the grid
+// (i, j) lives at texel (r % image width, r / image width), so a grid of any shape up to
+// the images' texel count fits without reallocating.
+#ifndef REFRAKT_SWEEP_RAYS_GLSL
+#define REFRAKT_SWEEP_RAYS_GLSL
+
+// rgb = flux, a = view x on the ray's plane.
+layout(set = 0, binding = 21) uniform sampler2D rays_flux_0;
+layout(set = 0, binding = 22) uniform sampler2D rays_flux_1;
+// xyz = v = eta dx/ds, w = view y on the ray's plane.
+layout(set = 0, binding = 23) uniform sampler2D rays_direction_0;
+layout(set = 0, binding = 24) uniform sampler2D rays_direction_1;
+
+ivec2 ray_grid() { return ivec2(P.light_rays.xy); }
+
+ivec2 ray_texel(int r) {
+    int w = int(P.light_rays.z);
+    return ivec2(r % w, r / w);
+}
+
+int ray_index(ivec2 ij) { return ij.y * int(P.light_rays.x) + ij.x; }
+
+bool ray_exists(ivec2 ij) {
+    return all(greaterThanEqual(ij, ivec2(0))) && all(lessThan(ij, ray_grid()));
+}
+
+#define READ_RAY(name, layer, r) \
+    ((layer) == 0u ? texelFetch(name##_0, ray_texel(r), 0) : texelFetch(name##_1, ray_texel(r), 0))
+
+#endif
