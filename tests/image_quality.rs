@@ -68,11 +68,6 @@ fn floor_banding(
     };
     let mut r = Renderer::new(ctx, &vol, &tf).unwrap();
     let f = r.render(Model::Refract, &cam, &opts).unwrap();
-    if std::env::var("GRID").is_ok() {
-        let st = f.sweep.as_ref().unwrap();
-        let px = 2.0 * st.planes.first_depth * (cam.fov_y.to_radians() * 0.5).tan() / h as f32;
-        println!("grid {:?}, pixel at plane 0 {px}", st.light_grid);
-    }
     // Row means over the central half of the columns, for rows showing the floor.
     let mut rows = Vec::new();
     for y in 0..h {
@@ -135,25 +130,27 @@ fn the_thesis_step_keeps_a_soft_floor_unstriped() {
 }
 
 /// Issue 13's goal for the default transport: a lit floor varies row to row by at most
-/// 1 % of its level. Open: the forward transport's light grid has one ray per pixel over
-/// the back-projection of every plane, which for light at 60° to a narrow view is ~7
-/// pixels per ray across the light's sweep; the irradiance is then a mosaic the viewing
-/// rays sample at the plane spacing (measured 24–34 % soft, 51–148 % hard).
+/// 1 % of its level. Open: the forward transport's irradiance lives on its rays' boxes,
+/// which the viewing rays sample at the plane spacing; with a ray per pixel of plane 0
+/// (within a budget of 4 rays per screen pixel) soft floors vary by a few per cent and
+/// hard ones by more (docs/NOTES.md has the figures).
 #[test]
-#[ignore = "open (issue 13): forward light grid coarser than the pixels under oblique light"]
+#[ignore = "open (issue 13): lit surfaces still striped under the forward transport"]
 fn the_forward_transport_keeps_a_floor_unstriped() {
     with_context(|ctx| {
+        let mut worst = 0.0f64;
         for thin in [false, true] {
             for angle in [60.0f32, 75.0] {
                 for softness in [0.0f32, 1.0] {
                     let b = floor_banding(ctx, angle, softness, LightTransport::Forward, thin);
-                    assert!(
-                        b <= 0.01,
-                        "{angle}° softness {softness}: {:.2} %",
-                        b * 100.0
-                    );
+                    worst = worst.max(b);
                 }
             }
         }
+        assert!(
+            worst <= 0.01,
+            "worst row-to-row variation {:.2} %",
+            worst * 100.0
+        );
     });
 }
