@@ -284,6 +284,12 @@ struct SceneArgs {
     /// [default: backward].
     #[arg(long, value_name = "forward|backward")]
     light_transport: Option<String>,
+    /// Forward light transport: light rays per screen pixel, 1 to 8 (refract). The rays
+    /// cover the light's whole domain at the nearest plane's pixel pitch as far as this
+    /// budget allows; more resolve oblique light and caustics more finely, at a cost
+    /// proportional to their number [default: 2].
+    #[arg(long, value_name = "N")]
+    light_rays: Option<u32>,
     /// Clipping plane "nx,ny,nz,offset" in world space: opacity is zero where
     /// n·p > offset, the medium and refraction stay (refract, thesis Fig. 6.6); "none"
     /// removes a scene's plane.
@@ -620,6 +626,7 @@ fn scene_from_args(args: &SceneArgs) -> Result<Scene> {
     set!(s.roughness, args.roughness);
     set!(s.specular, args.specular);
     set!(s.eta_scale, args.eta_scale);
+    set!(s.light_rays, args.light_rays);
     if let Some(t) = &args.light_transport {
         s.light_transport =
             refrakt::render::LightTransport::parse(t).context("--light-transport")?;

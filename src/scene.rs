@@ -77,6 +77,8 @@ pub struct Scene {
     pub eta_scale: f32,
     /// How light travels between the sweep's planes.
     pub light_transport: LightTransport,
+    /// Forward transport: light rays per screen pixel.
+    pub light_rays: u32,
     pub clip: Option<(Vec3, f32)>,
     pub exposure: f32,
     pub tonemap: ToneOperator,
@@ -139,6 +141,7 @@ impl Default for Scene {
             specular: 1.0,
             eta_scale: 1.0,
             light_transport: LightTransport::Forward,
+            light_rays: 2,
             clip: None,
             exposure: 0.0,
             tonemap: ToneOperator::Aces,
@@ -462,6 +465,7 @@ impl Scene {
                 specular: self.specular,
                 eta_scale: self.eta_scale,
                 light_transport: self.light_transport,
+                light_rays: self.light_rays,
                 clip: self.clip,
                 env_rotation: self.env_rotation,
                 ..Default::default()
@@ -663,6 +667,7 @@ struct RenderTable {
     specular: Option<f32>,
     eta_scale: Option<f32>,
     light_transport: Option<String>,
+    light_rays: Option<u32>,
     clip: Option<[f32; 4]>,
     exposure: Option<f32>,
     tonemap: Option<String>,
@@ -921,6 +926,9 @@ impl SceneFile {
             }
             if let Some(x) = r.eta_scale {
                 s.eta_scale = x;
+            }
+            if let Some(n) = r.light_rays {
+                s.light_rays = n;
             }
             if let Some(t) = &r.light_transport {
                 s.light_transport = LightTransport::parse(t).context("[render] light_transport")?;

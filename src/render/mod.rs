@@ -586,6 +586,10 @@ impl Renderer {
                     mean: self.env.sat.mean,
                     enabled: self.env.enabled,
                 };
+                // The ray images are sized by the rays per pixel too.
+                if self.sweep.as_ref().map(|p| p.rays_per_pixel()) != Some(opts.sweep.light_rays) {
+                    self.sweep = None;
+                }
                 let pass = sized_pass(&mut self.sweep, opts, |w, h| {
                     sweep::SweepPass::new(
                         &self.ctx,
@@ -596,6 +600,7 @@ impl Renderer {
                         &env,
                         w,
                         h,
+                        opts.sweep.light_rays,
                     )
                 })?;
                 let recording = pass.record(

@@ -208,6 +208,11 @@ pub struct SweepOptions {
     pub eta_scale: f32,
     /// How light travels between planes.
     pub light_transport: LightTransport,
+    /// Forward transport: light rays per screen pixel (1 to `MAX_LIGHT_RAYS`). The rays
+    /// cover the light's whole domain at plane 0's pixel pitch as far as this budget
+    /// allows; more rays resolve oblique light and crossing rays more finely, at a cost
+    /// proportional to their number.
+    pub light_rays: u32,
     /// Benchmark baseline: run every plane with glsl/sweep_floor.frag, which only carries
     /// the state forward (same passes, barriers, attachments and reads). The image is not
     /// a rendering; the time is the floor the sweep's optics add to.
@@ -229,6 +234,7 @@ impl Default for SweepOptions {
             env_footprint: true,
             eta_scale: 1.0,
             light_transport: LightTransport::Forward,
+            light_rays: 2,
             floor: false,
         }
     }
@@ -276,6 +282,11 @@ impl SweepOptions {
             self.eta_scale.is_finite() && (0.0..=MAX_ETA_SCALE).contains(&self.eta_scale),
             "refractive-index scale {} must be in [0, {MAX_ETA_SCALE}]",
             self.eta_scale
+        );
+        ensure!(
+            (1..=MAX_LIGHT_RAYS).contains(&self.light_rays),
+            "light rays per pixel {} must be in 1..={MAX_LIGHT_RAYS}",
+            self.light_rays
         );
         if let Some((n, o)) = self.clip {
             ensure!(
@@ -550,9 +561,10 @@ pub(super) struct SweepPass {
     floor: GraphicsPipeline,
     forward: Option<ForwardPipelines>,
     irradiance: [IrradianceImage; 2],
-    /// The forward transport's light rays (flux + view x; v + view y), `RAY_IMAGE_SCALE`
-    /// times the screen per axis.
+    /// The forward transport's light rays (flux + view x; v + view y): `rays_per_pixel`
+    /// texels per screen pixel (the screen's width, that many times its height).
     rays: [StateImage; 2],
+    rays_per_pixel: u32,
     splat_pass: RenderPass,
     splat_framebuffers: [Framebuffer; 2],
     /// Forward transport: the light rays' pass (the two light buffers) and the viewing
@@ -589,7 +601,16 @@ impl SweepPass {
         env: &EnvInputs,
         width: u32,
         height: u32,
+        rays_per_pixel: u32,
     ) -> Result<Self> {
+        let max_image = ctx.info().limits.max_image_dimension2_d;
+        ensure!(
+            (height as u64) * (rays_per_pixel as u64) <= max_image as u64,
+            "{rays_per_pixel} light rays per pixel need ray images {width}x{} texels; device \
+             '{}' allows {max_image} per side",
+            height as u64 * rays_per_pixel as u64,
+            ctx.info().name
+        );
         let max_attachments = ctx.info().limits.max_color_attachments;
         if max_attachments < 6 {
             bail!(
@@ -665,7 +686,7 @@ impl SweepPass {
                 ImageDesc {
                     kind: ImageKind::D2Array,
                     format: STATE_FORMAT,
-                    extent: [width * RAY_IMAGE_SCALE, height * RAY_IMAGE_SCALE, 1],
+                    extent: [width, height * rays_per_pixel, 1],
                     layers: 2,
                     usage: vk::usage::COLOR_ATTACHMENT
                         | vk::usage::SAMPLED
@@ -725,8 +746,8 @@ impl SweepPass {
                 ctx,
                 &light_pass,
                 &[&rays[0].layers[layer], &rays[1].layers[layer]],
-                width * RAY_IMAGE_SCALE,
-                height * RAY_IMAGE_SCALE,
+                width,
+                height * rays_per_pixel,
                 &format!("sweep light rays layer {layer}"),
             )
         };
@@ -877,6 +898,7 @@ impl SweepPass {
             forward,
             irradiance,
             rays,
+            rays_per_pixel,
             splat_pass,
             splat_framebuffers,
             light_pass,
@@ -892,6 +914,11 @@ impl SweepPass {
 
     pub fn size(&self) -> (u32, u32) {
         (self.width, self.height)
+    }
+
+    /// Light rays per screen pixel the ray images were made for.
+    pub fn rays_per_pixel(&self) -> u32 {
+        self.rays_per_pixel
     }
 
     /// The same layers of all six state images, bound for the same use.
@@ -1089,7 +1116,7 @@ impl SweepPass {
             storage.push((img, 0..2, Access::ComputeStorage));
         }
         rec.transition_many(&storage);
-        // The setup covers the screen and the ray images (RAY_IMAGE_SCALE times larger).
+        // The setup covers the screen and the ray images (rays_per_pixel times taller).
         let setup_groups = [ray_image[0].div_ceil(8), ray_image[1].div_ceil(8), 1];
         rec.dispatch(&self.setup, &self.setup_set, &[], setup_groups)?;
         // Both layers become sampled: every draw's set names both (see module docs).
@@ -1164,7 +1191,9 @@ impl SweepPass {
                         &self.light_framebuffers[write as usize],
                         &[(light_images[0], write), (light_images[1], write)],
                     )?;
-                    rec.set_viewport(ray_image[0], ray_image[1]);
+                    // Only the rows that hold rays.
+                    let rows = (grid_dims[0] * grid_dims[1]).div_ceil(ray_image[0]);
+                    rec.set_viewport(ray_image[0], rows.clamp(1, ray_image[1]));
                     rec.draw_fullscreen(plane_pipeline, bytemuck::bytes_of(&push))?;
                     rec.end_render_pass();
                     rec.set_viewport(self.width, self.height);
@@ -1268,9 +1297,8 @@ impl SweepPass {
     }
 }
 
-/// Light rays the forward transport may use, per screen pixel: the ray images hold
-/// `RAY_IMAGE_SCALE`² texels per pixel.
-pub const RAY_IMAGE_SCALE: u32 = 2;
+/// Most light rays per screen pixel (`SweepOptions::light_rays`).
+pub const MAX_LIGHT_RAYS: u32 = 8;
 
 /// The forward transport's grid of light rays on the launch plane (one spacing before
 /// plane 0): (x, y of the grid's corner, cell width, cell height) in view units, and its
