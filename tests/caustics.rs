@@ -8,38 +8,10 @@ mod common;
 use common::*;
 use glam::Vec3;
 use refrakt::render::{
-    Camera, Frame, Light, LightTransport, Model, Planes, RenderOptions, Renderer, StateBuffer,
-    SweepOptions,
+    Camera, Frame, Light, LightTransport, Planes, RenderOptions, StateBuffer, SweepOptions,
 };
 use refrakt::transfer::{Piecewise, TransferFunctions};
 use refrakt::vk::Context;
-use refrakt::volume::Volume;
-
-fn sweep(
-    ctx: &Context,
-    vol: &Volume,
-    tf: &TransferFunctions,
-    cam: &Camera,
-    opts: &RenderOptions,
-) -> Frame {
-    let mut r = Renderer::new(ctx, vol, tf).unwrap();
-    r.render(Model::Refract, cam, opts).unwrap()
-}
-
-fn glass(eta: f32) -> TransferFunctions {
-    TransferFunctions {
-        eta: Piecewise::new(vec![(0.0, [1.0]), (1.0, [eta])]),
-        ..Default::default()
-    }
-}
-
-fn headlight(cam: &Camera, softness: f32) -> Light {
-    Light {
-        towards: cam.eye().normalize(),
-        colour: [1.0; 3],
-        softness,
-    }
-}
 
 /// Mean of channel 0 over every pixel of a light-colour dump.
 fn mean_light(f: &Frame, plane: u32) -> f64 {

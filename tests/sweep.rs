@@ -15,26 +15,6 @@ use refrakt::transfer::{Piecewise, TransferFunctions};
 use refrakt::vk::Context;
 use refrakt::volume::{procedural, Volume};
 
-fn sweep(
-    ctx: &Context,
-    vol: &Volume,
-    tf: &TransferFunctions,
-    cam: &Camera,
-    opts: &RenderOptions,
-) -> refrakt::render::Frame {
-    let mut r = Renderer::new(ctx, vol, tf).unwrap();
-    r.render(Model::Refract, cam, opts).unwrap()
-}
-
-/// Light along the view axis (travelling away from the camera).
-fn headlight(cam: &Camera, softness: f32) -> Light {
-    Light {
-        towards: cam.eye().normalize(),
-        colour: [1.0; 3],
-        softness,
-    }
-}
-
 fn dump(frame: &refrakt::render::Frame, b: StateBuffer, plane: u32) -> &Dump {
     frame
         .dumps

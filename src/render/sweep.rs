@@ -532,18 +532,34 @@ impl Clamps {
     }
 }
 
+/// An image of two layers (the ping-pong of the plane sweep) with a view of each layer:
+/// the six state buffers; the forward transport's irradiance (rgb) and light direction
+/// (luminance-weighted sum of unit directions, weight in w) of the last two planes, plane
+/// i in layer i % 2; and its light rays.
 struct StateImage {
     image: Image,
     layers: [LayerView; 2],
 }
 
-/// The forward transport's irradiance (rgb) and light direction (luminance-weighted sum
-/// of unit directions, weight in w) of the last two planes, plane i in layer i % 2:
-/// accumulated by the splat pass, sampled by the viewing rays of the segment that ends on
-/// the plane and of the one that starts there.
-struct IrradianceImage {
-    image: Image,
-    layers: [LayerView; 2],
+impl StateImage {
+    fn new(ctx: &Context, size: [u32; 2], name: &str) -> Result<Self> {
+        let image = Image::new(
+            ctx,
+            ImageDesc {
+                kind: ImageKind::D2Array,
+                format: STATE_FORMAT,
+                extent: [size[0], size[1], 1],
+                layers: 2,
+                usage: vk::usage::COLOR_ATTACHMENT
+                    | vk::usage::SAMPLED
+                    | vk::usage::STORAGE
+                    | vk::usage::TRANSFER_SRC,
+            },
+            name,
+        )?;
+        let layers = [image.layer_view(0)?, image.layer_view(1)?];
+        Ok(Self { image, layers })
+    }
 }
 
 pub(super) struct SweepPass {
@@ -560,7 +576,7 @@ pub(super) struct SweepPass {
     sweep: GraphicsPipeline,
     floor: GraphicsPipeline,
     forward: Option<ForwardPipelines>,
-    irradiance: [IrradianceImage; 2],
+    irradiance: [StateImage; 2],
     /// The forward transport's light rays (flux + view x; v + view y): `rays_per_pixel`
     /// texels per screen pixel (the screen's width, that many times its height).
     rays: [StateImage; 2],
@@ -620,25 +636,10 @@ impl SweepPass {
             );
         }
         let params = Buffer::uniform::<SweepParams>(ctx, "sweep params")?;
-        let mut states = Vec::new();
-        for b in StateBuffer::ALL {
-            let image = Image::new(
-                ctx,
-                ImageDesc {
-                    kind: ImageKind::D2Array,
-                    format: STATE_FORMAT,
-                    extent: [width, height, 1],
-                    layers: 2,
-                    usage: vk::usage::COLOR_ATTACHMENT
-                        | vk::usage::SAMPLED
-                        | vk::usage::STORAGE
-                        | vk::usage::TRANSFER_SRC,
-                },
-                b.name(),
-            )?;
-            let layers = [image.layer_view(0)?, image.layer_view(1)?];
-            states.push(StateImage { image, layers });
-        }
+        let states = StateBuffer::ALL
+            .into_iter()
+            .map(|b| StateImage::new(ctx, [width, height], b.name()))
+            .collect::<Result<Vec<_>>>()?;
         let render_pass = RenderPass::new(
             ctx,
             &[STATE_FORMAT; 6],
@@ -658,47 +659,15 @@ impl SweepPass {
         };
         let framebuffers = [fb(0)?, fb(1)?];
 
-        let irradiance_image = |name: &str| -> Result<IrradianceImage> {
-            let image = Image::new(
-                ctx,
-                ImageDesc {
-                    kind: ImageKind::D2Array,
-                    format: STATE_FORMAT,
-                    extent: [width, height, 1],
-                    layers: 2,
-                    usage: vk::usage::COLOR_ATTACHMENT
-                        | vk::usage::SAMPLED
-                        | vk::usage::STORAGE
-                        | vk::usage::TRANSFER_SRC,
-                },
-                name,
-            )?;
-            let layers = [image.layer_view(0)?, image.layer_view(1)?];
-            Ok(IrradianceImage { image, layers })
-        };
         let irradiance = [
-            irradiance_image("irradiance")?,
-            irradiance_image("irradiance direction")?,
+            StateImage::new(ctx, [width, height], "irradiance")?,
+            StateImage::new(ctx, [width, height], "irradiance direction")?,
         ];
-        let ray_image = |name: &str| -> Result<StateImage> {
-            let image = Image::new(
-                ctx,
-                ImageDesc {
-                    kind: ImageKind::D2Array,
-                    format: STATE_FORMAT,
-                    extent: [width, height * rays_per_pixel, 1],
-                    layers: 2,
-                    usage: vk::usage::COLOR_ATTACHMENT
-                        | vk::usage::SAMPLED
-                        | vk::usage::STORAGE
-                        | vk::usage::TRANSFER_SRC,
-                },
-                name,
-            )?;
-            let layers = [image.layer_view(0)?, image.layer_view(1)?];
-            Ok(StateImage { image, layers })
-        };
-        let rays = [ray_image("light rays")?, ray_image("light ray directions")?];
+        let ray_size = [width, height * rays_per_pixel];
+        let rays = [
+            StateImage::new(ctx, ray_size, "light rays")?,
+            StateImage::new(ctx, ray_size, "light ray directions")?,
+        ];
         let splat_pass = RenderPass::cleared(
             ctx,
             &[STATE_FORMAT; 2],

@@ -220,16 +220,7 @@ impl Recorder<'_> {
             | vk::PipelineStageFlags2::FRAGMENT_SHADER
             | vk::PipelineStageFlags2::COMPUTE_SHADER;
         let barrier = |src_stage, src_access, dst_stage, dst_access| {
-            vk::BufferMemoryBarrier2::default()
-                .src_stage_mask(src_stage)
-                .src_access_mask(src_access)
-                .dst_stage_mask(dst_stage)
-                .dst_access_mask(dst_access)
-                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                .buffer(buffer.raw)
-                .offset(0)
-                .size(vk::WHOLE_SIZE)
+            buffer_barrier(buffer, src_stage, src_access, dst_stage, dst_access)
         };
         // Write-after-read: earlier reads (this or an earlier submission) finish first.
         let before = [barrier(

@@ -4,7 +4,7 @@
 
 use std::sync::Arc;
 
-use refrakt::render::{Camera, Frame, Model, RenderOptions, Renderer};
+use refrakt::render::{Camera, Frame, Light, Model, RenderOptions, Renderer};
 use refrakt::transfer::TransferFunctions;
 use refrakt::vk::{Context, ContextDesc, ValidationLog};
 use refrakt::volume::{Volume, Voxels};
@@ -114,4 +114,33 @@ pub fn ball_at(n: u32, r: f32, c: [f32; 3]) -> Volume {
 /// [`ball_at`] the centre.
 pub fn ball(n: u32, r: f32) -> Volume {
     ball_at(n, r, [0.0; 3])
+}
+
+/// One frame of the refractive plane sweep.
+pub fn sweep(
+    ctx: &Context,
+    vol: &Volume,
+    tf: &TransferFunctions,
+    cam: &Camera,
+    opts: &RenderOptions,
+) -> Frame {
+    let mut r = Renderer::new(ctx, vol, tf).expect("renderer");
+    r.render(Model::Refract, cam, opts).expect("render")
+}
+
+/// Light along the view axis (travelling away from the camera), white.
+pub fn headlight(cam: &Camera, softness: f32) -> Light {
+    Light {
+        towards: (cam.eye() - cam.target).normalize(),
+        colour: [1.0; 3],
+        softness,
+    }
+}
+
+/// Clear glass: eta rising linearly from 1 at value 0 to `eta` at value 1, nothing else.
+pub fn glass(eta: f32) -> TransferFunctions {
+    TransferFunctions {
+        eta: refrakt::transfer::Piecewise::new(vec![(0.0, [1.0]), (1.0, [eta])]),
+        ..Default::default()
+    }
 }
