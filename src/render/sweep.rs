@@ -902,6 +902,16 @@ impl SweepPass {
             .collect()
     }
 
+    /// Both layers of every image the setup writes (state, irradiance, rays), for `access`.
+    fn every_layer(&self, access: Access) -> Vec<(&Image, std::ops::Range<u32>, Access)> {
+        self.states
+            .iter()
+            .chain(&self.irradiance)
+            .chain(&self.rays)
+            .map(|s| (&s.image, 0..2, access))
+            .collect()
+    }
+
     /// State-buffer traffic of one plane (see [`SweepStats::bytes_per_plane`]).
     pub fn bytes_per_plane(&self, soft: bool, specular: bool) -> u64 {
         let pixels = self.width as u64 * self.height as u64;
@@ -1075,30 +1085,12 @@ impl SweepPass {
         }
         rec.begin_scope("sweep setup");
         rec.clear_storage(&self.counters);
-        let mut storage = self.state_layers(0..2, Access::ComputeStorage);
-        for img in self
-            .irradiance
-            .iter()
-            .map(|i| &i.image)
-            .chain(self.rays.iter().map(|r| &r.image))
-        {
-            storage.push((img, 0..2, Access::ComputeStorage));
-        }
-        rec.transition_many(&storage);
+        rec.transition_many(&self.every_layer(Access::ComputeStorage));
         // The setup covers the screen and the ray images (rays_per_pixel times taller).
         let setup_groups = [ray_image[0].div_ceil(8), ray_image[1].div_ceil(8), 1];
         rec.dispatch(&self.setup, &self.setup_set, &[], setup_groups)?;
         // Both layers become sampled: every draw's set names both (see module docs).
-        let mut sampled = self.state_layers(0..2, Access::SampledGeneral);
-        for img in self
-            .irradiance
-            .iter()
-            .map(|i| &i.image)
-            .chain(self.rays.iter().map(|r| &r.image))
-        {
-            sampled.push((img, 0..2, Access::SampledGeneral));
-        }
-        rec.transition_many(&sampled);
+        rec.transition_many(&self.every_layer(Access::SampledGeneral));
         rec.end_scope();
 
         rec.begin_scope("sweep");
