@@ -288,7 +288,7 @@ struct SceneArgs {
     /// cover the light's whole domain at the nearest plane's pixel pitch as far as this
     /// budget allows; more resolve oblique light and caustics more finely, at a cost
     /// proportional to their number [default: 2].
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
     light_rays: Option<u32>,
     /// Clipping plane "nx,ny,nz,offset" in world space: opacity is zero where
     /// n·p > offset, the medium and refraction stay (refract, thesis Fig. 6.6); "none"
