@@ -342,6 +342,14 @@ fn total_internal_reflection_lets_no_light_through_a_wedge() {
         for (angle, passed) in results {
             assert!(passed <= 0.02, "{angle}°: {:.1} % passed", passed * 100.0);
         }
+        // For the record (docs/NOTES.md), nearer the critical angle.
+        for angle in [42.0f32, 43.0, 45.0] {
+            let passed = light_beyond_wedge(ctx, angle, LightTransport::Forward);
+            println!(
+                "exit face at {angle}° (not asserted): {:.2} % beyond it",
+                passed * 100.0
+            );
+        }
         // Below the critical angle the face transmits (the same measurement can fail).
         let passed = light_beyond_wedge(ctx, 30.0, LightTransport::Forward);
         println!(
