@@ -2,19 +2,27 @@
 //!
 //! Per frame, in ONE command buffer: a compute setup pass initialises six state buffers
 //! (light colour, light direction, viewing-ray position, viewing-ray direction, colour +
-//! opacity, medium), then one full-screen draw per view-aligned plane propagates light
-//! (backward, semi-Lagrangian) and viewing rays (forward) together, then a compute pass
-//! composites the background. Each state buffer is ONE 2D image with 2 array layers; plane
-//! i renders layer i % 2 through a framebuffer of per-layer views and samples layer
-//! 1 - i % 2 through per-layer sampled views. The read layer arrives as a push constant:
-//! nothing is rebound or updated between planes.
+//! opacity, medium) and, for the forward light transport, the light rays and the
+//! irradiance; then the view-aligned planes; then a compute pass composites the
+//! background. Each buffer is ONE 2D image with 2 array layers; plane i renders layer
+//! i % 2 through a framebuffer of per-layer views and samples layer 1 - i % 2 through
+//! per-layer sampled views. The read layer arrives as a push constant: nothing is rebound
+//! or updated between planes.
 //!
-//! Synchronization: the state images live in GENERAL layout, so the only barriers between
+//! Per plane, the thesis' backward transport is one full-screen draw that moves light
+//! (semi-Lagrangian) and viewing rays together. The forward transport (the default) is
+//! three draws: the light rays advance (over the ray images, whose size follows the ray
+//! budget, not the screen), they splat their flux into the plane's irradiance (additive
+//! point sprites), and the viewing rays cross the segment that ends on the plane. All
+//! plane pipelines are made from one descriptor set, so switching pipelines leaves it
+//! bound (a set bind per plane costs ~4 ms and 3 MB on lavapipe, a pipeline switch ~0).
+//!
+//! Synchronization: the images live in GENERAL layout, so the only barriers between
 //! planes are memory dependencies on exactly the layers that change role (the layer just
-//! written becomes sampled, the layer just sampled becomes an attachment), one
-//! vkCmdPipelineBarrier2 for each of the two roles, covering all six images. GENERAL is what lets one descriptor set name both layers: the
-//! validation layer checks the layout of every statically used descriptor at every draw
-//! (see docs/NOTES.md).
+//! written becomes sampled, the layer just sampled becomes an attachment), batched into
+//! one vkCmdPipelineBarrier2 per role change. GENERAL is what lets one descriptor set name
+//! both layers: the validation layer checks the layout of every statically used
+//! descriptor at every draw (see docs/NOTES.md).
 
 use anyhow::{bail, ensure, Result};
 use bytemuck::{Pod, Zeroable};
@@ -33,9 +41,9 @@ use crate::vk::{
 /// With the forward light transport `LightColour` and `LightDirection` dump the plane's
 /// light as the viewing rays see it (the splatted irradiance, and the luminance-weighted
 /// sum of light directions with the weight in w), and `LightRays` / `LightRayDirections`
-/// the light rays themselves (flux rgb + view x on the plane; v = η dx/ds + view y), one ray
-/// per texel of the grid in [`SweepStats::light_grid`]. With the backward transport the
-/// latter two are the same images as the former.
+/// the light rays themselves (flux rgb + view x on the plane; v = η dx/ds + view y; ray
+/// r of the grid in [`SweepStats::light_grid`] / [`SweepStats::light_rays`] at texel r).
+/// With the backward transport the latter two are the same images as the former.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum StateBuffer {
     LightColour,
