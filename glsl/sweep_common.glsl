@@ -19,7 +19,9 @@ layout(set = 0, binding = 0) uniform SweepParams {
     vec4 clip;           // xyz = world normal, w = offset: opacity is zero where dot(n, p) > w;
                          // a zero normal disables clipping
     vec4 background;     // linear RGBA behind the volume
-    vec4 refraction;     // x = refractive-index scale k: eta' = 1 + k (eta_tf - 1)
+    vec4 refraction;     // x = refractive-index scale k: eta' = 1 + k (eta_tf - 1); y = 1 for
+                         //   Fresnel reflections of viewing rays; z = 1 when an environment
+                         //   map is bound; w = its rotation about world up (radians)
     vec4 light_grid;     // forward transport: the light rays' grid on the launch plane
                          //   (view x, y of ray (0,0)'s cell corner; cell size x, y)
     vec4 transport;      // x = 1 forward light transport, 0 backward; y = diffusion weight
@@ -111,6 +113,32 @@ vec3 value_gradient(vec3 p) {
     float dz = mix(x01, x11, f.y) - mix(x00, x10, f.y);
     mat3 jt = transpose(mat3(P.view_to_tex));
     return jt * (vec3(dx, dy, dz) * dims);
+}
+
+// Direction of a surface at view-space p: the gradient of the value smoothed by the 3D
+// Sobel operator (a central difference one voxel either side along each axis, weighted
+// 1-2-1 across it; 26 fetches). Neither the exact gradient of the trilinear cells (it
+// tilts by up to ~15° where a one-voxel clamped ramp meets the plateaus) nor wider plain
+// central differences (wider than the ramp, each axis sees the whole step and the
+// normal drifts to the diagonal) give the orientation of a face not aligned with the
+// grid; the smoothing across each difference does. View-space units, zero in a flat
+// region.
+vec3 surface_gradient(vec3 p) {
+    vec3 t = to_tex(p);
+    vec3 h = 1.0 / P.volume_dims.xyz;
+    vec3 g = vec3(0.0);
+    for (int k = 0; k < 27; ++k) {
+        ivec3 o = ivec3(k % 3, (k / 3) % 3, k / 9) - 1;
+        if (o == ivec3(0)) continue;
+        float f = value_at_tex(t + vec3(o) * h);
+        vec3 w = vec3(o.y == 0 ? 2.0 : 1.0, o.x == 0 ? 2.0 : 1.0, 1.0);
+        float wz = o.z == 0 ? 2.0 : 1.0;
+        g += f * vec3(float(o.x) * w.x * wz, float(o.y) * w.y * wz,
+                      float(o.z) * (o.x == 0 ? 2.0 : 1.0) * (o.y == 0 ? 2.0 : 1.0));
+    }
+    // Sobel weights sum to 16 per side; /(2 h) for a central difference.
+    g /= 32.0 * h;
+    return transpose(mat3(P.view_to_tex)) * g;
 }
 
 bool clipped(vec3 p) {

@@ -19,6 +19,10 @@ layout(set = 0, binding = 20, std430) buffer Counters {
     uint clamps[4];
 } counters;
 
+// The environment map for Fresnel reflections of viewing rays (a 2 x 1 black map when
+// there is none; SweepParams.refraction.z says whether to use it).
+layout(set = 0, binding = 25) uniform sampler2D reflection_env;
+
 void count_clamp(uint which) {
     atomicAdd(counters.clamps[which], 1u);
 }

@@ -11,9 +11,13 @@
 #ifndef LIGHT_SUBSTEPS
 #define LIGHT_SUBSTEPS 4
 #endif
+#ifndef VIEW_SUBSTEPS
+#define VIEW_SUBSTEPS 1
+#endif
 #include "sweep_common.glsl"
 #include "sweep_buffers.glsl"
 #include "sweep_light.glsl"
+#include "environment.glsl"
 #if FORWARD_LIGHT
 #include "sweep_rays.glsl"
 #endif
@@ -74,6 +78,16 @@ void light_at(vec2 uv, uint layer, out vec3 light, out vec3 dir) {
     dir = lit > 1e-6 ? d_lit / lit : d_plain;
 }
 
+// Radiance arriving along view-space direction d from outside the volume: the environment
+// map (rotated about world up like the composite's) or the constant background.
+vec3 environment_radiance(vec3 d) {
+    if (P.refraction.z < 0.5) return P.background.rgb;
+    vec3 w = mat3(P.view_to_world) * d;
+    float r = P.refraction.w;
+    w = vec3(cos(r) * w.x - sin(r) * w.z, w.y, sin(r) * w.x + cos(r) * w.z);
+    return env_bilinear(reflection_env, env_texel(env_angles(w), textureSize(reflection_env, 0)));
+}
+
 float hash(uvec3 v) {
     uint h = v.x * 0x8da6b343u ^ v.y * 0xd8163841u ^ v.z * 0xcb1ab31fu;
     h ^= h >> 13; h *= 0x5bd1e995u; h ^= h >> 15;
@@ -120,6 +134,23 @@ float specular_term(vec3 n, vec3 l, vec3 v, float eta_ratio) {
     float G = (nl / (nl * (1.0 - k) + k)) * (nv / (nv * (1.0 - k) + k));
     float F = fresnel(max(dot(v, h), 0.0), eta_ratio);
     return D * F * G / (4.0 * nv);
+}
+
+// The light chained through a surface's skin (see the viewing rays below), kept in the
+// medium buffer's .w: 0 = none; else 64 q + 32 + log2(luminance), q = the skin depth
+// crossed so far in sixteenths of a reference step (up to 63), the luminance from 2^-32
+// to 2^31, log-coded so a caustic's light keeps its precision (~2e-4 relative).
+const float CHAIN_DEPTH = 4.0;  // reference steps of depth (along the gradient) a chain runs
+float chain_encode(float light, float depth) {
+    float l = clamp(log2(max(light, 1e-30)) + 32.0, 0.0, 63.99);
+    return min(round(depth * 16.0), 63.0) * 64.0 + max(l, 1e-3);
+}
+bool chain_decode(float code, out float light, out float depth) {
+    float q = floor(code / 64.0);
+    float l = code - q * 64.0;
+    depth = q / 16.0;
+    light = l <= 1e-2 ? 0.0 : exp2(l - 32.0);
+    return code > 0.0;
 }
 
 void main() {
@@ -299,6 +330,7 @@ void main() {
     vec3 dir = normalize(vd);
     float seg_len = ds / dir.z;   // arc length from plane i-1 to this plane
 
+    float chain_code = M4.w;
     if (A < P.specular.z) {
         vec2 uv_v = project(vp);
         vec3 c; float a; vec3 m;
@@ -312,21 +344,118 @@ void main() {
 #else
         vec3 i_d = READ_BUFFER(light_colour, R, uv_v).rgb;
 #endif
+        // Direction the light travels here (view space, unit).
+#if FORWARD_LIGHT
+        vec4 ls = READ_BUFFER(irradiance_direction, W, uv_v);
+        vec3 ldir = normalize(ls.w > 0.0 ? ls.xyz : P.light_dir.xyz);
+#else
+        vec3 ldir = normalize(READ_BUFFER(light_direction, R, uv_v).xyz);
+#endif
         vec3 i_s = vec3(0.0);
         bool unlit = P.volume_dims.w > 0.5;
+        chain_code = 0.0;
         if (unlit) {
             i_d = vec3(1.0);
-        } else if (P.specular.y > 0.0 && dot(grad_f, grad_f) > 1e-8) {
-#if FORWARD_LIGHT
-            vec4 ls = READ_BUFFER(irradiance_direction, W, uv_v);
-            vec3 l = -normalize(ls.w > 0.0 ? ls.xyz : P.light_dir.xyz);
-#else
-            vec3 l = -normalize(READ_BUFFER(light_direction, R, uv_v).xyz);
-#endif
-            vec3 v = -dir;
-            vec3 n = normalize(grad_f);
-            if (dot(n, v) < 0.0) n = -n;
-            i_s = P.specular.y * specular_term(n, l, v, eta_here / vd4.w) * i_d;
+        } else {
+            // The light of the matter inside the segment, not of the plane before it (the
+            // cause of banding at the plane spacing on lit surfaces; docs/NOTES.md).
+            //
+            // (1) Within the segment the light crosses the same matter as the viewing ray
+            // on its way to each point. Locally the matter is a layer across the value
+            // gradient n, so the light's optical depth to a point is r times the viewing
+            // ray's, r = |n.v| / |n.l| (in a homogeneous medium, the two path lengths back
+            // to the plane: v_z / l_z). Integrating e^-t (view) e^-rt (light) over the
+            // segment's optical depth weights its emission by (1 - (1-a)^(1+r)) / ((1+r) a):
+            // 1 for clear matter, 1 / (1 + r) for an opaque one, however the planes cut it.
+            float r = dir.z / max(ldir.z, 1e-3);
+            float across = 1.0;   // depth crossed per unit of path, along the gradient
+            bool layered = abs(f_v - vp4.w) > 1e-4 && dot(grad_f, grad_f) > 1e-12;
+            if (layered) {
+                vec3 n = normalize(grad_f);
+                across = abs(dot(n, dir));
+                r = across / max(abs(dot(n, ldir)), 1e-3);
+            }
+            float k = 1.0 + r;
+            c *= a > 1e-4 ? (1.0 - pow(1.0 - a, k)) / (k * a) : 1.0 - 0.5 * r * a;
+            // (2) Through a surface's skin the light at the segment's front is chained from
+            // the previous segment (its light times (1-a)^r, the same layer model), not
+            // read from this plane: the plane's light is resolved at its pixel pitch (and,
+            // forward, on the rays' boxes), so across a skin thinner than a pixel it mixes
+            // lit and shadowed matter. The chain starts at the plane light of the last
+            // segment before the matter and runs CHAIN_DEPTH reference steps deep into it
+            // (along the gradient, so a grazing view follows a skin as far as a steep one);
+            // deeper, in clear space and in homogeneous matter, the plane's light rules, so
+            // shadows cast by other matter are seen (within a skin they are not: the
+            // chain's limit). The chain lives in medium.w (chain_decode).
+            float chained_light, chained_depth;
+            bool matter = a > 1e-3;
+            bool have_chain = chain_decode(M4.w, chained_light, chained_depth);
+            if (matter && have_chain && layered && chained_depth < CHAIN_DEPTH) {
+                float have = dot(i_d, vec3(0.2126, 0.7152, 0.0722));
+                i_d = have > 1e-6 ? i_d * (chained_light / have)
+                                  : P.light_colour.rgb * chained_light;
+            }
+            float next = dot(i_d, vec3(0.2126, 0.7152, 0.0722)) * pow(1.0 - a, r);
+            float depth = matter ? chained_depth + seg_len * across / ref_step : 0.0;
+            chain_code = chain_encode(next, depth);
+            if (P.specular.y > 0.0 && dot(grad_f, grad_f) > 1e-8) {
+                vec3 l = -ldir;
+                vec3 v = -dir;
+                vec3 n = normalize(grad_f);
+                if (dot(n, v) < 0.0) n = -n;
+                i_s = P.specular.y * specular_term(n, l, v, eta_here / vd4.w) * i_d;
+            }
+        }
+        // Fresnel reflection at a change of eta (the F of eq. 4.12, unpolarised): the
+        // reflected fraction sees the environment (or the background) in the mirrored
+        // direction, weighted by (1 - A) M like everything composited (eq. 4.13), and the
+        // ray goes on with the rest (folded into A, so what lies behind is seen through
+        // 1 - F). Not occluded: the mirrored direction is not traced through the volume
+        // (like the thesis' highlights, ch. 8). A one-voxel face is crossed over one to
+        // four segments: it reflects once, with the F of the whole step of eta (the
+        // plateaus found a few voxels either side along the normal), in the segment where
+        // eta passes the step's middle, so it reflects F wherever the planes cut it. (The
+        // sum of each segment's own small F is a fraction of it: what a graded face,
+        // and a smooth gradient of eta, physically reflect.)
+        if (P.refraction.y > 0.5) {
+            float d_eta = eta_here - vd4.w;
+            if (abs(d_eta) > 1e-4) {
+                // The step of eta: its plateaus a few voxels either side of the segment
+                // along the face's normal. The face reflects once, in the segment where
+                // eta passes the step's middle, with the normal where it does (the middle
+                // of a one-voxel ramp, where the smoothed gradient is most symmetric).
+                vec3 mid = vp - 0.5 * seg_len * dir;
+                vec3 g = surface_gradient(mid);
+                vec3 n = dot(g, g) > 1e-12 ? normalize(g) : dir;
+                if (dot(n, dir) * d_eta < 0.0) n = -n;   // n points to higher eta
+                float h = 0.5 * seg_len + 1.5 * ref_step;
+                float eta_lo = min(min(eta_here, vd4.w), eta_of(value_at_tex(to_tex(mid - h * n))));
+                float eta_hi = max(max(eta_here, vd4.w), eta_of(value_at_tex(to_tex(mid + h * n))));
+                float eta_mid = 0.5 * (eta_lo + eta_hi);
+                bool crosses = (vd4.w < eta_mid) != (eta_here < eta_mid);
+                if (crosses) {
+                    float at = clamp((eta_mid - vd4.w) / d_eta, 0.0, 1.0);
+                    vec3 gc = surface_gradient(vp - (1.0 - at) * seg_len * dir);
+                    if (dot(gc, gc) > 1e-12) n = normalize(gc) * (dot(gc, n) >= 0.0 ? 1.0 : -1.0);
+                }
+                // The angle of incidence on the face's low-eta side, from the tangential
+                // part of v = eta dx/ds, which crossing the face keeps (Snell): the ray's
+                // own direction is already partly turned inside the ramp. F is the same
+                // both ways through the face (reciprocity) short of total reflection.
+                float sin_lo = length(vd - dot(vd, n) * n) / eta_lo;
+                // Beyond the critical angle the ray itself is the reflected light (the
+                // kicks turn it back), so nothing is looked up.
+                if (crosses && sin_lo < 1.0) {
+                    float reflected = fresnel(sqrt(1.0 - sin_lo * sin_lo), eta_hi / eta_lo);
+                    // Mirror the direction the ray had on the side it came from.
+                    vec3 vt = vd - dot(vd, n) * n;
+                    float eta_in = d_eta > 0.0 ? eta_lo : eta_hi;
+                    float vn = sqrt(max(eta_in * eta_in - dot(vt, vt), 0.0));
+                    vec3 incident = (vt + (dot(vd, n) >= 0.0 ? vn : -vn) * n) / eta_in;
+                    C += (1.0 - A) * M * reflected * environment_radiance(reflect(incident, n));
+                    A += (1.0 - A) * reflected;
+                }
+            }
         }
         // Oddy-Willis compositing (eq. 4.13): the medium factor once, specular not
         // multiplied by opacity.
@@ -334,14 +463,31 @@ void main() {
         A += (1.0 - A) * a;
         M *= m;
     }
-    // Bend (eq. 4.3) and advance to the next plane.
-    vd += seg_len * grad_eta;
+    // Advance to the next plane and turn there (eq. 4.3 as a Snell step, as the light rays
+    // do, VIEW_SUBSTEPS per plane): v = eta dx/ds keeps its part tangential to the face
+    // and takes the new eta's length. The face's normal is the value's gradient by
+    // central differences two voxels wide: the exact gradient of a clamped one-voxel
+    // ramp's cells tilts by up to ~15° on a face not aligned with the grid, and so did the
+    // thesis' kick (ds grad(eta), central differences one voxel apart), which also turned
+    // each ray by however much of a sharp face's ramp its planes happened to sample.
+    vec3 q = vp;
+    float dz_view = ds / float(VIEW_SUBSTEPS);
+    for (int k = 0; k < VIEW_SUBSTEPS; ++k) {
+        if (vd.z < MIN_FORWARD * length(vd)) {
+            count_clamp(2u);
+            vd = limit_direction(vd);
+        }
+        vec3 d = normalize(vd);
+        vec3 q_next = q + d * (dz_view / d.z);
+        float f_q = value_at_tex(to_tex(q_next));
+        vd = refract_step(vd, eta_of(f_q), surface_gradient(0.5 * (q + q_next)));
+        q = q_next;
+    }
     if (vd.z < MIN_FORWARD * length(vd)) {
         count_clamp(2u);
         vd = limit_direction(vd);
     }
-    vec3 next_dir = normalize(vd);
-    vec3 vp_next = vp + next_dir * (ds / next_dir.z);
+    vec3 vp_next = q;
 
 #if PASS == 0
     out_light_colour = vec4(light, 0.0);
@@ -350,6 +496,6 @@ void main() {
     out_view_position = vec4(vp_next, f_v);
     out_view_direction = vec4(vd, eta_here);
     out_colour_opacity = vec4(C, A);
-    out_medium = vec4(M, 0.0);
+    out_medium = vec4(M, chain_code);
 #endif
 }

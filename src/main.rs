@@ -277,11 +277,11 @@ struct SceneArgs {
     /// refraction off, 1 is the transfer function's eta (refract) [default: 1].
     #[arg(long, allow_negative_numbers = true)]
     eta_scale: Option<f32>,
-    /// How light travels from plane to plane (refract): "backward" is the thesis'
-    /// semi-Lagrangian step (one direction per pixel, gain bounded per plane);
-    /// "forward" (experimental) advances every light ray on its own and splats its flux
-    /// onto each plane, so crossing rays stay apart and caustics stay compact
-    /// [default: backward].
+    /// How light travels from plane to plane (refract): "forward" advances every light
+    /// ray on its own and splats its flux onto each plane, so light is conserved through
+    /// foci and caustics land where geometric optics puts them; "backward" is the thesis'
+    /// semi-Lagrangian step (one direction per pixel, gain bounded per plane), kept for
+    /// comparison [default: forward].
     #[arg(long, value_name = "forward|backward")]
     light_transport: Option<String>,
     /// Forward light transport: light rays per screen pixel, 1 to 8 (refract). The rays
@@ -290,6 +290,11 @@ struct SceneArgs {
     /// proportional to their number [default: 2].
     #[arg(long, value_name = "N", allow_negative_numbers = true)]
     light_rays: Option<u32>,
+    /// Fresnel reflection of viewing rays at changes of η (refract): the reflected part
+    /// sees the environment (or background) in the mirrored direction, not occluded by
+    /// the volume; "off" is the thesis' model, everything transmitted [default: on].
+    #[arg(long, value_name = "on|off")]
+    reflections: Option<String>,
     /// Clipping plane "nx,ny,nz,offset" in world space: opacity is zero where
     /// n·p > offset, the medium and refraction stay (refract, thesis Fig. 6.6); "none"
     /// removes a scene's plane.
@@ -630,6 +635,9 @@ fn scene_from_args(args: &SceneArgs) -> Result<Scene> {
     if let Some(t) = &args.light_transport {
         s.light_transport =
             refrakt::render::LightTransport::parse(t).context("--light-transport")?;
+    }
+    if let Some(r) = &args.reflections {
+        s.reflections = refrakt::scene::parse_on_off(r).context("--reflections")?;
     }
     set!(s.env_rotation, args.env_rotation);
     if let Some(e) = args.exposure {

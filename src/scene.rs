@@ -79,6 +79,8 @@ pub struct Scene {
     pub light_transport: LightTransport,
     /// Forward transport: light rays per screen pixel.
     pub light_rays: u32,
+    /// Fresnel reflection of viewing rays (false: the thesis' model).
+    pub reflections: bool,
     pub clip: Option<(Vec3, f32)>,
     pub exposure: f32,
     pub tonemap: ToneOperator,
@@ -142,6 +144,7 @@ impl Default for Scene {
             eta_scale: 1.0,
             light_transport: LightTransport::Forward,
             light_rays: 2,
+            reflections: true,
             clip: None,
             exposure: 0.0,
             tonemap: ToneOperator::Aces,
@@ -466,6 +469,7 @@ impl Scene {
                 eta_scale: self.eta_scale,
                 light_transport: self.light_transport,
                 light_rays: self.light_rays,
+                reflections: self.reflections,
                 clip: self.clip,
                 env_rotation: self.env_rotation,
                 ..Default::default()
@@ -668,6 +672,7 @@ struct RenderTable {
     eta_scale: Option<f32>,
     light_transport: Option<String>,
     light_rays: Option<u32>,
+    reflections: Option<bool>,
     clip: Option<[f32; 4]>,
     exposure: Option<f32>,
     tonemap: Option<String>,
@@ -933,6 +938,9 @@ impl SceneFile {
             if let Some(t) = &r.light_transport {
                 s.light_transport = LightTransport::parse(t).context("[render] light_transport")?;
             }
+            if let Some(x) = r.reflections {
+                s.reflections = x;
+            }
             if let Some(c) = r.clip {
                 s.clip = Some((Vec3::new(c[0], c[1], c[2]), c[3]));
             }
@@ -947,5 +955,14 @@ impl SceneFile {
         s.render_options()?;
         s.tone_map()?;
         Ok(s)
+    }
+}
+
+/// "on" / "off" (also "true" / "false", "yes" / "no"), for switches given as flags.
+pub fn parse_on_off(text: &str) -> Result<bool> {
+    match text.to_ascii_lowercase().as_str() {
+        "on" | "true" | "yes" => Ok(true),
+        "off" | "false" | "no" => Ok(false),
+        other => bail!("\"{other}\" is neither on nor off"),
     }
 }

@@ -69,7 +69,9 @@ fn scene_file_sets_everything_and_flags_override_it() {
     // opaque red; the corner sees the scene's blue background.
     assert_eq!(img.get_pixel(0, 0).0, [0, 0, 255]);
     let c = img.get_pixel(12, 10).0;
-    assert!(c[0] > 200 && c[2] < 30, "centre {c:?}");
+    // (Lit head-on, an opaque surface returns half the light: the self-shadowing of its
+    // skin, 1 / (1 + r) with r = 1.)
+    assert!(c[0] > 120 && c[1] < 30 && c[2] < 30, "centre {c:?}");
 
     // Flags override fields: size, background, and the environment.
     let out2 = dir.path().join("b.png");

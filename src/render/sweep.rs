@@ -221,6 +221,10 @@ pub struct SweepOptions {
     /// allows; more rays resolve oblique light and crossing rays more finely, at a cost
     /// proportional to their number.
     pub light_rays: u32,
+    /// Fresnel reflection of viewing rays at changes of η: the reflected fraction sees the
+    /// environment (or background) in the mirrored direction, unoccluded; false = the
+    /// thesis' model (no reflection, everything transmitted).
+    pub reflections: bool,
     /// Benchmark baseline: run every plane with glsl/sweep_floor.frag, which only carries
     /// the state forward (same passes, barriers, attachments and reads). The image is not
     /// a rendering; the time is the floor the sweep's optics add to.
@@ -243,6 +247,7 @@ impl Default for SweepOptions {
             eta_scale: 1.0,
             light_transport: LightTransport::Forward,
             light_rays: 2,
+            reflections: true,
             floor: false,
         }
     }
@@ -767,6 +772,8 @@ impl SweepPass {
                 plane_bindings.push(Binding::LayerTexture(view, sampler, Access::SampledGeneral));
             }
         }
+        // Binding 25: the environment for Fresnel reflections (glsl/sweep_light.glsl).
+        plane_bindings.push(Binding::Texture(env.map, sampler));
         let sweep_set = DescriptorSet::new(ctx, &plane_bindings, "sweep")?;
         let output = FrameTarget::new(ctx, width, height, "sweep frame")?;
         let env_params = Buffer::uniform::<EnvParams>(ctx, "environment params")?;
@@ -1035,7 +1042,12 @@ impl SweepPass {
             specular: [sweep.roughness, sweep.specular, opts.termination_alpha, 0.0],
             clip: [clip_n.x, clip_n.y, clip_n.z, clip_o],
             background: opts.background,
-            refraction: [sweep.eta_scale, 0.0, 0.0, 0.0],
+            refraction: [
+                sweep.eta_scale,
+                if sweep.reflections { 1.0 } else { 0.0 },
+                if env.enabled { 1.0 } else { 0.0 },
+                sweep.env_rotation.to_radians(),
+            ],
             light_grid: grid,
             light_rays: [
                 grid_dims[0] as f32,
