@@ -123,9 +123,12 @@ vec3 value_gradient(vec3 p) {
 // normal drifts to the diagonal) give the orientation of a face not aligned with the
 // grid; the smoothing across each difference does. View-space units, zero in a flat
 // region.
+#ifndef SOBEL_SPACING
+#define SOBEL_SPACING 1.0
+#endif
 vec3 surface_gradient(vec3 p) {
     vec3 t = to_tex(p);
-    vec3 h = 1.0 / P.volume_dims.xyz;
+    vec3 h = SOBEL_SPACING / P.volume_dims.xyz;
     vec3 g = vec3(0.0);
     for (int k = 0; k < 27; ++k) {
         ivec3 o = ivec3(k % 3, (k / 3) % 3, k / 9) - 1;

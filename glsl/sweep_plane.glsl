@@ -344,9 +344,12 @@ void main() {
 #else
         vec3 i_d = READ_BUFFER(light_colour, R, uv_v).rgb;
 #endif
-        // Direction the light travels here (view space, unit).
+        // Direction the light travels at the segment's front, where i_d is read: at a
+        // face, the side the light meets it from (read at the segment's back, a plane
+        // beyond a face, it was the refracted light's direction or not depending on how
+        // the planes fell: a highlight banded at the plane spacing).
 #if FORWARD_LIGHT
-        vec4 ls = READ_BUFFER(irradiance_direction, W, uv_v);
+        vec4 ls = READ_BUFFER(irradiance_direction, R, uv_front);
         vec3 ldir = normalize(ls.w > 0.0 ? ls.xyz : P.light_dir.xyz);
 #else
         vec3 ldir = normalize(READ_BUFFER(light_direction, R, uv_v).xyz);
@@ -398,62 +401,82 @@ void main() {
             float next = dot(i_d, vec3(0.2126, 0.7152, 0.0722)) * pow(1.0 - a, r);
             float depth = matter ? chained_depth + seg_len * across / ref_step : 0.0;
             chain_code = chain_encode(next, depth);
-            if (P.specular.y > 0.0 && dot(grad_f, grad_f) > 1e-8) {
-                vec3 l = -ldir;
-                vec3 v = -dir;
-                vec3 n = normalize(grad_f);
-                if (dot(n, v) < 0.0) n = -n;
-                i_s = P.specular.y * specular_term(n, l, v, eta_here / vd4.w) * i_d;
-            }
         }
-        // Fresnel reflection at a change of eta (the F of eq. 4.12, unpolarised): the
-        // reflected fraction sees the environment (or the background) in the mirrored
-        // direction, weighted by (1 - A) M like everything composited (eq. 4.13), and the
-        // ray goes on with the rest (folded into A, so what lies behind is seen through
-        // 1 - F). Not occluded: the mirrored direction is not traced through the volume
-        // (like the thesis' highlights, ch. 8). A one-voxel face is crossed over one to
-        // four segments: it reflects once, with the F of the whole step of eta (the
-        // plateaus found a few voxels either side along the normal), in the segment where
-        // eta passes the step's middle, so it reflects F wherever the planes cut it. (The
-        // sum of each segment's own small F is a fraction of it: what a graded face,
-        // and a smooth gradient of eta, physically reflect.)
-        if (P.refraction.y > 0.5) {
-            float d_eta = eta_here - vd4.w;
-            if (abs(d_eta) > 1e-4) {
-                // The step of eta: its plateaus a few voxels either side of the segment
-                // along the face's normal. The face reflects once, in the segment where
-                // eta passes the step's middle, with the normal where it does (the middle
-                // of a one-voxel ramp, where the smoothed gradient is most symmetric).
-                vec3 mid = vp - 0.5 * seg_len * dir;
-                vec3 g = surface_gradient(mid);
-                vec3 n = dot(g, g) > 1e-12 ? normalize(g) : dir;
-                if (dot(n, dir) * d_eta < 0.0) n = -n;   // n points to higher eta
-                float h = 0.5 * seg_len + 1.5 * ref_step;
-                float eta_lo = min(min(eta_here, vd4.w), eta_of(value_at_tex(to_tex(mid - h * n))));
-                float eta_hi = max(max(eta_here, vd4.w), eta_of(value_at_tex(to_tex(mid + h * n))));
-                float eta_mid = 0.5 * (eta_lo + eta_hi);
-                bool crosses = (vd4.w < eta_mid) != (eta_here < eta_mid);
-                if (crosses) {
-                    float at = clamp((eta_mid - vd4.w) / d_eta, 0.0, 1.0);
-                    vec3 gc = surface_gradient(vp - (1.0 - at) * seg_len * dir);
-                    if (dot(gc, gc) > 1e-12) n = normalize(gc) * (dot(gc, n) >= 0.0 ? 1.0 : -1.0);
-                }
+        // A face: where eta steps (a one-voxel ramp between plateaus) the viewing ray
+        // meets a surface of glass once, whatever the sample distance and however the
+        // planes cut the ramp: in the segment where eta passes the middle of the step,
+        // whose plateaus are found a few voxels either side along the normal. There it
+        // reflects (Fresnel) and shows the highlight, both with the whole step's F. (Per
+        // plane from consecutive eta samples, the highlight's F depended on how much of
+        // the ramp a plane happened to straddle: rings on glass at the plane spacing; and
+        // the sum of each segment's own small F is a fraction of the face's, as for a
+        // graded face, which physically reflects little.)
+        float d_eta = eta_here - vd4.w;
+        if (abs(d_eta) > 1e-4 && (P.refraction.y > 0.5 || (P.specular.y > 0.0 && !unlit))) {
+            vec3 mid = vp - 0.5 * seg_len * dir;
+            vec3 g = surface_gradient(mid);
+            vec3 n = dot(g, g) > 1e-12 ? normalize(g) : dir;
+            if (dot(n, dir) * d_eta < 0.0) n = -n;   // n points to higher eta
+            float h = 0.5 * seg_len + 2.5 * ref_step;
+            float eta_lo = min(min(eta_here, vd4.w), eta_of(value_at_tex(to_tex(mid - h * n))));
+            float eta_hi = max(max(eta_here, vd4.w), eta_of(value_at_tex(to_tex(mid + h * n))));
+            float eta_mid = 0.5 * (eta_lo + eta_hi);
+            if ((vd4.w < eta_mid) != (eta_here < eta_mid)) {
+                // The normal where eta passes the middle, where the smoothed gradient of
+                // a one-voxel ramp is most symmetric.
+                float at = clamp((eta_mid - vd4.w) / d_eta, 0.0, 1.0);
+                vec3 gc = surface_gradient(vp - (1.0 - at) * seg_len * dir);
+                if (dot(gc, gc) > 1e-12) n = normalize(gc) * (dot(gc, n) >= 0.0 ? 1.0 : -1.0);
                 // The angle of incidence on the face's low-eta side, from the tangential
-                // part of v = eta dx/ds, which crossing the face keeps (Snell): the ray's
+                // part of v = eta dx/ds, which crossing the face keeps (Snell); the ray's
                 // own direction is already partly turned inside the ramp. F is the same
                 // both ways through the face (reciprocity) short of total reflection.
-                float sin_lo = length(vd - dot(vd, n) * n) / eta_lo;
-                // Beyond the critical angle the ray itself is the reflected light (the
-                // kicks turn it back), so nothing is looked up.
-                if (crosses && sin_lo < 1.0) {
+                vec3 vt = vd - dot(vd, n) * n;
+                float sin_lo = length(vt) / eta_lo;
+                bool entering = d_eta > 0.0;
+                // Fresnel reflection (the F of eq. 4.12, unpolarised): the reflected part
+                // sees the environment (or the background) in the mirrored direction,
+                // weighted by (1 - A) M like everything composited (eq. 4.13), and the ray
+                // goes on with the rest (folded into A, so what lies behind is seen through
+                // 1 - F). Not occluded: the mirrored direction is not traced through the
+                // volume (like the thesis' highlights, ch. 8). Beyond the critical angle
+                // the ray itself is the reflected light (it turns back), so nothing is
+                // looked up.
+                if (P.refraction.y > 0.5 && sin_lo < 1.0) {
                     float reflected = fresnel(sqrt(1.0 - sin_lo * sin_lo), eta_hi / eta_lo);
                     // Mirror the direction the ray had on the side it came from.
-                    vec3 vt = vd - dot(vd, n) * n;
-                    float eta_in = d_eta > 0.0 ? eta_lo : eta_hi;
+                    float eta_in = entering ? eta_lo : eta_hi;
                     float vn = sqrt(max(eta_in * eta_in - dot(vt, vt), 0.0));
                     vec3 incident = (vt + (dot(vd, n) >= 0.0 ? vn : -vn) * n) / eta_in;
                     C += (1.0 - A) * M * reflected * environment_radiance(reflect(incident, n));
                     A += (1.0 - A) * reflected;
+                }
+                // The highlight of the light on the face (eqs. 4.9-4.11), lit by the light
+                // that meets the face: read on the segment's front plane, moved off the
+                // face along that plane to the side the light comes from. (Near the line
+                // where the plane cuts the face its light is a blur of the refracted and
+                // the unrefracted, whose mix depended on how the planes fell: the
+                // highlight banded at the plane spacing.)
+                if (P.specular.y > 0.0 && !unlit) {
+                    vec3 front = vp - dir * seg_len;
+                    vec3 along = vec3(n.xy, 0.0);
+                    float la = length(along);
+                    float side = dot(ldir, n) > 0.0 ? -1.0 : 1.0;
+                    vec3 off = la > 1e-3 ? along / la * side * (2.5 * ref_step / max(la, 0.3))
+                                         : vec3(0.0);
+                    vec2 uv_face = project(front + off);
+#if FORWARD_LIGHT
+                    vec3 i_face = READ_BUFFER(irradiance, R, uv_face).rgb;
+                    vec4 lf = READ_BUFFER(irradiance_direction, R, uv_face);
+                    vec3 l_face = normalize(lf.w > 0.0 ? lf.xyz : P.light_dir.xyz);
+#else
+                    vec3 i_face = READ_BUFFER(light_colour, R, uv_face).rgb;
+                    vec3 l_face = normalize(READ_BUFFER(light_direction, R, uv_face).xyz);
+#endif
+                    vec3 v = -dir;
+                    vec3 nv = dot(n, v) < 0.0 ? -n : n;
+                    float ratio = entering ? eta_hi / eta_lo : eta_lo / eta_hi;
+                    i_s = P.specular.y * specular_term(nv, -l_face, v, ratio) * i_face;
                 }
             }
         }

@@ -334,6 +334,10 @@ fn bad_sweep_options_are_clear_errors() {
     );
     assert_clean_failure(&["render", "--softness", "-1", "-o", "x.png"], "softness");
     assert_clean_failure(&["render", "--clip", "0,0,1", "-o", "x.png"], "--clip");
+    assert_clean_failure(
+        &["render", "--reflections", "maybe", "-o", "x.png"],
+        "--reflections: \"maybe\" is neither on nor off",
+    );
 }
 
 #[test]

@@ -395,6 +395,17 @@ fn slab_fresnel(
     sd: f32,
     black_inside: bool,
 ) -> (f64, f64, f64, f64) {
+    slab_fresnel_with(ctx, incidence, sd, black_inside, true)
+}
+
+/// [`slab_fresnel`] with reflections switched on or off.
+fn slab_fresnel_with(
+    ctx: &Context,
+    incidence: f32,
+    sd: f32,
+    black_inside: bool,
+    reflections: bool,
+) -> (f64, f64, f64, f64) {
     use refrakt::environment::{direction, pixel_angles, EnvironmentMap};
     let n = 64u32;
     let a = incidence.to_radians();
@@ -431,6 +442,7 @@ fn slab_fresnel(
     };
     opts.sweep = SweepOptions {
         specular: 0.0,
+        reflections,
         ..Default::default()
     };
     let mut r = Renderer::new(ctx, &vol, &tf).unwrap();
@@ -504,6 +516,108 @@ fn glass_reflects_and_transmits_by_fresnel() {
                 }
             }
         }
+        // --reflections off: the thesis' model, the face reflects nothing.
+        let (r, _, _, _) = slab_fresnel_with(ctx, 60.0, 1.0, true, false);
+        println!("reflections off, one face at 60°: reflected {r:.5}");
+        if r > 1e-4 {
+            failures.push(format!("reflections off still reflect {r}"));
+        }
         assert!(failures.is_empty(), "{}", failures.join("\n"));
+    });
+}
+
+/// Detrended row-to-row variation of an image's channel 0 over its central half of
+/// columns and the rows `rows`, relative to the level (as in `floor_banding`).
+fn row_to_row(f: &refrakt::render::Frame, rows: std::ops::Range<u32>) -> (f64, f64) {
+    let w = f.width;
+    let pts: Vec<(f64, f64)> = rows
+        .map(|y| {
+            let s: f64 = (w / 4..3 * w / 4).map(|x| f.pixel(x, y)[0] as f64).sum();
+            (y as f64, s / (w / 2) as f64)
+        })
+        .collect();
+    let (mut m, mut rhs) = (glam::DMat3::ZERO, glam::DVec3::ZERO);
+    for &(x, v) in &pts {
+        let b = glam::DVec3::new(1.0, x, x * x);
+        m += glam::DMat3::from_cols(b * b.x, b * b.y, b * b.z);
+        rhs += b * v;
+    }
+    let c = m.inverse() * rhs;
+    let level = pts.iter().map(|p| p.1).sum::<f64>() / pts.len() as f64;
+    let res: Vec<f64> = pts
+        .iter()
+        .map(|&(x, v)| v - (c.x + c.y * x + c.z * x * x))
+        .collect();
+    let d: Vec<f64> = res.windows(2).map(|p| p[1] - p[0]).collect();
+    let rms = (d.iter().map(|d| d * d).sum::<f64>() / d.len() as f64).sqrt();
+    (rms / level, level)
+}
+
+/// Issue 13: highlights without rings. A glass face (η 1.5, one-voxel ramp, tilted 30°
+/// from the view axis, black glass past the face's middle so only this face shows) lit
+/// from the mirror direction: its Cook–Torrance highlight is the same at every sample
+/// distance (within 10 %) and varies over the face row to row by at most 12 % of its level
+/// (detrended as for the floor). Measured: levels 0.039 / 0.040 / 0.042 at sample distance
+/// 1 / 0.5 / 0.25, row to row 9.0 / 8.8 / 6.4 % (both transports alike). Before issue 13
+/// (F from consecutive η samples per plane): 0.019 / 0.013 / 0.007 (a fraction of the
+/// face's F, shrinking with the spacing) and 11 / 20 / 19 %. The remaining variation follows the smoothed normal's tilt across the
+/// voxel grid (the issue's goal of no visible rings is open: docs/NOTES.md).
+#[test]
+fn highlights_on_glass_have_no_rings() {
+    with_context(|ctx| {
+        let n = 64u32;
+        let a = 30f32.to_radians();
+        let normal = Vec3::new(0.0, a.sin(), a.cos());
+        let vol = f32_volume(n, |p| {
+            0.5 + (0.15 - Vec3::from(p).dot(normal).abs()) * n as f32
+        });
+        // Black inside, past the face's middle: only the face's own highlight is seen (the
+        // back face's, lit by light refracted through the one-voxel ramp, carries that
+        // light's stripes: the trilinear field's, which the photon tracer shares).
+        let mut tf = glass(1.5);
+        tf.colour = Piecewise::new(vec![(0.0, [0.0, 0.0, 0.0])]);
+        tf.opacity = Piecewise::new(vec![(0.0, [0.0]), (0.8, [0.0]), (1.0, [1.0])]);
+        let cam = face_on(2.5, 8.0);
+        let mirror = Vec3::NEG_Z - 2.0 * Vec3::NEG_Z.dot(normal) * normal;
+        let (mut worst, mut levels) = (0.0f64, Vec::new());
+        for sd in [1.0f32, 0.5, 0.25] {
+            let mut opts = RenderOptions {
+                width: 64,
+                height: 64,
+                sample_distance: sd,
+                background: [0.0, 0.0, 0.0, 1.0],
+                ..Default::default()
+            };
+            opts.sweep = SweepOptions {
+                light: Light {
+                    towards: mirror,
+                    colour: [1.0; 3],
+                    softness: 0.0,
+                },
+                specular: 1.0,
+                roughness: 0.5,
+                reflections: false,
+                ..Default::default()
+            };
+            let mut r = Renderer::new(ctx, &vol, &tf).unwrap();
+            r.set_environment(None).unwrap();
+            let f = r.render(Model::Refract, &cam, &opts).unwrap();
+            let (b, level) = row_to_row(&f, 8..56);
+            println!(
+                "sample distance {sd}: highlight level {level:.4}, row-to-row {:.3} %",
+                100.0 * b
+            );
+            assert!(level > 0.01, "no highlight at sd {sd} ({level})");
+            worst = worst.max(b);
+            levels.push(level);
+        }
+        let (lo, hi) = levels
+            .iter()
+            .fold((f64::MAX, 0.0f64), |(a, b), &l| (a.min(l), b.max(l)));
+        assert!(
+            hi <= 1.1 * lo,
+            "highlight depends on the sample distance: {levels:?}"
+        );
+        assert!(worst <= 0.12, "highlight rings: {:.2} %", 100.0 * worst);
     });
 }
