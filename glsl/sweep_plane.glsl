@@ -331,6 +331,9 @@ void main() {
     float seg_len = ds / dir.z;   // arc length from plane i-1 to this plane
 
     float chain_code = M4.w;
+    // The surface normal at this plane's point: the face's for the segment ending here and
+    // the turn of the step starting here (one smoothed gradient per plane; 26 fetches).
+    vec3 n_here = surface_gradient(vp);
     if (A < P.specular.z) {
         vec2 uv_v = project(vp);
         vec3 c; float a; vec3 m;
@@ -414,7 +417,7 @@ void main() {
         float d_eta = eta_here - vd4.w;
         if (abs(d_eta) > 1e-4 && (P.refraction.y > 0.5 || (P.specular.y > 0.0 && !unlit))) {
             vec3 mid = vp - 0.5 * seg_len * dir;
-            vec3 g = surface_gradient(mid);
+            vec3 g = n_here;   // the face's orientation (see below)
             vec3 n = dot(g, g) > 1e-12 ? normalize(g) : dir;
             if (dot(n, dir) * d_eta < 0.0) n = -n;   // n points to higher eta
             float h = 0.5 * seg_len + 2.5 * ref_step;
@@ -422,11 +425,6 @@ void main() {
             float eta_hi = max(max(eta_here, vd4.w), eta_of(value_at_tex(to_tex(mid + h * n))));
             float eta_mid = 0.5 * (eta_lo + eta_hi);
             if ((vd4.w < eta_mid) != (eta_here < eta_mid)) {
-                // The normal where eta passes the middle, where the smoothed gradient of
-                // a one-voxel ramp is most symmetric.
-                float at = clamp((eta_mid - vd4.w) / d_eta, 0.0, 1.0);
-                vec3 gc = surface_gradient(vp - (1.0 - at) * seg_len * dir);
-                if (dot(gc, gc) > 1e-12) n = normalize(gc) * (dot(gc, n) >= 0.0 ? 1.0 : -1.0);
                 // The angle of incidence on the face's low-eta side, from the tangential
                 // part of v = eta dx/ds, which crossing the face keeps (Snell); the ray's
                 // own direction is already partly turned inside the ramp. F is the same
@@ -488,11 +486,14 @@ void main() {
     }
     // Advance to the next plane and turn there (eq. 4.3 as a Snell step, as the light rays
     // do, VIEW_SUBSTEPS per plane): v = eta dx/ds keeps its part tangential to the face
-    // and takes the new eta's length. The face's normal is the value's gradient by
-    // central differences two voxels wide: the exact gradient of a clamped one-voxel
-    // ramp's cells tilts by up to ~15° on a face not aligned with the grid, and so did the
-    // thesis' kick (ds grad(eta), central differences one voxel apart), which also turned
-    // each ray by however much of a sharp face's ramp its planes happened to sample.
+    // and takes the new eta's length. The face's normal is the Sobel-smoothed gradient
+    // (surface_gradient), taken at this plane's point for the first step: the exact
+    // gradient of a clamped one-voxel ramp's cells tilts by up to ~15° on a face not
+    // aligned with the grid, and the thesis' kick (ds grad(eta), central differences one
+    // voxel apart) turned each ray by however much of a sharp face's ramp its planes
+    // happened to sample. Measured on a glass ball against Snell's law (docs/NOTES.md):
+    // the normal at the plane's point did better than at the step's middle (0.45° against
+    // 0.85° median), and more sub-steps worse (they follow the graded ramp, not the face).
     vec3 q = vp;
     float dz_view = ds / float(VIEW_SUBSTEPS);
     for (int k = 0; k < VIEW_SUBSTEPS; ++k) {
@@ -503,7 +504,7 @@ void main() {
         vec3 d = normalize(vd);
         vec3 q_next = q + d * (dz_view / d.z);
         float f_q = value_at_tex(to_tex(q_next));
-        vd = refract_step(vd, eta_of(f_q), surface_gradient(0.5 * (q + q_next)));
+        vd = refract_step(vd, eta_of(f_q), k == 0 ? n_here : surface_gradient(0.5 * (q + q_next)));
         q = q_next;
     }
     if (vd.z < MIN_FORWARD * length(vd)) {
