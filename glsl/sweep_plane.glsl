@@ -136,6 +136,10 @@ float specular_term(vec3 n, vec3 l, vec3 v, float eta_ratio) {
     return D * F * G / (4.0 * nv);
 }
 
+// Smallest change of eta treated as a face of glass (reflection, highlight): below it,
+// noise in a medium (see the viewing rays).
+const float MIN_FACE_STEP = 0.02;
+
 // The light chained through a surface's skin (see the viewing rays below), kept in the
 // medium buffer's .w: 0 = none; else 64 q + 32 + log2(luminance), q = the skin depth
 // crossed so far in sixteenths of a reference step (up to 63), the luminance from 2^-32
@@ -424,22 +428,27 @@ void main() {
             float eta_lo = min(min(eta_here, vd4.w), eta_of(value_at_tex(to_tex(mid - h * n))));
             float eta_hi = max(max(eta_here, vd4.w), eta_of(value_at_tex(to_tex(mid + h * n))));
             float eta_mid = 0.5 * (eta_lo + eta_hi);
-            if ((vd4.w < eta_mid) != (eta_here < eta_mid)) {
+            // A face is a step of at least MIN_FACE_STEP: in noise (a scanned or
+            // simulated medium) eta wobbles about its plateau and the smoothed gradient
+            // points anywhere, so a wobble seen at a grazing angle to that random normal
+            // reflected nearly everything (white speckles through red wine, measured).
+            if ((vd4.w < eta_mid) != (eta_here < eta_mid) && eta_hi - eta_lo >= MIN_FACE_STEP) {
                 // The angle of incidence on the face's low-eta side, from the tangential
                 // part of v = eta dx/ds, which crossing the face keeps (Snell); the ray's
                 // own direction is already partly turned inside the ramp. F is the same
                 // both ways through the face (reciprocity) short of total reflection.
                 vec3 vt = vd - dot(vd, n) * n;
-                float sin_lo = length(vt) / eta_lo;
                 bool entering = d_eta > 0.0;
+                float sin_lo = length(vt) / eta_lo;
                 // Fresnel reflection (the F of eq. 4.12, unpolarised): the reflected part
                 // sees the environment (or the background) in the mirrored direction,
                 // weighted by (1 - A) M like everything composited (eq. 4.13), and the ray
                 // goes on with the rest (folded into A, so what lies behind is seen through
                 // 1 - F). Not occluded: the mirrored direction is not traced through the
                 // volume (like the thesis' highlights, ch. 8). Beyond the critical angle
-                // the ray itself is the reflected light (it turns back), so nothing is
-                // looked up.
+                // the ray itself is the reflected light (its Snell step turns it back), so
+                // nothing is looked up. (Looking the environment up with F = 1 there and
+                // ending the ray was tried: no visible difference on the wine glass.)
                 if (P.refraction.y > 0.5 && sin_lo < 1.0) {
                     float reflected = fresnel(sqrt(1.0 - sin_lo * sin_lo), eta_hi / eta_lo);
                     // Mirror the direction the ray had on the side it came from.
