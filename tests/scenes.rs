@@ -52,6 +52,7 @@ width = 24
 height = 20
 background = [0.0, 0.0, 1.0, 1.0]
 tonemap = "none"
+reflections = false
 "#;
 
 #[test]
