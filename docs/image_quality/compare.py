@@ -29,3 +29,21 @@ for name, scene, x, y, cw, ch, k in REGIONS:
     rows = [ra + gap + rb for ra, rb in zip(a, b)]
     io.save(os.path.join(here, "compare-" + name + ".png"), 2 * cw * k + 6, ch * k, b''.join(rows))
     print("compare-" + name + ".png")
+
+# Median-residual noise, mean |pixel - median of its 3x3| (of 255, all channels), in the
+# regions docs/NOTES.md quotes ("Clean images").
+def noise(path, x0, y0, x1, y1):
+    w, h, px = io.load(path)
+    tot = n = 0
+    for y in range(max(1, y0), min(h - 1, y1)):
+        for x in range(max(1, x0), min(w - 1, x1)):
+            for c in range(3):
+                nb = sorted(px[((y + dy) * w + (x + dx)) * 3 + c] for dy in (-1, 0, 1) for dx in (-1, 0, 1))
+                tot += abs(px[(y * w + x) * 3 + c] - nb[4]); n += 1
+    return tot / n
+
+for scene, box in [("lung-ct", (40, 100, 220, 220)), ("glass", (95, 85, 165, 150)),
+                   ("sphere-on-floor", (90, 60, 170, 130))]:
+    b = noise(os.path.join(here, "before", scene + ".png"), *box)
+    a = noise(os.path.join(here, "after", scene + ".png"), *box)
+    print("%s: median residual %.2f -> %.2f of 255 in %s" % (scene, b, a, box))
