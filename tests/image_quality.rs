@@ -88,30 +88,17 @@ fn floor_banding(
         }
     }
     assert!(rows.len() > 40, "too few floor rows ({})", rows.len());
-    // Least-squares quadratic trend.
-    let fit = |x: f64, c: &[f64; 3]| c[0] + c[1] * x + c[2] * x * x;
-    let (mut m, mut rhs) = (glam::DMat3::ZERO, glam::DVec3::ZERO);
-    for &(x, v) in &rows {
-        let b = glam::DVec3::new(1.0, x, x * x);
-        m += glam::DMat3::from_cols(b * b.x, b * b.y, b * b.z);
-        rhs += b * v;
-    }
-    let sol = m.inverse() * rhs;
-    let c = [sol.x, sol.y, sol.z];
-    let level = rows.iter().map(|r| r.1).sum::<f64>() / rows.len() as f64;
-    let res: Vec<f64> = rows.iter().map(|&(x, v)| v - fit(x, &c)).collect();
-    let diffs: Vec<f64> = res.windows(2).map(|p| p[1] - p[0]).collect();
-    let rms = (diffs.iter().map(|d| d * d).sum::<f64>() / diffs.len() as f64).sqrt();
+    let (rel, level, max_rel) = detrended_row_to_row(&rows);
     println!(
         "{} {} floor at {angle}° softness {softness}: level {level:.4}, row-to-row {:.3} % \
          (max {:.3} %)",
         transport.name(),
         if thin { "thin" } else { "soft" },
-        100.0 * rms / level,
-        100.0 * diffs.iter().fold(0.0f64, |a, d| a.max(d.abs())) / level
+        100.0 * rel,
+        100.0 * max_rel
     );
     let mu = angle.to_radians().cos() as f64;
-    (rms / level, level * (1.0 + mu))
+    (rel, level * (1.0 + mu))
 }
 
 /// Row to row within 1 % of the level (1.5 % at 80°), and the level within 1 % of the
@@ -163,6 +150,14 @@ fn median_p95(v: &mut [f64]) -> (f64, f64) {
     (q(0.5), q(0.95))
 }
 
+/// The glass ball of the refraction tests: 64³, radius 26 voxels (one-voxel ramp), η 1.5,
+/// seen face-on from 2.5 with a 22° field of view. (n, radius, volume, TFs, camera).
+fn glass_ball() -> (u32, f32, refrakt::volume::Volume, TransferFunctions, Camera) {
+    let n = 64u32;
+    let radius = 26.0 / n as f32;
+    (n, radius, ball(n, radius), glass(1.5), face_on(2.5, 22.0))
+}
+
 /// Exit directions of viewing rays through a glass sphere (η 1.5, radius 26 voxels, a
 /// one-voxel ramp) seen face-on: each pixel's direction after the last plane against
 /// Snell's law at a perfect sphere of the ramp's middle radius, and against the photon
@@ -171,21 +166,12 @@ fn median_p95(v: &mut [f64]) -> (f64, f64) {
 /// (median, 95th percentile) in degrees against Snell, the same against the tracer, the
 /// tracer's own against Snell, and the pixel count.
 fn view_exit_errors(ctx: &Context, sd: f32) -> [(f64, f64); 3] {
-    let n = 64u32;
-    let radius = 26.0 / n as f32;
-    let vol = ball(n, radius);
-    let tf = glass(1.5);
-    let cam = face_on(2.5, 22.0);
+    let (n, radius, vol, tf, cam) = glass_ball();
     let (w, h) = (64u32, 64u32);
     let planes = refrakt::render::Planes::for_box(&cam, Vec3::splat(0.5), sd / n as f32).unwrap();
     // The pass for plane k leaves the rays on plane k + 1: dump the last but one.
     let k = planes.count - 2;
-    let mut opts = RenderOptions {
-        width: w,
-        height: h,
-        sample_distance: sd,
-        ..Default::default()
-    };
+    let mut opts = frame_options(w, h, sd);
     opts.sweep = SweepOptions {
         dumps: vec![(refrakt::render::StateBuffer::ViewDirection, k)],
         specular: 0.0,
@@ -274,29 +260,10 @@ fn viewing_rays_leave_a_glass_sphere_as_snell_says() {
 /// difference between each pixel and the median of its 3×3 neighbourhood over the pixels
 /// within 0.8 R of the centre, relative to their mean (the median residual noise).
 fn noise_inside_sphere(ctx: &Context, sd: f32) -> f64 {
-    use refrakt::environment::{direction, pixel_angles, EnvironmentMap};
-    let n = 64u32;
-    let radius = 26.0 / n as f32;
-    let vol = ball(n, radius);
-    let tf = glass(1.5);
-    let cam = face_on(2.5, 22.0);
+    let (_, radius, vol, tf, cam) = glass_ball();
     let (w, h) = (64u32, 64u32);
-    let (ew, eh) = (256u32, 128u32);
-    let mut px = Vec::new();
-    for y in 0..eh {
-        for x in 0..ew {
-            let (phi, theta) = pixel_angles(ew, eh, x as f32 + 0.5, y as f32 + 0.5);
-            let d = direction(phi, theta);
-            px.push([0.5 + 0.4 * d[0], 0.5 + 0.4 * d[1], 0.5, 1.0]);
-        }
-    }
-    let map = EnvironmentMap::new(ew, eh, px, "ramp").unwrap();
-    let mut opts = RenderOptions {
-        width: w,
-        height: h,
-        sample_distance: sd,
-        ..Default::default()
-    };
+    let map = environment_from(256, |d| [0.5 + 0.4 * d.x, 0.5 + 0.4 * d.y, 0.5, 1.0]);
+    let mut opts = frame_options(w, h, sd);
     opts.sweep = SweepOptions {
         specular: 0.0,
         ..Default::default()
@@ -406,7 +373,6 @@ fn slab_fresnel_with(
     black_inside: bool,
     reflections: bool,
 ) -> (f64, f64, f64, f64) {
-    use refrakt::environment::{direction, pixel_angles, EnvironmentMap};
     let n = 64u32;
     let a = incidence.to_radians();
     let normal = Vec3::new(0.0, a.sin(), a.cos());
@@ -419,27 +385,15 @@ fn slab_fresnel_with(
         tf.opacity = Piecewise::new(vec![(0.0, [0.0]), (0.8, [0.0]), (1.0, [1.0])]);
     }
     let cam = face_on(2.5, 6.0);
-    let (ew, eh) = (512u32, 256u32);
-    let mut px = Vec::new();
-    for y in 0..eh {
-        for x in 0..ew {
-            let (phi, theta) = pixel_angles(ew, eh, x as f32 + 0.5, y as f32 + 0.5);
-            let d = Vec3::from(direction(phi, theta));
-            px.push(if d.dot(normal) > 0.0 {
-                [1.0, 0.0, 0.0, 1.0]
-            } else {
-                [0.0, 1.0, 0.0, 1.0]
-            });
+    let map = environment_from(512, |d| {
+        if d.dot(normal) > 0.0 {
+            [1.0, 0.0, 0.0, 1.0]
+        } else {
+            [0.0, 1.0, 0.0, 1.0]
         }
-    }
-    let map = EnvironmentMap::new(ew, eh, px, "split").unwrap();
+    });
     let (w, h) = (32u32, 32u32);
-    let mut opts = RenderOptions {
-        width: w,
-        height: h,
-        sample_distance: sd,
-        ..Default::default()
-    };
+    let mut opts = frame_options(w, h, sd);
     opts.sweep = SweepOptions {
         specular: 0.0,
         reflections,
@@ -536,21 +490,30 @@ fn row_to_row(f: &refrakt::render::Frame, rows: std::ops::Range<u32>) -> (f64, f
             (y as f64, s / (w / 2) as f64)
         })
         .collect();
+    let (rel, level, _) = detrended_row_to_row(&pts);
+    (rel, level)
+}
+
+/// Over (row, mean) points: the RMS of the differences between consecutive rows after a
+/// least-squares quadratic trend over the rows is removed, relative to the mean level;
+/// the level; the largest such difference relative to the level.
+fn detrended_row_to_row(rows: &[(f64, f64)]) -> (f64, f64, f64) {
     let (mut m, mut rhs) = (glam::DMat3::ZERO, glam::DVec3::ZERO);
-    for &(x, v) in &pts {
+    for &(x, v) in rows {
         let b = glam::DVec3::new(1.0, x, x * x);
         m += glam::DMat3::from_cols(b * b.x, b * b.y, b * b.z);
         rhs += b * v;
     }
     let c = m.inverse() * rhs;
-    let level = pts.iter().map(|p| p.1).sum::<f64>() / pts.len() as f64;
-    let res: Vec<f64> = pts
+    let level = rows.iter().map(|p| p.1).sum::<f64>() / rows.len() as f64;
+    let res: Vec<f64> = rows
         .iter()
         .map(|&(x, v)| v - (c.x + c.y * x + c.z * x * x))
         .collect();
     let d: Vec<f64> = res.windows(2).map(|p| p[1] - p[0]).collect();
     let rms = (d.iter().map(|d| d * d).sum::<f64>() / d.len() as f64).sqrt();
-    (rms / level, level)
+    let max = d.iter().fold(0.0f64, |a, d| a.max(d.abs()));
+    (rms / level, level, max / level)
 }
 
 /// Issue 13: highlights without rings. A glass face (η 1.5, one-voxel ramp, tilted 30°

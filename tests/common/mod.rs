@@ -144,3 +144,31 @@ pub fn glass(eta: f32) -> TransferFunctions {
         ..Default::default()
     }
 }
+
+/// Render options of a `width` × `height` frame at sample distance `sd`, the rest default.
+pub fn frame_options(width: u32, height: u32, sd: f32) -> RenderOptions {
+    RenderOptions {
+        width,
+        height,
+        sample_distance: sd,
+        ..Default::default()
+    }
+}
+
+/// An equirectangular environment map `width` × `width / 2` whose radiance in world
+/// direction d is `radiance(d)` (at texel centres).
+pub fn environment_from(
+    width: u32,
+    radiance: impl Fn(glam::Vec3) -> [f32; 4],
+) -> refrakt::environment::EnvironmentMap {
+    use refrakt::environment::{direction, pixel_angles, EnvironmentMap};
+    let height = width / 2;
+    let mut px = Vec::with_capacity((width * height) as usize);
+    for y in 0..height {
+        for x in 0..width {
+            let (phi, theta) = pixel_angles(width, height, x as f32 + 0.5, y as f32 + 0.5);
+            px.push(radiance(glam::Vec3::from(direction(phi, theta))));
+        }
+    }
+    EnvironmentMap::new(width, height, px, "test map").unwrap()
+}
