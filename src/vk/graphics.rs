@@ -219,7 +219,46 @@ impl GraphicsPipeline {
         primitives: Primitives,
         name: &str,
     ) -> Result<Self> {
+        Self::specialized(
+            ctx,
+            vertex,
+            fragment,
+            pass,
+            set,
+            push_size,
+            primitives,
+            &[],
+            name,
+        )
+    }
+
+    /// [`GraphicsPipeline::new`] with the fragment shader's specialization constants:
+    /// `constants[i]` is the 32-bit value of `constant_id = i` (a bool is 0 or 1). The
+    /// driver compiles the pipeline with them folded in, so a branch on one costs nothing
+    /// (llvmpipe runs both sides of a branch on a uniform otherwise).
+    #[allow(clippy::too_many_arguments)]
+    pub fn specialized(
+        ctx: &Context,
+        vertex: &[u8],
+        fragment: &[u8],
+        pass: &RenderPass,
+        set: &DescriptorSet,
+        push_size: u32,
+        primitives: Primitives,
+        constants: &[u32],
+        name: &str,
+    ) -> Result<Self> {
         let device = ctx.device();
+        let entries: Vec<vk::SpecializationMapEntry> = (0..constants.len() as u32)
+            .map(|i| vk::SpecializationMapEntry {
+                constant_id: i,
+                offset: 4 * i,
+                size: 4,
+            })
+            .collect();
+        let spec = vk::SpecializationInfo::default()
+            .map_entries(&entries)
+            .data(bytemuck::cast_slice(constants));
         let layout = pipeline_layout(ctx, set, push_size)?;
         let vs = shader_module(ctx, vertex, &format!("{name} vs"))?;
         let fs = match shader_module(ctx, fragment, &format!("{name} fs")) {
@@ -241,7 +280,8 @@ impl GraphicsPipeline {
             vk::PipelineShaderStageCreateInfo::default()
                 .stage(vk::ShaderStageFlags::FRAGMENT)
                 .module(fs)
-                .name(c"main"),
+                .name(c"main")
+                .specialization_info(&spec),
         ];
         let vertex_input = vk::PipelineVertexInputStateCreateInfo::default();
         let assembly =
