@@ -115,35 +115,6 @@ vec3 value_gradient(vec3 p) {
     return jt * (vec3(dx, dy, dz) * dims);
 }
 
-// Direction of a surface at view-space p: the gradient of the value smoothed by the 3D
-// Sobel operator (a central difference one voxel either side along each axis, weighted
-// 1-2-1 across it; 26 fetches). Neither the exact gradient of the trilinear cells (it
-// tilts by up to ~15° where a one-voxel clamped ramp meets the plateaus) nor wider plain
-// central differences (wider than the ramp, each axis sees the whole step and the
-// normal drifts to the diagonal) give the orientation of a face not aligned with the
-// grid; the smoothing across each difference does. View-space units, zero in a flat
-// region.
-#ifndef SOBEL_SPACING
-#define SOBEL_SPACING 1.0
-#endif
-vec3 surface_gradient(vec3 p) {
-    vec3 t = to_tex(p);
-    vec3 h = SOBEL_SPACING / P.volume_dims.xyz;
-    vec3 g = vec3(0.0);
-    for (int k = 0; k < 27; ++k) {
-        ivec3 o = ivec3(k % 3, (k / 3) % 3, k / 9) - 1;
-        if (o == ivec3(0)) continue;
-        float f = value_at_tex(t + vec3(o) * h);
-        vec3 w = vec3(o.y == 0 ? 2.0 : 1.0, o.x == 0 ? 2.0 : 1.0, 1.0);
-        float wz = o.z == 0 ? 2.0 : 1.0;
-        g += f * vec3(float(o.x) * w.x * wz, float(o.y) * w.y * wz,
-                      float(o.z) * (o.x == 0 ? 2.0 : 1.0) * (o.y == 0 ? 2.0 : 1.0));
-    }
-    // Sobel weights sum to 16 per side; /(2 h) for a central difference.
-    g /= 32.0 * h;
-    return transpose(mat3(P.view_to_tex)) * g;
-}
-
 bool clipped(vec3 p) {
     if (dot(P.clip.xyz, P.clip.xyz) == 0.0) return false;
     vec3 w = (P.view_to_world * vec4(p, 1.0)).xyz;

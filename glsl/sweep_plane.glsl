@@ -8,11 +8,13 @@
 #if !defined(FORWARD_LIGHT) || !defined(PASS)
 #error "define FORWARD_LIGHT and PASS before including sweep_plane.glsl"
 #endif
+// Bisections locating the middle of a face of glass along its normal (to 1/128 of the
+// probes' span, ~0.05 voxels).
+#ifndef FACE_BISECTIONS
+#define FACE_BISECTIONS 7
+#endif
 #ifndef LIGHT_SUBSTEPS
 #define LIGHT_SUBSTEPS 4
-#endif
-#ifndef VIEW_SUBSTEPS
-#define VIEW_SUBSTEPS 1
 #endif
 #include "sweep_common.glsl"
 #include "sweep_buffers.glsl"
@@ -335,19 +337,9 @@ void main() {
     float seg_len = ds / dir.z;   // arc length from plane i-1 to this plane
 
     float chain_code = M4.w;
-    // The surface normal at this plane's point: the face's for the segment ending here and
-    // the turn of the step starting here (one smoothed gradient per plane; 26 fetches).
+    // The surface normal at this plane's point (the smoothed gradient volume): the face's
+    // for the segment ending here, and the probing direction of the step starting here.
     vec3 n_here = surface_gradient(vp);
-    // The step of eta across this point's neighbourhood along that normal (probes a few
-    // voxels either side): tenths beside a face of glass, ~0 inside a thin glass skin
-    // (both probes outside it) or in a gently varying or noisy medium (the turn below).
-    float face_step = 0.0;
-    if (dot(n_here, n_here) > 1e-12) {
-        vec3 nn = normalize(n_here);
-        float hs = 0.5 * ds + 2.5 * ref_step;
-        face_step = abs(eta_of(value_at_tex(to_tex(vp + hs * nn)))
-                        - eta_of(value_at_tex(to_tex(vp - hs * nn))));
-    }
     if (A < P.specular.z) {
         vec2 uv_v = project(vp);
         vec3 c; float a; vec3 m;
@@ -506,37 +498,96 @@ void main() {
         A += (1.0 - A) * a;
         M *= m;
     }
-    // Advance to the next plane and turn there (eq. 4.3 as a Snell step, as the light rays
-    // do, VIEW_SUBSTEPS per plane): v = eta dx/ds keeps its part tangential to the face
-    // and takes the new eta's length. The face's normal is the Sobel-smoothed gradient
-    // (surface_gradient), taken at this plane's point for the first step: the exact
-    // gradient of a clamped one-voxel ramp's cells tilts by up to ~15° on a face not
-    // aligned with the grid, and the thesis' kick (ds grad(eta), central differences one
-    // voxel apart) turned each ray by however much of a sharp face's ramp its planes
-    // happened to sample. Measured on a glass ball against Snell's law (docs/NOTES.md):
-    // the normal at the plane's point did better than at the step's middle (0.45° against
-    // 0.85° median), and more sub-steps worse (they follow the graded ramp, not the face).
-    vec3 q = vp;
-    float dz_view = ds / float(VIEW_SUBSTEPS);
-    for (int k = 0; k < VIEW_SUBSTEPS; ++k) {
-        if (vd.z < MIN_FORWARD * length(vd)) {
-            count_clamp(2u);
-            vd = limit_direction(vd);
-        }
-        vec3 d = normalize(vd);
-        vec3 q_next = q + d * (dz_view / d.z);
-        float f_q = value_at_tex(to_tex(q_next));
-        // Snell beside a face of glass; elsewhere the thesis' kick (eq. 4.3,
-        // v += ds grad(eta)). A skin of eta thinner than the probes (the demo floor's: its
-        // value ramp crosses the glass's eta band) was turned twice by Snell steps with
-        // normals from different planes, and the floor behind it striped (row to row 1.6 %
-        // against 0.7 % with the kick); in noise the smoothed normal points anywhere and
-        // a Snell step at a grazing angle to it turns a ray far for a tiny change of eta.
-        vec3 v_snell = refract_step(vd, eta_of(f_q), k == 0 ? n_here : surface_gradient(0.5 * (q + q_next)));
-        vec3 v_kick = vd + length(q_next - q) * grad_eta;
-        vd = mix(v_kick, v_snell, smoothstep(0.06, 0.1, face_step));
-        q = q_next;
+    // Advance to the next plane, turning on the way (eq. 4.3). v = eta dx/ds.
+    //
+    // A face of glass is the volume's picture of a sharp interface: eta steps between two
+    // plateaus within a voxel or two (a segmented or antialiased surface). There the ray
+    // turns once, by Snell's law between the plateaus, where it meets the face's middle,
+    // about the smoothed normal there, and goes on to the next plane in its new
+    // direction; |v| is the plateau's eta of the side it is on. The face is found along
+    // the normal through the step's centre: its plateaus probed 2.5 reference steps
+    // beyond the step either side, its middle by bisection between them, its width from
+    // eta 1.5 reference steps either side of the middle (a face: most of the step within
+    // them).
+    // Turning at the plane after the crossing instead delayed every turn by half a plane
+    // spacing on average: a ball's exit directions were off by 0.2° at its centre to 4°
+    // at its rim at sample distance 1 (docs/NOTES.md). The side is judged by |v|, not by
+    // the eta sampled at this plane, so no crossing is missed between two planes.
+    //
+    // A graded change of eta (wider than the face test, or too weak for it) is integrated
+    // as such, by a Snell step from eta here to eta at the next plane taken at the step's
+    // middle (the stratified medium's invariant, second order in the step). Weaker still
+    // (below 0.06 across the probes: noise, thin skins) the thesis' kick, v += ds grad(eta):
+    // a skin of eta thinner than the probes (the demo floor's: its value ramp crosses the
+    // glass's eta band) was turned twice by Snell steps about normals from different
+    // planes, and the floor behind it striped (row to row 1.6 % against 0.7 % with the
+    // kick); in noise the normal points anywhere and a Snell step at a grazing angle to it
+    // turns a ray far for a tiny change of eta.
+    if (vd.z < MIN_FORWARD * length(vd)) {
+        count_clamp(2u);
+        vd = limit_direction(vd);
     }
+    vec3 d = normalize(vd);
+    vec3 q_straight = vp + d * (ds / d.z);
+    float eta_b = eta_of(value_at_tex(to_tex(q_straight)));
+    vec3 v_kick = vd + length(q_straight - vp) * grad_eta;
+    vec3 v_face = vd;
+    vec3 q_face = q_straight;
+    float face_step = 0.0;
+    if (dot(n_here, n_here) > 1e-12) {
+        vec3 nn = normalize(n_here);
+        vec3 centre = 0.5 * (vp + q_straight);
+        float hs = 0.5 * abs(dot(q_straight - vp, nn)) + 2.5 * ref_step;
+        float e_plus = eta_of(value_at_tex(to_tex(centre + hs * nn)));
+        float e_minus = eta_of(value_at_tex(to_tex(centre - hs * nn)));
+        face_step = abs(e_plus - e_minus);
+        if (e_plus < e_minus) nn = -nn;   // nn points to higher eta
+        float eta_lo = min(e_plus, e_minus), eta_hi = max(e_plus, e_minus);
+        float eta_mid = 0.5 * (eta_lo + eta_hi);
+        // The face's middle on the normal line through the centre.
+        float s0 = -hs, s1 = hs;
+        for (int k = 0; k < FACE_BISECTIONS; ++k) {
+            float s = 0.5 * (s0 + s1);
+            if (eta_of(value_at_tex(to_tex(centre + s * nn))) >= eta_mid) s1 = s; else s0 = s;
+        }
+        vec3 face = centre + 0.5 * (s0 + s1) * nn;
+        float across = eta_of(value_at_tex(to_tex(face + 1.5 * ref_step * nn)))
+                     - eta_of(value_at_tex(to_tex(face - 1.5 * ref_step * nn)));
+        // Sharp: most of the step within 1.5 reference steps of the middle, and plateaus
+        // at the probes (eta 1.5 reference steps further out is the same; in the tails of
+        // a wider ramp the probes' middle is no face, and the ramp goes on changing).
+        float further = abs(eta_of(value_at_tex(to_tex(centre + (hs + 1.5 * ref_step) * nn))) - eta_hi)
+                      + abs(eta_of(value_at_tex(to_tex(centre - (hs + 1.5 * ref_step) * nn))) - eta_lo);
+        float ratio = face_step > 0.0 ? across / face_step : 0.0;
+        float flatness = face_step > 0.0 ? further / face_step : 1.0;
+        float sharp = smoothstep(0.75, 0.85, ratio) * (1.0 - smoothstep(0.05, 0.15, flatness));
+        // One Snell step from the ray's eta (|v|) to a target: graded, eta at the next
+        // plane, at the step's middle; sharp, the plateau of the side the step ends on,
+        // where the ray meets the face (or at the middle if it does not cross it here: a
+        // no-op on a plateau). Every turn is a Snell step from the ray's own eta about the
+        // local normal, so a ray that mixes the two along a face (tails graded, middle
+        // sharp) still leaves it in Snell's direction.
+        bool beyond = dot(q_straight - face, nn) >= 0.0;
+        float eta_side = beyond ? eta_hi : eta_lo;
+        vec3 x_sharp = centre;
+        if ((length(vd) >= eta_mid) != beyond) {
+            float run = dot(q_straight - vp, nn);
+            float t = abs(run) > 1e-9 ? clamp(dot(face - vp, nn) / run, 0.0, 1.0) : 0.0;
+            x_sharp = mix(vp, q_straight, t);
+        }
+        vec3 x = mix(centre, x_sharp, sharp);
+        vec3 n = surface_gradient(x);
+        v_face = refract_step(vd, mix(eta_b, eta_side, sharp), dot(n, n) > 1e-12 ? n : nn);
+        if (v_face.z < MIN_FORWARD * length(v_face)) {
+            count_clamp(2u);
+            v_face = limit_direction(v_face);
+        }
+        vec3 d2 = normalize(v_face);
+        q_face = x + d2 * ((q_straight.z - x.z) / d2.z);
+    }
+    float w_face = smoothstep(0.06, 0.1, face_step);
+    vd = mix(v_kick, v_face, w_face);
+    vec3 q = mix(q_straight, q_face, w_face);
     if (vd.z < MIN_FORWARD * length(vd)) {
         count_clamp(2u);
         vd = limit_direction(vd);

@@ -846,7 +846,10 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
         Default::default()
     };
     let mut frame = renderer.render(model, &camera, &opts)?;
-    let mut all = env_timings;
+    // One-off builds first (the gradient volume once per volume, the environment's SAT
+    // once per map), then the frame's own passes.
+    let mut all = renderer.gradient_timings().clone();
+    all.extend(env_timings);
     all.extend(std::mem::take(&mut frame.timings));
     frame.timings = all;
     output::write(&frame, &args.output, &tone)?;
@@ -864,6 +867,17 @@ fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
         opts.sample_distance,
         frame.max_steps
     );
+    if let refrakt::render::gradient::GradientStatus::TooLarge { needed, budget } =
+        renderer.gradient_status()
+    {
+        println!(
+            "note: the gradient volume would need {} MiB (budget {} MiB, half the device's \
+             largest heap): surface normals computed on the fly instead (3D Sobel, ~1.5° \
+             less accurate at faces of glass; docs/NOTES.md)",
+            needed >> 20,
+            budget >> 20
+        );
+    }
     if frame.timings.scopes.is_empty() {
         println!("GPU timings: this device has no timestamp queries");
     } else {

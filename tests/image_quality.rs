@@ -6,6 +6,7 @@ mod common;
 
 use common::*;
 use glam::Vec3;
+use refrakt::render::gradient::GradientStatus;
 use refrakt::render::{
     Camera, Light, LightTransport, Model, RenderOptions, Renderer, SweepOptions,
 };
@@ -165,7 +166,7 @@ fn glass_ball() -> (u32, f32, refrakt::volume::Volume, TransferFunctions, Camera
 /// the ray equation, 0.05-voxel steps). Over the pixels whose eye ray meets the sphere:
 /// (median, 95th percentile) in degrees against Snell, the same against the tracer, the
 /// tracer's own against Snell, and the pixel count.
-fn view_exit_errors(ctx: &Context, sd: f32) -> [(f64, f64); 3] {
+fn view_exit_errors(ctx: &Context, sd: f32, gradient_budget: Option<u64>) -> [(f64, f64); 3] {
     let (n, radius, vol, tf, cam) = glass_ball();
     let (w, h) = (64u32, 64u32);
     let planes = refrakt::render::Planes::for_box(&cam, Vec3::splat(0.5), sd / n as f32).unwrap();
@@ -177,7 +178,18 @@ fn view_exit_errors(ctx: &Context, sd: f32) -> [(f64, f64); 3] {
         specular: 0.0,
         ..Default::default()
     };
-    let f = sweep(ctx, &vol, &tf, &cam, &opts);
+    let mut r = Renderer::new(ctx, &vol, &tf).unwrap();
+    if let Some(bytes) = gradient_budget {
+        r.set_gradient_budget(bytes);
+    }
+    let f = r.render(Model::Refract, &cam, &opts).unwrap();
+    let have_volume = *r.gradient_status() == GradientStatus::Built;
+    assert_eq!(
+        have_volume,
+        gradient_budget.is_none(),
+        "{:?}",
+        r.gradient_status()
+    );
     let dirs = &f.dumps[0].pixels;
     let field = refrakt::photons::Field::new(&vol, &tf, &opts).unwrap();
     let (eye, forward, right, up) = cam.frame();
@@ -222,35 +234,48 @@ fn view_exit_errors(ctx: &Context, sd: f32) -> [(f64, f64); 3] {
     ]
 }
 
-/// Viewing rays leave a glass sphere near the directions Snell's law gives. Measured:
-/// median / 95th percentile 0.45° / 3.0° at sample distance 1, 1.08° / 4.5° at 0.5 (the
-/// thesis' kick, ds grad(eta) by one-voxel central differences: 1.09° / 10.3° at 1).
-/// Against the tracer in the exact trilinear field the figures are printed: that field's
-/// one-voxel clamped ramp is itself no sphere (the tracer's rays leave it 1.3° / 12° off
-/// Snell), see docs/NOTES.md.
+/// Issue 13: viewing rays leave a glass sphere (radius 26 voxels, one-voxel ramp, η 1.5)
+/// in the directions Snell's law gives at the ramp's middle sphere: median ≤ 0.3°, 95th
+/// percentile ≤ 1° at every sample distance (measured 0.09° / 0.55–0.59° at 2, 1, 0.5 and
+/// 0.25; the error grows towards the rim, where the exit direction turns fastest with
+/// the impact parameter: 0.33° median over the outer tenth of the radius). Before the
+/// sharp-face turn and the smoothed gradient volume: 0.45° / 3.0° at 1, 1.08° / 4.5° at
+/// 0.5; the thesis' kick 1.09° / 10.3°. Against the tracer in the exact trilinear field
+/// the figures are printed only: that field's one-voxel clamped ramp is itself no sphere
+/// (the tracer's rays leave it 1.3° / 12° off Snell), see docs/NOTES.md.
 #[test]
-fn viewing_rays_leave_a_glass_sphere_near_snells_directions() {
+fn viewing_rays_leave_a_glass_sphere_as_snell_says() {
     with_context(|ctx| {
-        for sd in [1.0f32, 0.5] {
-            let [snell, tracer, own] = view_exit_errors(ctx, sd);
+        let mut failures = Vec::new();
+        for sd in [2.0f32, 1.0, 0.5, 0.25] {
+            let [snell, tracer, own] = view_exit_errors(ctx, sd, None);
             println!(
                 "sample distance {sd}: exit directions vs Snell median {:.3}° p95 {:.3}°; \
                  vs the tracer {:.3}° / {:.3}° (the tracer vs Snell {:.3}° / {:.3}°)",
                 snell.0, snell.1, tracer.0, tracer.1, own.0, own.1
             );
-            assert!(snell.0 <= 1.2 && snell.1 <= 5.0, "sd {sd}: {snell:?}");
+            if snell.0 > 0.3 || snell.1 > 1.0 {
+                failures.push(format!("sd {sd}: {snell:?}"));
+            }
         }
+        assert!(failures.is_empty(), "{}", failures.join("\n"));
     });
 }
 
-/// Issue 13's goal (open): median ≤ 0.3°, 95th percentile ≤ 1° at every sample distance.
+/// Without the gradient volume (a volume too large for the device's memory) the sweep
+/// takes its normals from a 3D Sobel on the fly: the same scheme with normals ~1.5° off
+/// (median). Measured: median / p95 1.29° / 4.3° at sample distance 1 and 0.5 (the
+/// thesis' kick: 1.09° / 10.3°); bounds median 1.6°, p95 5°.
 #[test]
-#[ignore = "open (issue 13): viewing-ray exit directions not yet within 0.3° / 1° of Snell"]
-fn viewing_rays_leave_a_glass_sphere_as_snell_says() {
+fn viewing_rays_without_the_gradient_volume_stay_near_snell() {
     with_context(|ctx| {
         for sd in [1.0f32, 0.5] {
-            let [snell, _, _] = view_exit_errors(ctx, sd);
-            assert!(snell.0 <= 0.3 && snell.1 <= 1.0, "sd {sd}: {snell:?}");
+            let [snell, _, _] = view_exit_errors(ctx, sd, Some(0));
+            println!(
+                "sample distance {sd}, normals on the fly: vs Snell median {:.3}° p95 {:.3}°",
+                snell.0, snell.1
+            );
+            assert!(snell.0 <= 1.6 && snell.1 <= 5.0, "sd {sd}: {snell:?}");
         }
     });
 }
@@ -347,8 +372,10 @@ fn fresnel_unpolarised(cos_i: f64, n1: f64, n2: f64) -> f64 {
     0.5 * (rs * rs + rp * rp)
 }
 
-/// A glass slab (η 1.5, 0.3 thick, one-voxel faces) whose normal makes `incidence`
-/// degrees with the view axis, in front of an environment that is red on the camera's
+/// A glass slab (η 1.5, 0.2 thick, one-voxel faces) whose normal makes `incidence`
+/// degrees with the view axis (its faces meet the central ray at least 13 voxels inside
+/// the box: the box's side is a face of the field too, value 0 beyond it, and the
+/// smoothed gradient reaches 5 voxels), in front of an environment that is red on the camera's
 /// side of the slab's plane and green beyond it: red measures what the faces reflect,
 /// green what the slab transmits. Returns (reflected, transmitted, expected reflected,
 /// expected transmitted) over the central pixels. Clear (`black_inside` false): the front
@@ -377,7 +404,7 @@ fn slab_fresnel_with(
     let a = incidence.to_radians();
     let normal = Vec3::new(0.0, a.sin(), a.cos());
     let vol = f32_volume(n, |p| {
-        0.5 + (0.15 - Vec3::from(p).dot(normal).abs()) * n as f32
+        0.5 + (0.1 - Vec3::from(p).dot(normal).abs()) * n as f32
     });
     let mut tf = glass(1.5);
     if black_inside {
@@ -399,6 +426,9 @@ fn slab_fresnel_with(
         reflections,
         ..Default::default()
     };
+    // No early termination: at 0.99 a ray stops with up to 1 % of what lies behind still
+    // to come, and the black glass would let that much of the green through.
+    opts.termination_alpha = 1.0;
     let mut r = Renderer::new(ctx, &vol, &tf).unwrap();
     r.set_environment(Some(&map)).unwrap();
     let f = r.render(Model::Refract, &cam, &opts).unwrap();
@@ -428,10 +458,10 @@ fn slab_fresnel_with(
 
 /// Issue 13: Fresnel reflection of viewing rays, at every sample distance (the faces fall
 /// differently between planes). One face (black glass behind it): the Fresnel equations
-/// within 0.5 % absolute at normal incidence, 1 % at 30° and 45°, 2.5 % at 60° and 70°
-/// (measured +1.1 / +1.2 % at 60°: the issue's 1 % there is open). A clear slab at normal
-/// incidence: reflected F + (1 − F) F and transmitted (1 − F)² within 0.5 %; at 60° within
-/// 2.5 % (measured +1.2 / +1.9 %). With reflections off the face reflects nothing.
+/// within 0.5 % absolute at normal incidence and 1 % at 30°–70° (measured within 0.07 %).
+/// A clear slab: reflected F + (1 − F) F and transmitted (1 − F)² within 0.5 % at normal
+/// incidence (exact to 0.01 %), 1 % at 60° (measured within 0.05 %). With reflections off
+/// the face reflects nothing.
 #[test]
 fn glass_reflects_and_transmits_by_fresnel() {
     with_context(|ctx| {
@@ -440,15 +470,7 @@ fn glass_reflects_and_transmits_by_fresnel() {
         for sd in [1.0f32, 0.5] {
             for incidence in [0.0f32, 30.0, 45.0, 60.0, 70.0] {
                 let (r, t, er, _) = slab_fresnel(ctx, incidence, sd, true);
-                // The issue asks 1 % at 60°: measured +1.1 % (sd 1) and +1.2 % (sd 0.5); 70°
-                // −0.2 % and +0.4 % (open; the smoothed normal tilts ~2°, see NOTES).
-                let tol = if incidence == 0.0 {
-                    0.005
-                } else if incidence < 60.0 {
-                    0.01
-                } else {
-                    0.025
-                };
+                let tol = if incidence == 0.0 { 0.005 } else { 0.01 };
                 println!(
                     "sample distance {sd}, one face at {incidence}°: reflected {r:.4} \
                      (Fresnel {er:.4}), behind it {t:.4}"
@@ -457,7 +479,7 @@ fn glass_reflects_and_transmits_by_fresnel() {
                     failures.push(format!("sd {sd}, one face {incidence}°: {r} vs {er}"));
                 }
             }
-            for (incidence, tol) in [(0.0f32, 0.005), (60.0, 0.025)] {
+            for (incidence, tol) in [(0.0f32, 0.005), (60.0, 0.01)] {
                 let (r, t, er, et) = slab_fresnel(ctx, incidence, sd, false);
                 println!(
                     "sample distance {sd}, clear slab at {incidence}°: reflected {r:.4} \
@@ -519,12 +541,13 @@ fn detrended_row_to_row(rows: &[(f64, f64)]) -> (f64, f64, f64) {
 /// Issue 13: highlights without rings. A glass face (η 1.5, one-voxel ramp, tilted 30°
 /// from the view axis, black glass past the face's middle so only this face shows) lit
 /// from the mirror direction: its Cook–Torrance highlight is the same at every sample
-/// distance (within 10 %) and varies over the face row to row by at most 12 % of its level
-/// (detrended as for the floor). Measured: levels 0.041 / 0.040 / 0.042 at sample distance
-/// 1 / 0.5 / 0.25, row to row 5.8 / 9.0 / 6.7 %. Before issue 13
-/// (F from consecutive η samples per plane): 0.019 / 0.013 / 0.007 (a fraction of the
-/// face's F, shrinking with the spacing) and 11 / 20 / 19 %. The remaining variation follows the smoothed normal's tilt across the
-/// voxel grid (the issue's goal of no visible rings is open: docs/NOTES.md).
+/// distance (within 3 %) and varies over the face row to row by at most 2 % of its level
+/// (detrended as for the floor). Measured: levels 0.0405 / 0.0406 / 0.0406 at sample
+/// distance 1 / 0.5 / 0.25, row to row 0.51 / 0.51 / 0.50 %. With the Sobel normal (26
+/// trilinear fetches) instead of the smoothed gradient volume: 5.8 / 9.0 / 6.7 % (its
+/// tilt across the voxel grid was the rings); before issue 13 (F from consecutive η
+/// samples per plane): levels 0.019 / 0.013 / 0.007 (a fraction of the face's F,
+/// shrinking with the spacing) and 11 / 20 / 19 %.
 #[test]
 fn highlights_on_glass_have_no_rings() {
     with_context(|ctx| {
@@ -532,7 +555,7 @@ fn highlights_on_glass_have_no_rings() {
         let a = 30f32.to_radians();
         let normal = Vec3::new(0.0, a.sin(), a.cos());
         let vol = f32_volume(n, |p| {
-            0.5 + (0.15 - Vec3::from(p).dot(normal).abs()) * n as f32
+            0.5 + (0.1 - Vec3::from(p).dot(normal).abs()) * n as f32
         });
         // Black inside, past the face's middle: only the face's own highlight is seen (the
         // back face's, lit by light refracted through the one-voxel ramp, carries that
@@ -578,9 +601,9 @@ fn highlights_on_glass_have_no_rings() {
             .iter()
             .fold((f64::MAX, 0.0f64), |(a, b), &l| (a.min(l), b.max(l)));
         assert!(
-            hi <= 1.1 * lo,
+            hi <= 1.03 * lo,
             "highlight depends on the sample distance: {levels:?}"
         );
-        assert!(worst <= 0.12, "highlight rings: {:.2} %", 100.0 * worst);
+        assert!(worst <= 0.02, "highlight rings: {:.2} %", 100.0 * worst);
     });
 }

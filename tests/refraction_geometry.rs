@@ -224,18 +224,21 @@ fn tilted_slab_shifts_rays_by_snells_law() {
             "{traced} vs {centre}"
         );
 
-        // Faces one voxel wide: within 5 % of Snell per pixel, as the issue asks, and
-        // within 2.5 % of the exact shift for the interface actually stored.
+        // Faces one voxel wide are the volume's picture of sharp faces (issue 13: the ray
+        // turns once, by Snell's law between the plateaus, at the face's middle): within
+        // 1 % of Snell per pixel (measured 0.33 % worst; issue 5 asked 5 %). The graded
+        // medium the tanh ramp literally stores shifts rays 1.7 % further: within 2.5 %.
         let e = measure(ctx, &slab, 96, 1.0);
         println!(
             "1-voxel faces: per-pixel error vs Snell mean {:.4} worst {:.4}; vs graded mean {:.4} worst {:.4}",
             mean(&e.snell), worst(&e.snell), mean(&e.graded), worst(&e.graded)
         );
-        assert!(worst(&e.snell) <= 0.05, "worst {}", worst(&e.snell));
+        assert!(worst(&e.snell) <= 0.01, "worst {}", worst(&e.snell));
         assert!(worst(&e.graded) <= 0.025, "worst {}", worst(&e.graded));
 
         // Faces three voxels wide shift rays 8 % more than sharp faces would (tan θ is
-        // convex in η); the renderer follows the graded medium, not the sharp formula.
+        // convex in η); such a ramp is a graded medium, and the renderer follows it, not
+        // the sharp formula (measured worst 1.0 % from the graded shift).
         let e = measure(ctx, &slab, 64, 3.0);
         println!(
             "3-voxel faces: per-pixel error vs Snell mean {:.4}; vs graded mean {:.4} worst {:.4}",

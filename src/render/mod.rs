@@ -3,6 +3,7 @@
 //! raw Vulkan.
 
 mod ea;
+pub mod gradient;
 pub mod preintegration;
 pub mod sweep;
 mod tonemap;
@@ -235,6 +236,11 @@ pub struct Renderer {
     ctx: Context,
     volume_info: VolumeInfo,
     volume_tex: Image,
+    /// Built when the refractive sweep first needs it (the EA model does not), if it fits.
+    gradient: Option<gradient::GradientVolume>,
+    gradient_status: gradient::GradientStatus,
+    gradient_budget: Option<u64>,
+    gradient_timings: Timings,
     tf: TransferFunctions,
     tf_image: Image,
     tf_dirty: bool,
@@ -367,6 +373,10 @@ impl Renderer {
                 dims: volume.dims,
             },
             volume_tex,
+            gradient: None,
+            gradient_status: gradient::GradientStatus::Unbuilt,
+            gradient_budget: None,
+            gradient_timings: Timings::default(),
             tf: tf.clone(),
             tf_image,
             tf_dirty: true,
@@ -415,6 +425,25 @@ impl Renderer {
         &self.tf
     }
 
+    /// GPU time of the gradient volume's build (scope "gradient volume"; empty until the
+    /// first refractive frame builds it). Built once per renderer: it depends on the
+    /// volume only.
+    pub fn gradient_timings(&self) -> &Timings {
+        &self.gradient_timings
+    }
+
+    /// Whether the sweep has its gradient volume (or computes normals on the fly).
+    pub fn gradient_status(&self) -> &gradient::GradientStatus {
+        &self.gradient_status
+    }
+
+    /// Bytes the gradient volume (with its build's intermediate) may take instead of half
+    /// the device's largest heap; takes effect before the first refractive frame. (Tests
+    /// use it to run the fallback, normals on the fly, on any device.)
+    pub fn set_gradient_budget(&mut self, bytes: u64) {
+        self.gradient_budget = Some(bytes);
+    }
+
     pub fn preintegration(&self) -> &PreintegrationTable {
         &self.preint
     }
@@ -458,6 +487,7 @@ impl Renderer {
     /// Render one frame with `model` and read it back.
     pub fn render(&mut self, model: Model, camera: &Camera, opts: &RenderOptions) -> Result<Frame> {
         self.check(model, camera, opts)?;
+        self.ensure_gradient(model)?;
         let ctx = self.ctx.clone();
         let mut recorded = None;
         let timings = ctx.execute(|rec| {
@@ -507,6 +537,7 @@ impl Renderer {
             "state-buffer dumps are read back by Renderer::render, not recorded frames"
         );
         self.check(model, camera, opts)?;
+        self.ensure_gradient(model)?;
         let r = self.record_inner(rec, model, camera, opts, false)?;
         Ok(RecordedFrame {
             image: &self.target(model)?.image,
@@ -523,6 +554,27 @@ impl Renderer {
         .ok_or_else(|| anyhow::anyhow!("no {} frame has been recorded", model.name()))
     }
 
+    /// Build the gradient volume if `model` needs it and it is not there yet: its own
+    /// submission, waited for (once per volume; a caller's open recording is unaffected,
+    /// it is submitted later).
+    fn ensure_gradient(&mut self, model: Model) -> Result<()> {
+        if model != Model::Refract || self.gradient_status != gradient::GradientStatus::Unbuilt {
+            return Ok(());
+        }
+        let (needed, device_budget) =
+            gradient::GradientVolume::memory(&self.ctx, self.volume_tex.extent());
+        let budget = self.gradient_budget.unwrap_or(device_budget);
+        if needed > budget {
+            self.gradient_status = gradient::GradientStatus::TooLarge { needed, budget };
+            return Ok(());
+        }
+        let (g, t) = gradient::GradientVolume::build(&self.ctx, &self.volume_tex, &self.linear)?;
+        self.gradient = Some(g);
+        self.gradient_status = gradient::GradientStatus::Built;
+        self.gradient_timings = t;
+        Ok(())
+    }
+
     /// The recording shared by `render` and `record`; arguments already checked.
     fn record_inner(
         &mut self,
@@ -536,6 +588,7 @@ impl Renderer {
             self.preint.record_build(rec, &self.tf)?;
             self.tf_dirty = false;
         }
+
         // The benchmark's frame time: every pass and barrier of the frame, without a table
         // rebuild (only when the transfer functions change) and without the copy out.
         rec.begin_scope("render");
@@ -580,6 +633,7 @@ impl Renderer {
                 })
             }
             Model::Refract => {
+                let gradient = self.gradient.as_ref().map(|g| g.image());
                 let env = sweep::EnvInputs {
                     map: &self.env.image,
                     sat: &self.env.sat.table,
@@ -594,6 +648,7 @@ impl Renderer {
                     sweep::SweepPass::new(
                         &self.ctx,
                         &self.volume_tex,
+                        gradient,
                         &self.tf_image,
                         self.preint.image(),
                         &self.linear,
@@ -611,7 +666,12 @@ impl Renderer {
                     camera,
                     opts,
                     &opts.sweep,
-                    [&self.volume_tex, &self.tf_image, self.preint.image()],
+                    [
+                        &self.volume_tex,
+                        gradient.unwrap_or(&self.volume_tex),
+                        &self.tf_image,
+                        self.preint.image(),
+                    ],
                     &env,
                     read_back,
                 )?;

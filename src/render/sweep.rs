@@ -624,6 +624,7 @@ impl SweepPass {
     pub fn new(
         ctx: &Context,
         volume: &Image,
+        gradient: Option<&Image>,
         tf: &Image,
         preint: &Image,
         sampler: &Sampler,
@@ -774,6 +775,11 @@ impl SweepPass {
         }
         // Binding 25: the environment for Fresnel reflections (glsl/sweep_light.glsl).
         plane_bindings.push(Binding::Texture(env.map, sampler));
+        // Binding 26: the smoothed gradient volume (render::gradient, glsl/sweep_light.glsl);
+        // without one the shaders compute normals on the fly (specialization constant 0)
+        // and never read the binding, which the volume then fills.
+        plane_bindings.push(Binding::Texture(gradient.unwrap_or(volume), sampler));
+        let constants = [gradient.is_some() as u32];
         let sweep_set = DescriptorSet::new(ctx, &plane_bindings, "sweep")?;
         let output = FrameTarget::new(ctx, width, height, "sweep frame")?;
         let env_params = Buffer::uniform::<EnvParams>(ctx, "environment params")?;
@@ -797,13 +803,15 @@ impl SweepPass {
 
         let setup =
             ComputePipeline::new(ctx, shaders::SWEEP_SETUP_COMP, &setup_set, 0, "sweep setup")?;
-        let sweep = GraphicsPipeline::fullscreen(
+        let sweep = GraphicsPipeline::specialized(
             ctx,
             shaders::FULLSCREEN_VERT,
             shaders::SWEEP_FRAG,
             &render_pass,
             &sweep_set,
             std::mem::size_of::<PlanePush>() as u32,
+            Primitives::Triangles,
+            &constants,
             "sweep plane",
         )?;
         let floor = GraphicsPipeline::fullscreen(
@@ -817,13 +825,15 @@ impl SweepPass {
         )?;
         let forward = if ctx.info().large_points && ctx.info().fragment_atomics {
             let plane = |fs: &[u8], pass: &RenderPass, name: &str| {
-                GraphicsPipeline::fullscreen(
+                GraphicsPipeline::specialized(
                     ctx,
                     shaders::FULLSCREEN_VERT,
                     fs,
                     pass,
                     &sweep_set,
                     std::mem::size_of::<PlanePush>() as u32,
+                    Primitives::Triangles,
+                    &constants,
                     name,
                 )
             };
@@ -956,7 +966,7 @@ impl SweepPass {
         camera: &Camera,
         opts: &RenderOptions,
         sweep: &SweepOptions,
-        inputs: [&Image; 3],
+        inputs: [&Image; 4],
         env: &EnvInputs,
         read_back: bool,
     ) -> Result<SweepRecording> {
