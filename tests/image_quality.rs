@@ -18,8 +18,9 @@ use refrakt::vk::Context;
 /// variation of the lit floor's brightness, relative to its level: the RMS of the
 /// differences between consecutive row means after removing a quadratic trend over the
 /// rows (the floor's real brightness changes smoothly with distance: fog-free, it should
-/// not change at all, but the perspective makes far rows average more of the floor).
-/// `thin`: the opacity rises over a fifth of the surface's one-voxel ramp (a hard
+/// not change at all, but the perspective makes far rows average more of the floor), or
+/// the same of the column means if larger (light that does not tile the plane stripes the
+/// floor along the columns). `thin`: the opacity rises over a fifth of the surface's one-voxel ramp (a hard
 /// surface); otherwise over all of it. Also returns the level relative to the continuous
 /// limit of the model (emission-absorption, light attenuated on its way in): an opaque
 /// layer lit along its normal and seen at μ = cos(angle) from it returns
@@ -89,22 +90,36 @@ fn floor_banding(
         }
     }
     assert!(rows.len() > 40, "too few floor rows ({})", rows.len());
+    // Column means over the same rows: light that fails to tile the plane (splats
+    // narrower than the light rays' spacing) stripes the floor along the columns instead.
+    let (y0, y1) = (rows[0].0 as u32, rows[rows.len() - 1].0 as u32 + 1);
+    let cols: Vec<f64> = (w / 4..3 * w / 4)
+        .map(|x| (y0..y1).map(|y| f.pixel(x, y)[0] as f64).sum::<f64>() / (y1 - y0) as f64)
+        .collect();
+    let col_mean = cols.iter().sum::<f64>() / cols.len() as f64;
+    let col_rel = (cols.iter().map(|c| (c - col_mean).powi(2)).sum::<f64>() / cols.len() as f64)
+        .sqrt()
+        / col_mean;
     let (rel, level, max_rel) = detrended_row_to_row(&rows);
     println!(
         "{} {} floor at {angle}° softness {softness}: level {level:.4}, row-to-row {:.3} % \
-         (max {:.3} %)",
+         (max {:.3} %), column to column {:.3} %",
         transport.name(),
         if thin { "thin" } else { "soft" },
         100.0 * rel,
-        100.0 * max_rel
+        100.0 * max_rel,
+        100.0 * col_rel
     );
     let mu = angle.to_radians().cos() as f64;
-    (rel, level * (1.0 + mu))
+    (rel.max(col_rel), level * (1.0 + mu))
 }
 
-/// Row to row within 1 % of the level (1.5 % at 80°), and the level within 1 % of the
-/// continuous limit, for both transports, soft and hard surfaces, softness 0 and 1, seen
-/// 45° to 80° from the normal. Before issue 13 (the segment shaded with its front plane's light): backward
+/// Row to row and column to column within 1 % of the level, and the level within 1 % of
+/// the continuous limit, for both transports, soft and hard surfaces, softness 0 and 1,
+/// seen 45° to 80° from the normal. At 80° the light is 80° from the sweep axis and the
+/// forward transport's ray grid is coarser than 8 pixels: with splats at most 8 pixels
+/// across the floor had dark columns (−63 % / +22 % column means; row to row 1.02 %).
+/// Before issue 13 (the segment shaded with its front plane's light): backward
 /// 1.0–1.4 % soft and 18–25 % hard, forward 1.7–5.4 % and 34–39 %, levels 0.77–0.93 of
 /// the light instead of 1 / (1 + μ).
 #[test]
@@ -118,13 +133,10 @@ fn a_lit_floor_is_unstriped_at_its_physical_level() {
                     for softness in [0.0f32, 1.0] {
                         let (b, level) = floor_banding(ctx, angle, softness, transport, thin);
                         worst = (worst.0.max(b), worst.1.max((level - 1.0).abs()));
-                        // At 80° the forward transport's light grid is coarse against the
-                        // grazing view's rows (one ray box spans rows): measured 1.02 %.
-                        let bound = if angle >= 80.0 { 0.015 } else { 0.01 };
-                        if b > bound || (level - 1.0).abs() > 0.01 {
+                        if b > 0.01 || (level - 1.0).abs() > 0.01 {
                             failures.push(format!(
-                                "{} {} {angle}° softness {softness}: row-to-row {:.2} %, \
-                                 level {:.3} of 1/(1+μ)",
+                                "{} {} {angle}° softness {softness}: row-to-row or column to \
+                                 column {:.2} %, level {:.3} of 1/(1+μ)",
                                 transport.name(),
                                 if thin { "thin" } else { "soft" },
                                 100.0 * b,
