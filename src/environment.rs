@@ -260,7 +260,7 @@ pub fn direction(phi: f32, theta: f32) -> [f32; 3] {
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct SatPush {
     mean: [f32; 4],
-    pass: u32,
+    pass_index: u32,
     pad: [u32; 3],
 }
 
@@ -319,7 +319,7 @@ impl SummedAreaTable {
                 }
                 let push = SatPush {
                     mean,
-                    pass,
+                    pass_index: pass,
                     pad: [0; 3],
                 };
                 rec.dispatch(
@@ -392,5 +392,27 @@ impl SatReadback {
             )
         };
         std::array::from_fn(|i| total[i] / area + self.mean[i] as f64)
+    }
+}
+
+#[cfg(test)]
+mod layout_tests {
+    use super::*;
+
+    #[test]
+    fn sat_push_matches_the_shaders_block() {
+        let host = crate::host_layout!(SatPush {
+            mean,
+            pass_index,
+            pad
+        });
+        crate::vk::spirv::check_block(
+            shaders::SAT_COMP,
+            "Push",
+            &host,
+            std::mem::size_of::<SatPush>(),
+            false,
+        )
+        .unwrap();
     }
 }

@@ -128,3 +128,30 @@ impl EaPass {
         Ok(super::steps_for(info.half_extent, info.ref_step, opts.sample_distance) as u32)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn params_match_the_shaders_block() {
+        let host = crate::host_layout!(Params {
+            cam_pos,
+            cam_forward,
+            cam_right,
+            cam_up,
+            box_half,
+            background,
+            march,
+            size,
+        });
+        crate::vk::spirv::check_block(
+            shaders::EA_COMP,
+            "Params",
+            &host,
+            std::mem::size_of::<Params>(),
+            true,
+        )
+        .unwrap();
+    }
+}

@@ -132,3 +132,25 @@ impl GradientVolume {
         &self.image
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn push_matches_the_shaders_block() {
+        let host = crate::host_layout!(Push {
+            axis,
+            sigma,
+            radius
+        });
+        crate::vk::spirv::check_block(
+            shaders::GRADIENT_COMP,
+            "Push",
+            &host,
+            std::mem::size_of::<Push>(),
+            false,
+        )
+        .unwrap();
+    }
+}

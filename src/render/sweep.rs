@@ -1358,3 +1358,88 @@ fn diffusion(radius: f32, cell: f32) -> (f32, u32) {
     let stride = (w_stride2 / 0.2).sqrt().ceil().max(1.0);
     (w_stride2 / (stride * stride), stride as u32)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::vk::spirv::check_block;
+
+    /// The std140 and push-constant mirrors against the blocks glslang laid out.
+    #[test]
+    fn host_structs_match_the_shaders_blocks() {
+        let params = crate::host_layout!(SweepParams {
+            view_to_tex,
+            view_to_world,
+            camera,
+            planes,
+            light_dir,
+            light_colour,
+            volume_dims,
+            specular,
+            clip,
+            background,
+            refraction,
+            light_grid,
+            transport,
+            light_rays,
+        });
+        let size = std::mem::size_of::<SweepParams>();
+        for spirv in [
+            shaders::SWEEP_FRAG,
+            shaders::SWEEP_SETUP_COMP,
+            shaders::SWEEP_COMPOSITE_COMP,
+            shaders::SWEEP_VIEW_FORWARD_FRAG,
+        ] {
+            check_block(spirv, "SweepParams", &params, size, true).unwrap();
+        }
+        let env = crate::host_layout!(EnvParams { info, mean });
+        let size = std::mem::size_of::<EnvParams>();
+        check_block(shaders::SWEEP_COMPOSITE_COMP, "EnvParams", &env, size, true).unwrap();
+        let push = crate::host_layout!(PlanePush {
+            plane,
+            read_layer,
+            depth,
+            pad
+        });
+        let size = std::mem::size_of::<PlanePush>();
+        for spirv in [
+            shaders::SWEEP_FRAG,
+            shaders::SWEEP_LIGHT_FORWARD_FRAG,
+            shaders::SWEEP_VIEW_FORWARD_FRAG,
+            shaders::LIGHT_SPLAT_VERT,
+        ] {
+            check_block(spirv, "Push", &push, size, false).unwrap();
+        }
+    }
+
+    /// The check fails when a host field is missing or moved (it can fail).
+    #[test]
+    fn a_moved_field_fails_the_block_check() {
+        let mut params = crate::host_layout!(SweepParams {
+            view_to_tex,
+            view_to_world,
+            camera,
+            planes,
+            light_dir,
+            light_colour,
+            volume_dims,
+            specular,
+            clip,
+            background,
+            refraction,
+            light_grid,
+            transport,
+            light_rays,
+        });
+        let size = std::mem::size_of::<SweepParams>();
+        params.swap(2, 3);
+        params[2].0 = "camera";
+        params[3].0 = "planes";
+        params[2].1 += 16;
+        let e = check_block(shaders::SWEEP_FRAG, "SweepParams", &params, size, true);
+        assert!(e.unwrap_err().to_string().contains("'camera'"));
+        params.pop();
+        let e = check_block(shaders::SWEEP_FRAG, "SweepParams", &params, size, true);
+        assert!(e.unwrap_err().to_string().contains("light_rays"));
+    }
+}

@@ -123,3 +123,26 @@ impl ToneMapPass {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn push_matches_the_shaders_block() {
+        let host = crate::host_layout!(Push {
+            scale,
+            op,
+            encode_srgb,
+            pad
+        });
+        crate::vk::spirv::check_block(
+            shaders::TONEMAP_FRAG,
+            "Push",
+            &host,
+            std::mem::size_of::<Push>(),
+            false,
+        )
+        .unwrap();
+    }
+}

@@ -12,6 +12,7 @@ mod context;
 mod graphics;
 mod pipeline;
 mod resources;
+pub mod spirv;
 mod swapchain;
 
 pub use ash::vk::Format;
