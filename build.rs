@@ -6,11 +6,15 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+// The limits shared with the shaders, defined once (each becomes a GLSL macro below).
+include!("src/render/limits.rs");
+
 fn main() {
     let manifest = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").unwrap());
     let glsl_dir = manifest.join("glsl");
     let out_dir = PathBuf::from(std::env::var("OUT_DIR").unwrap());
     println!("cargo:rerun-if-changed=glsl");
+    println!("cargo:rerun-if-changed=src/render/limits.rs");
     git_commit(&manifest);
 
     let mut entries: Vec<PathBuf> = std::fs::read_dir(&glsl_dir)
@@ -49,6 +53,8 @@ fn main() {
         options.set_optimization_level(shaderc::OptimizationLevel::Performance);
         options.set_generate_debug_info();
         options.set_warnings_as_errors();
+        // A float literal GLSL reads back exactly (`{:?}` prints the shortest round trip).
+        options.add_macro_definition("MIN_FORWARD", Some(&format!("{MIN_FORWARD:?}")));
         let include_root = glsl_dir.clone();
         options.set_include_callback(move |requested, _ty, requester, _depth| {
             let full = include_root.join(requested);

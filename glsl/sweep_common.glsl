@@ -37,7 +37,10 @@ layout(set = 0, binding = 3) uniform sampler2DArray preint;   // preintegration 
 
 // Light and viewing rays cannot turn by more than ~84 degrees from the sweep direction:
 // they must reach the next plane (thesis ch. 7). Directions are bent no further.
-const float MIN_FORWARD = 0.1;
+// MIN_FORWARD (that cosine) is a macro build.rs defines from src/render/limits.rs.
+#ifndef MIN_FORWARD
+#error "MIN_FORWARD comes from build.rs (src/render/limits.rs)"
+#endif
 
 vec3 plane_point(vec2 uv, float depth) {
     vec2 ndc = uv * 2.0 - 1.0;

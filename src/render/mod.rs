@@ -4,6 +4,8 @@
 
 mod ea;
 pub mod gradient;
+/// Limits shared with the shaders (build.rs defines each as a GLSL macro).
+pub mod limits;
 pub mod preintegration;
 pub mod sweep;
 mod tonemap;

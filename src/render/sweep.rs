@@ -181,9 +181,7 @@ impl LightTransport {
 /// measured), at 16 it is uniform (0.000 %).
 pub const MAX_SPLAT_HALF_WIDTH: f32 = 16.0;
 
-/// Light and viewing rays may deviate at most this much (cosine) from the sweep direction;
-/// see MIN_FORWARD in glsl/sweep_common.glsl.
-pub const MIN_FORWARD: f32 = 0.1;
+pub use super::limits::MIN_FORWARD;
 
 /// Largest refractive-index scale ([`SweepOptions::eta_scale`]).
 pub const MAX_ETA_SCALE: f32 = 3.0;
