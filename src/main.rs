@@ -1,4 +1,6 @@
-//! `refrakt` command line: `info` and `render`.
+//! `refrakt` command line: `info` (devices), `render` (one frame to an image, with GPU
+//! timings), `view` (the interactive viewer), `photons` (the CPU photon tracer's reference),
+//! `generate` (write a stand-in volume) and `bench` (the timing tables).
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;

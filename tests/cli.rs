@@ -61,16 +61,26 @@ fn render_writes_png_and_exr_with_timings() {
         ]);
         let out = String::from_utf8_lossy(&o.stdout);
         assert!(o.status.success(), "{}", stderr(&o));
+        // Each pass on a line of its own, its name followed by its time ("sweep" is not
+        // satisfied by "sweep setup").
         for pass in [
+            "gradient volume",
             "environment SAT",
-            "sweep setup",
-            "sweep ",
-            "composite",
             "preintegration",
-            "planes",
-            "per plane",
+            "sweep setup",
+            "sweep",
+            "composite",
         ] {
-            assert!(out.contains(pass), "no '{pass}' in:\n{out}");
+            let timed = out.lines().any(|l| {
+                l.trim_start().strip_prefix(pass).is_some_and(|rest| {
+                    rest.starts_with(' ')
+                        && rest.trim_start().starts_with(|c: char| c.is_ascii_digit())
+                })
+            });
+            assert!(timed, "no timed '{pass}' line in:\n{out}");
+        }
+        for needle in [" planes, spacing ", " ms per plane"] {
+            assert!(out.contains(needle), "no '{needle}' in:\n{out}");
         }
         assert!(out.contains(p), "output path not printed:\n{out}");
         let img = image_size(&path);
@@ -337,6 +347,18 @@ fn bad_sweep_options_are_clear_errors() {
     assert_clean_failure(
         &["render", "--reflections", "maybe", "-o", "x.png"],
         "--reflections: \"maybe\" is neither on nor off",
+    );
+    // The sweep has no per-step sampling: the flag is refused there, not ignored.
+    assert_clean_failure(
+        &[
+            "render",
+            "--no-preintegration",
+            "--volume-size",
+            "16",
+            "-o",
+            "x.png",
+        ],
+        "option of the EA model",
     );
 }
 

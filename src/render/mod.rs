@@ -481,6 +481,14 @@ impl Renderer {
             );
         }
         if model == Model::Refract {
+            // The sweep composites every segment from the preintegration table (thesis
+            // sect. 4.3); sampling the transfer functions per step is the EA model's option.
+            ensure!(
+                opts.preintegrated,
+                "sampling the transfer functions per step (no preintegration) is an option of \
+                 the EA model (--model ea); the refractive sweep always integrates its \
+                 segments with the preintegration table"
+            );
             sweep::check(self.volume_info, camera, opts, &opts.sweep)?;
         }
         Ok(())
