@@ -145,7 +145,7 @@ fn bad_environment_files_are_clear_errors() {
 }
 
 mod composite {
-    use super::common::with_context;
+    use super::common::{face_on, with_context};
     use glam::Vec3;
     use refrakt::environment::EnvironmentMap;
     use refrakt::render::{Camera, Model, RenderOptions, Renderer, SweepOptions};
@@ -168,16 +168,6 @@ mod composite {
         vol
     }
 
-    fn face_on() -> Camera {
-        Camera {
-            azimuth: 0.0,
-            elevation: 0.0,
-            distance: 2.5,
-            fov_y: 20.0,
-            ..Default::default()
-        }
-    }
-
     #[test]
     fn constant_map_behind_empty_and_tinted_volumes() {
         with_context(|ctx| {
@@ -193,7 +183,9 @@ mod composite {
                 height: 16,
                 ..Default::default()
             };
-            let f = r.render(Model::Refract, &face_on(), &opts).unwrap();
+            let f = r
+                .render(Model::Refract, &face_on(2.5, 20.0), &opts)
+                .unwrap();
             for p in &f.pixels {
                 for k in 0..3 {
                     assert!((p[k] - colour[k]).abs() < 1e-6, "{p:?}");
@@ -238,7 +230,9 @@ mod composite {
                 },
                 ..Default::default()
             };
-            let f = r.render(Model::Refract, &face_on(), &opts).unwrap();
+            let f = r
+                .render(Model::Refract, &face_on(2.5, 20.0), &opts)
+                .unwrap();
             let p = f.pixel(12, 8);
             for k in 0..3 {
                 let expected = colour[k] * m[k].powf(8.0);

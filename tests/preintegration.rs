@@ -398,18 +398,62 @@ fn bad_transfer_function_files_name_the_file_and_entry() {
 fn presets_render() {
     with_context(|ctx| {
         let vol = procedural::shell(24, 1).unwrap();
+        // The volume's values as the transfer functions see them (in [0, 1]).
+        let values: Vec<f32> = match &vol.voxels {
+            Voxels::U8(v) => v.iter().map(|&x| x as f32 / 255.0).collect(),
+            Voxels::U16(v) => v.iter().map(|&x| x as f32 / 65535.0).collect(),
+            Voxels::F32(v) => {
+                let (lo, hi) = vol.range.unwrap_or((0.0, 1.0));
+                v.iter().map(|&x| (x - lo) / (hi - lo)).collect()
+            }
+        };
+        let lo = values.iter().cloned().fold(f32::MAX, f32::min);
+        let hi = values.iter().cloned().fold(f32::MIN, f32::max);
+        let opts = RenderOptions {
+            width: 16,
+            height: 16,
+            ..Default::default()
+        };
+        let empty = TransferFunctions {
+            opacity: refrakt::transfer::Piecewise::new(vec![(0.0, [0.0])]),
+            ..TransferFunctions::load("supernova").unwrap()
+        };
+        let background = render(ctx, &vol, &empty, &Default::default(), &opts);
         for (name, _) in refrakt::transfer::PRESETS {
             let tf = TransferFunctions::load(name).unwrap();
-            let opts = RenderOptions {
-                width: 16,
-                height: 16,
-                ..Default::default()
-            };
             let f = render(ctx, &vol, &tf, &Default::default(), &opts);
             assert!(
                 f.pixels.iter().all(|p| p.iter().all(|c| c.is_finite())),
                 "{name}"
             );
+            // Visible matter where the preset gives the shell's values opacity or a medium
+            // colour, nothing where it gives neither (over the whole range trilinear
+            // interpolation reaches, densely: a narrow peak between two voxel values shows).
+            let range = (0..=1000).map(|i| lo + (hi - lo) * i as f32 / 1000.0);
+            let opaque = range
+                .clone()
+                .map(|s| tf.opacity.eval(s)[0])
+                .fold(0.0f32, f32::max);
+            let filtered = range
+                .map(|s| tf.medium.eval(s).into_iter().fold(1.0f32, f32::min))
+                .fold(1.0f32, f32::min);
+            let diff = f
+                .pixels
+                .iter()
+                .zip(&background.pixels)
+                .flat_map(|(a, b)| a.iter().zip(b).map(|(x, y)| (x - y).abs()))
+                .fold(0.0f32, f32::max);
+            if opaque > 0.05 || filtered < 0.95 {
+                assert!(
+                    diff > 1e-3,
+                    "{name}: opacity up to {opaque}, medium down to {filtered}, yet nothing shows"
+                );
+            } else if opaque == 0.0 && filtered == 1.0 {
+                assert!(
+                    diff < 1e-6,
+                    "{name}: no matter, yet the image differs by {diff}"
+                );
+            }
         }
     });
 }

@@ -7,7 +7,7 @@ mod common;
 
 use common::*;
 use glam::Vec3;
-use refrakt::render::{Camera, Light, Model, RenderOptions, Renderer, StateBuffer, SweepOptions};
+use refrakt::render::{Light, Model, RenderOptions, Renderer, StateBuffer, SweepOptions};
 use refrakt::transfer::{Piecewise, TransferFunctions};
 use refrakt::volume::{Volume, Voxels};
 
@@ -131,13 +131,7 @@ fn measure(ctx: &refrakt::vk::Context, slab: &Slab, n: u32, ramp: f32) -> Errors
     };
     // Narrow field of view from afar: rays nearly parallel, all crossing both faces inside
     // the volume.
-    let cam = Camera {
-        azimuth: 0.0,
-        elevation: 0.0,
-        distance: 4.0,
-        fov_y: 8.0,
-        ..Default::default()
-    };
+    let cam = face_on(4.0, 8.0);
     let (w, h) = (32u32, 32u32);
     let (eye, fwd, right, up) = cam.frame();
     let sd = 0.5;
