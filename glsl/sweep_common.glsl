@@ -13,9 +13,9 @@ layout(set = 0, binding = 0) uniform SweepParams {
     vec4 planes;         // x = depth of plane 0, y = spacing ds, z = plane count, w = reference step
     vec4 light_dir;      // xyz = direction light travels (view space, unit), w = softness
                          //   (filter radius per plane, in reference steps)
-    vec4 light_colour;   // rgb, w = bound on the intensity gain per plane
-    vec4 volume_dims;    // xyz = voxels per axis, w = 1 when unlit (diagnostic: i_d = 1, i_s = 0)
-    vec4 specular;       // x = roughness, y = specular strength, z = termination opacity
+    vec4 light_colour;   // rgb, w unused
+    vec4 volume_dims;    // xyz = voxels per axis, w unused
+    vec4 specular;       // x = roughness, y = specular strength, zw unused
     vec4 clip;           // xyz = world normal, w = offset: opacity is zero where dot(n, p) > w;
                          // a zero normal disables clipping
     vec4 background;     // linear RGBA behind the volume
@@ -29,6 +29,10 @@ layout(set = 0, binding = 0) uniform SweepParams {
                          //   w = largest splat half-width in pixels
     vec4 light_rays;     // forward transport: x, y = the rays' grid (columns, rows); z, w =
                          //   the ray images' size (ray r lives at texel (r % z, r / z))
+    float max_gain;      // bound on the backward step's intensity gain per plane
+    float termination_alpha;  // a viewing ray stops compositing at this opacity
+    uint unlit;          // 1: diagnostic, i_d = 1 and no highlights
+    uint pad0;
 } P;
 
 layout(set = 0, binding = 1) uniform sampler3D volume;

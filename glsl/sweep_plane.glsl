@@ -296,11 +296,11 @@ void main() {
     float s_prev = length(cross(dFdxFine(lp), dFdyFine(lp)));
     float gain = s_prev / s_here;
     // Chapter 7's bright spots: neighbours with very different directions give huge
-    // footprints. Bound the gain per plane (P.light_colour.w) and never let NaN/Inf through.
+    // footprints. Bound the gain per plane (P.max_gain) and never let NaN/Inf through.
     if (!(gain >= 0.0) || isinf(gain)) gain = 1.0;
-    if (gain > P.light_colour.w) {
+    if (gain > P.max_gain) {
         count_clamp(3u);
-        gain = P.light_colour.w;
+        gain = P.max_gain;
     }
 
     float f_p, f_lp;
@@ -340,7 +340,7 @@ void main() {
     // The surface normal at this plane's point (the smoothed gradient volume): the face's
     // for the segment ending here, and the probing direction of the step starting here.
     vec3 n_here = surface_gradient(vp);
-    if (A < P.specular.z) {
+    if (A < P.termination_alpha) {
         vec2 uv_v = project(vp);
         vec3 c; float a; vec3 m;
         segment(vp4.w, f_v, seg_len / ref_step, clipped(vp), c, a, m);
@@ -364,7 +364,7 @@ void main() {
         vec3 ldir = normalize(READ_BUFFER(light_direction, R, uv_v).xyz);
 #endif
         vec3 i_s = vec3(0.0);
-        bool unlit = P.volume_dims.w > 0.5;
+        bool unlit = P.unlit != 0u;
         chain_code = 0.0;
         if (unlit) {
             i_d = vec3(1.0);

@@ -331,6 +331,10 @@ struct SweepParams {
     light_grid: [f32; 4],
     transport: [f32; 4],
     light_rays: [f32; 4],
+    max_gain: f32,
+    termination_alpha: f32,
+    unlit: u32,
+    pad0: u32,
 }
 
 /// std140 mirror of `EnvParams` in glsl/sweep_composite.comp.
@@ -1043,15 +1047,15 @@ impl SweepPass {
                 sweep.light.colour[0],
                 sweep.light.colour[1],
                 sweep.light.colour[2],
-                sweep.max_gain,
+                0.0,
             ],
             volume_dims: [
                 volume_dims[0] as f32,
                 volume_dims[1] as f32,
                 volume_dims[2] as f32,
-                if sweep.unlit { 1.0 } else { 0.0 },
+                0.0,
             ],
-            specular: [sweep.roughness, sweep.specular, opts.termination_alpha, 0.0],
+            specular: [sweep.roughness, sweep.specular, 0.0, 0.0],
             clip: [clip_n.x, clip_n.y, clip_n.z, clip_o],
             background: opts.background,
             refraction: [
@@ -1073,6 +1077,10 @@ impl SweepPass {
                 diffusion_stride as f32,
                 forward.map_or(MAX_SPLAT_HALF_WIDTH, |f| f.max_half_width),
             ],
+            max_gain: sweep.max_gain,
+            termination_alpha: opts.termination_alpha,
+            unlit: sweep.unlit as u32,
+            pad0: 0,
         };
         let e = EnvParams {
             info: [
@@ -1380,6 +1388,10 @@ mod tests {
             light_grid,
             transport,
             light_rays,
+            max_gain,
+            termination_alpha,
+            unlit,
+            pad0,
         });
         let size = std::mem::size_of::<SweepParams>();
         for spirv in [
@@ -1428,6 +1440,10 @@ mod tests {
             light_grid,
             transport,
             light_rays,
+            max_gain,
+            termination_alpha,
+            unlit,
+            pad0,
         });
         let size = std::mem::size_of::<SweepParams>();
         params.swap(2, 3);
@@ -1436,7 +1452,7 @@ mod tests {
         params[2].1 += 16;
         let e = check_block(shaders::SWEEP_FRAG, "SweepParams", &params, size, true);
         assert!(e.unwrap_err().to_string().contains("'camera'"));
-        params.pop();
+        params.retain(|(name, _, _)| *name != "light_rays");
         let e = check_block(shaders::SWEEP_FRAG, "SweepParams", &params, size, true);
         assert!(e.unwrap_err().to_string().contains("light_rays"));
     }
