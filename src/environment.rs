@@ -1,6 +1,6 @@
-//! Environment maps behind the volume (thesis sect. 4.4, 5.3): equirectangular images and
-//! their summed-area table on the GPU, so the composite can average the map over the
-//! footprint of a pixel's refracted rays.
+//! Environment maps behind the volume (thesis sect. 4.4, 5.3): equirectangular images, and
+//! the host side of their summed-area table (built on the GPU by `render::sat`), so the
+//! composite can average the map over the footprint of a pixel's refracted rays.
 //!
 //! Coordinates: column x covers longitude φ = 2π (x + 0.5) / width − π (−π at the left
 //! edge, the seam at ±π), row y covers latitude θ = π/2 − π (y + 0.5) / height (+π/2, the
@@ -10,12 +10,6 @@
 use std::path::Path;
 
 use anyhow::{bail, ensure, Context as _, Result};
-use bytemuck::{Pod, Zeroable};
-
-use crate::shaders;
-use crate::vk::{
-    self, Access, Binding, ComputePipeline, Context, DescriptorSet, Image, ImageDesc, ImageKind,
-};
 
 /// An equirectangular map in linear RGB (alpha 1), row-major, top row (zenith) first.
 #[derive(Clone, Debug, PartialEq)]
@@ -211,23 +205,6 @@ impl EnvironmentMap {
         }
         acc.map(|a| (a / self.pixels.len() as f64) as f32)
     }
-
-    /// Upload as an RGBA32F 2D image (for sampling and for building the SAT).
-    pub fn upload(&self, ctx: &Context) -> Result<Image> {
-        let image = Image::new(
-            ctx,
-            ImageDesc {
-                kind: ImageKind::D2,
-                format: vk::Format::R32G32B32A32_SFLOAT,
-                extent: [self.width, self.height, 1],
-                layers: 1,
-                usage: vk::usage::SAMPLED | vk::usage::STORAGE | vk::usage::TRANSFER_DST,
-            },
-            "environment map",
-        )?;
-        ctx.upload_image(&image, 0, bytemuck::cast_slice(&self.pixels))?;
-        Ok(image)
-    }
 }
 
 fn srgb_to_linear(c: f32) -> f32 {
@@ -254,106 +231,6 @@ pub fn direction(phi: f32, theta: f32) -> [f32; 3] {
         theta.sin(),
         -theta.cos() * phi.cos(),
     ]
-}
-
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable)]
-struct SatPush {
-    mean: [f32; 4],
-    pass_index: u32,
-    pad: [u32; 3],
-}
-
-/// The summed-area table of a map on the GPU (`glsl/sat.comp`): RGBA32F, the same size as
-/// the map, S(x, y) = Σ over [0, x] × [0, y] of (map − mean). Box averages are then
-/// (corner combination) / area + mean.
-pub struct SummedAreaTable {
-    pub table: Image,
-    pub mean: [f32; 4],
-    pub width: u32,
-    pub height: u32,
-}
-
-impl SummedAreaTable {
-    /// Build from a map already uploaded with [`EnvironmentMap::upload`].
-    pub fn build(
-        ctx: &Context,
-        map: &EnvironmentMap,
-        map_image: &Image,
-    ) -> Result<(Self, vk::Timings)> {
-        let table = Image::new(
-            ctx,
-            ImageDesc {
-                kind: ImageKind::D2,
-                format: vk::Format::R32G32B32A32_SFLOAT,
-                extent: [map.width, map.height, 1],
-                layers: 1,
-                usage: vk::usage::SAMPLED | vk::usage::STORAGE | vk::usage::TRANSFER_SRC,
-            },
-            "environment SAT",
-        )?;
-        let set = DescriptorSet::new(
-            ctx,
-            &[
-                Binding::StorageImage(map_image),
-                Binding::StorageImage(&table),
-            ],
-            "environment SAT",
-        )?;
-        let pipeline = ComputePipeline::new(
-            ctx,
-            shaders::SAT_COMP,
-            &set,
-            std::mem::size_of::<SatPush>() as u32,
-            "environment SAT",
-        )?;
-        let mean = map.mean();
-        let timings = ctx.execute(|rec| {
-            rec.begin_scope("environment SAT");
-            rec.transition_all(map_image, Access::ComputeStorage);
-            rec.transition_all(&table, Access::ComputeStorage);
-            // Rows (one invocation per row), then columns reading what the rows wrote.
-            for (pass, lines) in [(0u32, map.height), (1, map.width)] {
-                if pass == 1 {
-                    rec.transition_all(&table, Access::ComputeStorage);
-                }
-                let push = SatPush {
-                    mean,
-                    pass_index: pass,
-                    pad: [0; 3],
-                };
-                rec.dispatch(
-                    &pipeline,
-                    &set,
-                    bytemuck::bytes_of(&push),
-                    [lines.div_ceil(64), 1, 1],
-                )?;
-            }
-            rec.transition_all(&table, Access::Sampled);
-            rec.end_scope();
-            Ok(())
-        })?;
-        Ok((
-            Self {
-                table,
-                mean,
-                width: map.width,
-                height: map.height,
-            },
-            timings,
-        ))
-    }
-
-    /// Read the table back.
-    pub fn read(&self, ctx: &Context) -> Result<SatReadback> {
-        let bytes = ctx.read_image(&self.table, 0)?;
-        Ok(SatReadback {
-            table: bytemuck::cast_slice(&bytes).to_vec(),
-            width: self.width,
-            height: self.height,
-            mean: self.mean,
-        })
-    }
 }
 
 /// A summed-area table read back to the host (tests, diagnostics).
@@ -392,27 +269,5 @@ impl SatReadback {
             )
         };
         std::array::from_fn(|i| total[i] / area + self.mean[i] as f64)
-    }
-}
-
-#[cfg(test)]
-mod layout_tests {
-    use super::*;
-
-    #[test]
-    fn sat_push_matches_the_shaders_block() {
-        let host = crate::host_layout!(SatPush {
-            mean,
-            pass_index,
-            pad
-        });
-        crate::vk::spirv::check_block(
-            shaders::SAT_COMP,
-            "Push",
-            &host,
-            std::mem::size_of::<SatPush>(),
-            false,
-        )
-        .unwrap();
     }
 }

@@ -14,8 +14,6 @@ use std::path::Path;
 use anyhow::{anyhow, bail, Context as _, Result};
 use serde::Deserialize;
 
-use crate::vk::{self, Context, Image, ImageDesc, ImageKind};
-
 /// Samples per transfer function on the GPU. Fine enough that linear interpolation between
 /// samples is within 1e-4 of the piecewise-linear function for slopes up to ~100 per unit s
 /// away from control points.
@@ -253,31 +251,6 @@ impl TransferFunctions {
             + self.opacity.points.len()
             + self.medium.points.len()
             + self.eta.points.len()
-    }
-
-    /// Upload into a new 1D-array image (2 layers of RGBA32F).
-    pub fn upload(&self, ctx: &Context) -> Result<Image> {
-        let image = Image::new(
-            ctx,
-            ImageDesc {
-                kind: ImageKind::D1Array,
-                format: vk::Format::R32G32B32A32_SFLOAT,
-                extent: [TF_SAMPLES, 1, 1],
-                layers: 2,
-                usage: vk::usage::SAMPLED | vk::usage::TRANSFER_DST | vk::usage::TRANSFER_SRC,
-            },
-            "transfer functions",
-        )?;
-        self.write_to(ctx, &image)?;
-        Ok(image)
-    }
-
-    /// Overwrite an existing TF image.
-    pub fn write_to(&self, ctx: &Context, image: &Image) -> Result<()> {
-        let (l0, l1) = self.texels();
-        ctx.upload_image(image, 0, bytemuck::cast_slice(&l0))?;
-        ctx.upload_image(image, 1, bytemuck::cast_slice(&l1))?;
-        Ok(())
     }
 }
 

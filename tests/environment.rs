@@ -3,7 +3,8 @@
 mod common;
 
 use common::with_context;
-use refrakt::environment::{EnvironmentMap, SummedAreaTable};
+use refrakt::environment::EnvironmentMap;
+use refrakt::render::SummedAreaTable;
 
 /// A 2048 x 1024 HDR map: the procedural sky and ground, a 1e5-bright sun disc and
 /// deterministic noise, the kind of data that breaks a plain f32 prefix sum.
@@ -53,7 +54,7 @@ fn cpu_average(m: &EnvironmentMap, x0: u32, x1: u32, y0: u32, y1: u32) -> [f64; 
 fn sat_box_averages_match_double_precision() {
     with_context(|ctx| {
         let m = hdr_map();
-        let img = m.upload(ctx).unwrap();
+        let img = refrakt::render::upload::environment_texture(ctx, &m).unwrap();
         let (sat, timings) = SummedAreaTable::build(ctx, &m, &img).unwrap();
         println!(
             "SAT build of 2048x1024: {:?} ms",

@@ -29,7 +29,7 @@ fn volume_upload_round_trip_is_byte_exact() {
         for voxels in [Voxels::U8(u8s), Voxels::U16(u16s), Voxels::F32(f32s)] {
             let mut v = Volume::new(dims, [1.0, 2.0, 0.5], voxels.clone()).unwrap();
             v.range = Some((0.0, 1.0));
-            let tex = v.upload(ctx).unwrap();
+            let tex = refrakt::render::upload::volume_texture(ctx, &v).unwrap();
             let back = ctx.read_image(&tex, 0).unwrap();
             let expected: Vec<u8> = match &voxels {
                 Voxels::U8(x) => x.clone(),

@@ -7,18 +7,21 @@ pub mod gradient;
 /// Limits shared with the shaders (build.rs defines each as a GLSL macro).
 pub mod limits;
 pub mod preintegration;
+pub mod sat;
 pub mod sweep;
 mod tonemap;
+pub mod upload;
 
 use anyhow::{bail, ensure, Result};
 use glam::Vec3;
 
-use crate::environment::{EnvironmentMap, SummedAreaTable};
+use crate::environment::EnvironmentMap;
 use crate::transfer::TransferFunctions;
 use crate::vk::{
     self, Buffer, Context, Filter, Image, ImageDesc, ImageKind, Recorder, Sampler, Timings,
 };
 use crate::volume::Volume;
+pub use sat::SummedAreaTable;
 
 pub use preintegration::{PreintegrationTable, TABLE_SIZE};
 pub use sweep::{
@@ -269,7 +272,7 @@ impl Environment {
             Some(m) => m.clone(),
             None => EnvironmentMap::constant(2, [0.0; 3])?,
         };
-        let image = map.upload(ctx)?;
+        let image = upload::environment_texture(ctx, &map)?;
         let (sat, timings) = SummedAreaTable::build(ctx, &map, &image)?;
         Ok((
             Self {
@@ -361,8 +364,8 @@ pub(crate) struct VolumeInfo {
 
 impl Renderer {
     pub fn new(ctx: &Context, volume: &Volume, tf: &TransferFunctions) -> Result<Self> {
-        let volume_tex = volume.upload(ctx)?;
-        let tf_image = tf.upload(ctx)?;
+        let volume_tex = upload::volume_texture(ctx, volume)?;
+        let tf_image = upload::transfer_texture(ctx, tf)?;
         let linear = Sampler::new(ctx, Filter::Linear, "linear clamp")?;
         let preint = PreintegrationTable::new(ctx)?;
         let (env, _) = Environment::new(ctx, None)?;
@@ -416,7 +419,7 @@ impl Renderer {
     /// render only if they actually differ.
     pub fn set_transfer_functions(&mut self, tf: &TransferFunctions) -> Result<()> {
         if *tf != self.tf {
-            tf.write_to(&self.ctx, &self.tf_image)?;
+            upload::write_transfer_texture(&self.ctx, tf, &self.tf_image)?;
             self.tf = tf.clone();
             self.tf_dirty = true;
         }

@@ -8,9 +8,7 @@ pub mod formats;
 pub mod procedural;
 pub mod standins;
 
-use anyhow::{bail, ensure, Context as _, Result};
-
-use crate::vk::{self, Context, Image, ImageDesc, ImageKind};
+use anyhow::{bail, ensure, Result};
 
 /// Voxel storage, x fastest, then y, then z.
 #[derive(Clone, Debug, PartialEq)]
@@ -150,14 +148,6 @@ impl Volume {
         self.spacing.iter().fold(f32::INFINITY, |a, &s| a.min(s)) / m
     }
 
-    fn texture_format(&self) -> vk::Format {
-        match self.voxels {
-            Voxels::U8(_) => vk::Format::R8_UNORM,
-            Voxels::U16(_) => vk::Format::R16_UNORM,
-            Voxels::F32(_) => vk::Format::R32_SFLOAT,
-        }
-    }
-
     /// Texel bytes as uploaded (f32 values mapped to [0,1] through `range`).
     pub fn texel_bytes(&self) -> Vec<u8> {
         match &self.voxels {
@@ -174,52 +164,6 @@ impl Volume {
                 bytemuck::cast_slice(&mapped).to_vec()
             }
         }
-    }
-
-    /// Fails, naming the limit, when the device cannot hold this volume as one 3D texture:
-    /// a side beyond maxImageDimension3D, or more texel bytes than its largest
-    /// device-local memory heap (the texture also needs a staging copy of the same size).
-    pub fn check_device_limits(&self, ctx: &Context) -> Result<()> {
-        let info = ctx.info();
-        let heap = info
-            .memory_heaps
-            .iter()
-            .filter(|(_, local)| *local)
-            .map(|(size, _)| *size)
-            .max();
-        formats::check_volume_limits(self, info.limits.max_image_dimension3_d, heap)
-            .with_context(|| format!("device '{}'", info.name))
-    }
-
-    /// Upload into a 3D texture ready for trilinear sampling.
-    pub fn upload(&self, ctx: &Context) -> Result<Image> {
-        self.validate()?;
-        self.check_device_limits(ctx)?;
-        let format = self.texture_format();
-        if !ctx.format_supports(
-            format,
-            vk::FormatFeatureFlags::SAMPLED_IMAGE
-                | vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR,
-        ) {
-            bail!(
-                "device '{}' cannot filter {format:?} textures linearly, needed for {} volumes",
-                ctx.info().name,
-                self.voxels.type_name()
-            );
-        }
-        let image = Image::new(
-            ctx,
-            ImageDesc {
-                kind: ImageKind::D3,
-                format,
-                extent: self.dims,
-                layers: 1,
-                usage: vk::usage::SAMPLED | vk::usage::TRANSFER_DST | vk::usage::TRANSFER_SRC,
-            },
-            "volume",
-        )?;
-        ctx.upload_image(&image, 0, &self.texel_bytes())?;
-        Ok(image)
     }
 }
 
