@@ -15,6 +15,7 @@ pub mod output;
 pub mod photons;
 pub mod render;
 pub mod scene;
+pub mod tone;
 pub mod transfer;
 pub mod viewer;
 pub mod volume;

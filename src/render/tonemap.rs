@@ -1,13 +1,13 @@
 //! The display pass: the renderer's linear HDR frame, tone mapped and sRGB encoded into an
 //! 8-bit colour attachment (a swapchain image in the viewer), with the arithmetic of
-//! [`crate::output::ToneMap`] and [`crate::output::linear_to_srgb`] — what the PNG path does
+//! [`crate::tone::ToneMap`] and [`crate::tone::linear_to_srgb`] — what the PNG path does
 //! on the CPU — in `glsl/tonemap.frag`. `tests/viewer.rs` checks the two agree within 1/255.
 
 use anyhow::{ensure, Result};
 use bytemuck::{Pod, Zeroable};
 
-use crate::output::{ToneMap, ToneOperator};
 use crate::shaders;
+use crate::tone::{ToneMap, ToneOperator};
 use crate::vk::{
     self, Access, Binding, Context, DescriptorSet, Filter, Framebuffer, GraphicsPipeline, Image,
     Recorder, RenderPass, Sampler,
