@@ -10,7 +10,9 @@ pub mod shaders {
 }
 
 pub mod bench;
+pub mod camera;
 pub mod environment;
+pub mod light;
 pub mod output;
 pub mod photons;
 pub mod render;

@@ -217,17 +217,7 @@ pub fn data_dir() -> PathBuf {
         .unwrap_or_else(|| PathBuf::from("refrakt-data"))
 }
 
-/// Light from above, tilted towards the camera so the front-to-back sweep can carry it;
-/// when the camera looks up too steeply for that, a key light from its upper left.
-pub fn default_light(camera: &Camera) -> Vec3 {
-    let (_, forward, right, up) = camera.frame();
-    let above = (Vec3::Y - 0.5 * forward).normalize();
-    if above.dot(-forward) >= 0.3 {
-        above
-    } else {
-        (-forward + 0.6 * up - 0.4 * right).normalize()
-    }
-}
+pub use crate::light::default_light;
 
 /// Every built-in scene name with a one-line description, for `--help` and errors.
 pub fn builtin_names() -> Vec<(String, String)> {

@@ -117,38 +117,15 @@ impl StateBuffer {
 pub const STATE_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 pub const STATE_BYTES_PER_PIXEL: u64 = 16;
 
-/// One directional light (thesis sect. 4.2).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Light {
-    /// World-space direction pointing towards the light (where the light comes from).
-    pub towards: Vec3,
-    /// Linear RGB.
-    pub colour: [f32; 3],
-    /// Size of the elliptical filter applied to the light at every plane, in reference
-    /// steps (smallest voxel sides): 0 = one tap, hard shadows; larger = softer shadows
-    /// and caustics (the light source's apparent size).
-    pub softness: f32,
-}
-
-impl Default for Light {
-    fn default() -> Self {
-        Self {
-            towards: Vec3::new(-0.3, 0.6, 1.0).normalize(),
-            colour: [1.0, 1.0, 1.0],
-            softness: 0.5,
-        }
-    }
-}
+pub use crate::light::Light;
 
 /// How light is carried from plane to plane.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LightTransport {
     /// Light rays advanced forward one by one (each texel of the light state is a ray with
-    /// its own position, direction and flux), their flux splatted onto each plane with a
-    /// normalised tent (glsl/light_splat.*). Conserves flux through focal crossings.
-    /// Experimental: rays that meet an exit surface near the critical angle are totally
-    /// reflected more often than they should be and dropped (1.5-2.5 % of the power behind
-    /// a strong lens, measured; docs/NOTES.md), so it is not the default yet.
+    /// its own position, direction and flux), each ray's flux spread over its cell on every
+    /// plane (glsl/light_splat.*). Conserves flux through focal crossings; the default
+    /// since issue 12 (docs/NOTES.md, "Light transport for caustics").
     Forward,
     /// The thesis' backward (semi-Lagrangian) step with the intensity law (eqs. 4.4–4.8):
     /// one direction per pixel, gain bounded per plane. The default.
