@@ -597,89 +597,78 @@ fn scene_from_args(args: &SceneArgs) -> Result<Scene> {
     if let Some(sp) = &args.spacing {
         s.spacing = Some(parse_floats::<3>("--spacing", sp)?);
     }
+    let mut o = scene::Overrides::default();
     if let Some(f) = &args.flip {
-        s.flip = scene::parse_flip(f).context("--flip")?;
+        o.flip = Some(scene::parse_flip(f).context("--flip")?);
     }
-    if let Some(tf) = &args.tf {
-        s.transfer = TransferSource::Named(tf.clone());
-    }
-    if let Some(m) = args.model {
-        s.model = match m {
-            ModelArg::Ea => Model::Ea,
-            ModelArg::Refract => Model::Refract,
-        };
-    }
+    o.transfer = args.tf.clone().map(TransferSource::Named);
+    o.model = args.model.map(|m| match m {
+        ModelArg::Ea => Model::Ea,
+        ModelArg::Refract => Model::Refract,
+    });
     if args.no_preintegration {
-        s.preintegrated = false;
+        o.preintegrated = Some(false);
     }
-    macro_rules! set {
-        ($field:expr, $arg:expr) => {
-            if let Some(v) = $arg {
-                $field = v;
-            }
-        };
-    }
-    set!(s.width, args.width);
-    set!(s.height, args.height);
-    set!(s.sample_distance, args.sample_distance);
-    set!(s.camera.azimuth, args.azimuth);
-    set!(s.camera.elevation, args.elevation);
-    set!(s.camera.distance, args.distance);
-    set!(s.camera.fov_y, args.fov);
+    o.width = args.width;
+    o.height = args.height;
+    o.sample_distance = args.sample_distance;
+    o.azimuth = args.azimuth;
+    o.elevation = args.elevation;
+    o.distance = args.distance;
+    o.fov = args.fov;
     if let Some(t) = &args.target {
-        s.camera.target = glam::Vec3::from(parse_floats::<3>("--target", t)?);
+        o.target = Some(glam::Vec3::from(parse_floats::<3>("--target", t)?));
     }
-    set!(s.softness, args.softness);
-    set!(s.roughness, args.roughness);
-    set!(s.specular, args.specular);
-    set!(s.eta_scale, args.eta_scale);
-    set!(s.light_rays, args.light_rays);
+    o.softness = args.softness;
+    o.roughness = args.roughness;
+    o.specular = args.specular;
+    o.eta_scale = args.eta_scale;
+    o.light_rays = args.light_rays;
     if let Some(t) = &args.light_transport {
-        s.light_transport =
-            refrakt::render::LightTransport::parse(t).context("--light-transport")?;
+        o.light_transport =
+            Some(refrakt::render::LightTransport::parse(t).context("--light-transport")?);
     }
     if let Some(r) = &args.reflections {
-        s.reflections = refrakt::scene::parse_on_off(r).context("--reflections")?;
+        o.reflections = Some(refrakt::scene::parse_on_off(r).context("--reflections")?);
     }
-    set!(s.env_rotation, args.env_rotation);
+    o.env_rotation = args.env_rotation;
     if let Some(e) = args.exposure {
         ensure!(
             e.is_finite(),
             "--exposure {e} must be a finite number of stops"
         );
-        s.exposure = e;
+        o.exposure = Some(e);
     }
     if let Some(b) = &args.background {
-        s.background = parse_background(b)?;
+        o.background = Some(parse_background(b)?);
     }
     if let Some(l) = &args.light {
-        s.light_towards = Some(glam::Vec3::from(parse_floats::<3>("--light", l)?));
+        o.light_towards = Some(glam::Vec3::from(parse_floats::<3>("--light", l)?));
     }
     if let Some(c) = &args.light_colour {
-        s.light_colour = parse_floats::<3>("--light-colour", c)?;
+        o.light_colour = Some(parse_floats::<3>("--light-colour", c)?);
     }
     if let Some(c) = &args.clip {
-        s.clip = if c == "none" {
+        o.clip = Some(if c == "none" {
             None
         } else {
             let v = parse_floats::<4>("--clip", c)?;
             Some((glam::Vec3::new(v[0], v[1], v[2]), v[3]))
-        };
+        });
     }
     if let Some(e) = &args.env {
-        s.environment = match e.as_str() {
+        o.environment = Some(match e.as_str() {
             "sky" => EnvSource::Sky,
             "none" => EnvSource::None,
             f => EnvSource::File(PathBuf::from(f)),
-        };
+        });
     }
-    if let Some(t) = args.tonemap {
-        s.tonemap = match t {
-            ToneArg::Aces => output::ToneOperator::Aces,
-            ToneArg::Reinhard => output::ToneOperator::Reinhard,
-            ToneArg::None => output::ToneOperator::None,
-        };
-    }
+    o.tonemap = args.tonemap.map(|t| match t {
+        ToneArg::Aces => output::ToneOperator::Aces,
+        ToneArg::Reinhard => output::ToneOperator::Reinhard,
+        ToneArg::None => output::ToneOperator::None,
+    });
+    s.apply(o);
     Ok(s)
 }
 

@@ -88,6 +88,81 @@ pub struct Scene {
     pub file: Option<PathBuf>,
 }
 
+/// Values that replace a scene's, from a scene file's sections or from the command line:
+/// each front end parses its own syntax (with its own error context) into this, and
+/// [`Scene::apply`] is the one place they are applied (`None` keeps the scene's value).
+#[derive(Clone, Debug, Default)]
+pub struct Overrides {
+    pub transfer: Option<TransferSource>,
+    pub model: Option<Model>,
+    pub width: Option<u32>,
+    pub height: Option<u32>,
+    pub sample_distance: Option<f32>,
+    pub preintegrated: Option<bool>,
+    pub background: Option<[f32; 4]>,
+    pub roughness: Option<f32>,
+    pub specular: Option<f32>,
+    pub eta_scale: Option<f32>,
+    pub light_rays: Option<u32>,
+    pub light_transport: Option<LightTransport>,
+    pub reflections: Option<bool>,
+    /// `Some(None)` removes the scene's clipping plane.
+    pub clip: Option<Option<(Vec3, f32)>>,
+    pub exposure: Option<f32>,
+    pub tonemap: Option<ToneOperator>,
+    pub azimuth: Option<f32>,
+    pub elevation: Option<f32>,
+    pub distance: Option<f32>,
+    pub fov: Option<f32>,
+    pub target: Option<Vec3>,
+    pub light_towards: Option<Vec3>,
+    pub light_colour: Option<[f32; 3]>,
+    pub softness: Option<f32>,
+    pub environment: Option<EnvSource>,
+    pub env_rotation: Option<f32>,
+    pub flip: Option<[bool; 3]>,
+}
+
+impl Scene {
+    /// Replace this scene's values by those `o` gives.
+    pub fn apply(&mut self, o: Overrides) {
+        fn set<T>(field: &mut T, value: Option<T>) {
+            if let Some(v) = value {
+                *field = v;
+            }
+        }
+        set(&mut self.transfer, o.transfer);
+        set(&mut self.model, o.model);
+        set(&mut self.width, o.width);
+        set(&mut self.height, o.height);
+        set(&mut self.sample_distance, o.sample_distance);
+        set(&mut self.preintegrated, o.preintegrated);
+        set(&mut self.background, o.background);
+        set(&mut self.roughness, o.roughness);
+        set(&mut self.specular, o.specular);
+        set(&mut self.eta_scale, o.eta_scale);
+        set(&mut self.light_rays, o.light_rays);
+        set(&mut self.light_transport, o.light_transport);
+        set(&mut self.reflections, o.reflections);
+        set(&mut self.clip, o.clip);
+        set(&mut self.exposure, o.exposure);
+        set(&mut self.tonemap, o.tonemap);
+        set(&mut self.camera.azimuth, o.azimuth);
+        set(&mut self.camera.elevation, o.elevation);
+        set(&mut self.camera.distance, o.distance);
+        set(&mut self.camera.fov_y, o.fov);
+        set(&mut self.camera.target, o.target);
+        if o.light_towards.is_some() {
+            self.light_towards = o.light_towards;
+        }
+        set(&mut self.light_colour, o.light_colour);
+        set(&mut self.softness, o.softness);
+        set(&mut self.environment, o.environment);
+        set(&mut self.env_rotation, o.env_rotation);
+        set(&mut self.flip, o.flip);
+    }
+}
+
 /// A scene with its inputs loaded: what `render` and `view` draw. Built only by
 /// [`Scene::load_all`], the one place both commands get a scene from.
 #[derive(Clone, Debug)]
@@ -788,8 +863,9 @@ impl SceneFile {
         }
         s.spacing = v.spacing;
         s.file = Some(path.to_path_buf());
+        let mut o = Overrides::default();
         if let Some(f) = &v.flip {
-            s.flip = parse_flip(f).context("[volume] flip")?;
+            o.flip = Some(parse_flip(f).context("[volume] flip")?);
         }
         if let Some(n) = self.name {
             s.name = n;
@@ -807,10 +883,10 @@ impl SceneFile {
             if let Some(p) = t.preset {
                 TransferFunctions::load(&p)
                     .map_err(|_| anyhow::anyhow!("[transfer] preset '{p}' does not exist"))?;
-                s.transfer = TransferSource::Named(p);
+                o.transfer = Some(TransferSource::Named(p));
             } else if let Some(f) = t.file {
                 let p = rel(&f)?;
-                s.transfer = TransferSource::Named(p.to_string_lossy().into_owned());
+                o.transfer = Some(TransferSource::Named(p.to_string_lossy().into_owned()));
             } else if inline {
                 let mut table = toml::Table::new();
                 for (k, v) in [
@@ -824,17 +900,18 @@ impl SceneFile {
                     }
                 }
                 let tf = TransferFunctions::parse(&table.to_string(), "[transfer]")?;
-                s.transfer = TransferSource::Inline(Box::new(tf));
+                o.transfer = Some(TransferSource::Inline(Box::new(tf)));
             }
         }
         if let Some(c) = self.camera {
+            let mut target = s.camera.target;
             if let Some(t) = c.target {
-                let target = Vec3::from(t);
+                target = Vec3::from(t);
                 ensure!(
                     target.is_finite(),
                     "[camera] target {t:?} must be finite numbers"
                 );
-                s.camera.target = target;
+                o.target = Some(target);
             }
             if let Some(eye) = c.eye {
                 ensure!(
@@ -844,103 +921,67 @@ impl SceneFile {
                 let eye = Vec3::from(eye);
                 ensure!(eye.is_finite(), "[camera] eye {eye} must be finite numbers");
                 // The camera orbits the target (the origin unless given) and looks at it.
-                let e = eye - s.camera.target;
+                let e = eye - target;
                 let d = e.length();
                 ensure!(
                     d > 0.0 && d.is_finite(),
                     "[camera] eye must differ from target"
                 );
-                s.camera.distance = d;
-                s.camera.elevation = (e.y / d)
-                    .clamp(-1.0, 1.0)
-                    .asin()
-                    .to_degrees()
-                    .clamp(-90.0, 90.0);
-                s.camera.azimuth = e.x.atan2(e.z).to_degrees();
+                o.distance = Some(d);
+                o.elevation = Some(
+                    (e.y / d)
+                        .clamp(-1.0, 1.0)
+                        .asin()
+                        .to_degrees()
+                        .clamp(-90.0, 90.0),
+                );
+                o.azimuth = Some(e.x.atan2(e.z).to_degrees());
             }
-            if let Some(a) = c.azimuth {
-                s.camera.azimuth = a;
-            }
-            if let Some(a) = c.elevation {
-                s.camera.elevation = a;
-            }
-            if let Some(a) = c.distance {
-                s.camera.distance = a;
-            }
-            if let Some(a) = c.fov {
-                s.camera.fov_y = a;
-            }
+            o.azimuth = c.azimuth.or(o.azimuth);
+            o.elevation = c.elevation.or(o.elevation);
+            o.distance = c.distance.or(o.distance);
+            o.fov = c.fov;
         }
         if let Some(l) = self.light {
-            if let Some(t) = l.towards {
-                s.light_towards = Some(Vec3::from(t));
-            }
-            if let Some(c) = l.colour {
-                s.light_colour = c;
-            }
-            if let Some(x) = l.softness {
-                s.softness = x;
-            }
+            o.light_towards = l.towards.map(Vec3::from);
+            o.light_colour = l.colour;
+            o.softness = l.softness;
         }
         if let Some(e) = self.environment {
             if let Some(m) = e.map {
-                s.environment = match m.as_str() {
+                o.environment = Some(match m.as_str() {
                     "sky" => EnvSource::Sky,
                     "none" => EnvSource::None,
                     f => EnvSource::File(rel(f)?),
-                };
+                });
             }
-            if let Some(r) = e.rotation {
-                s.env_rotation = r;
-            }
+            o.env_rotation = e.rotation;
         }
         if let Some(r) = self.render {
             if let Some(m) = r.model {
-                s.model = parse_model(&m).context("[render]")?;
+                o.model = Some(parse_model(&m).context("[render]")?);
             }
-            if let Some(x) = r.width {
-                s.width = x;
-            }
-            if let Some(x) = r.height {
-                s.height = x;
-            }
-            if let Some(x) = r.sample_distance {
-                s.sample_distance = x;
-            }
-            if let Some(x) = r.preintegrated {
-                s.preintegrated = x;
-            }
-            if let Some(x) = r.background {
-                s.background = x;
-            }
-            if let Some(x) = r.roughness {
-                s.roughness = x;
-            }
-            if let Some(x) = r.specular {
-                s.specular = x;
-            }
-            if let Some(x) = r.eta_scale {
-                s.eta_scale = x;
-            }
-            if let Some(n) = r.light_rays {
-                s.light_rays = n;
-            }
+            o.width = r.width;
+            o.height = r.height;
+            o.sample_distance = r.sample_distance;
+            o.preintegrated = r.preintegrated;
+            o.background = r.background;
+            o.roughness = r.roughness;
+            o.specular = r.specular;
+            o.eta_scale = r.eta_scale;
+            o.light_rays = r.light_rays;
             if let Some(t) = &r.light_transport {
-                s.light_transport = LightTransport::parse(t).context("[render] light_transport")?;
+                o.light_transport =
+                    Some(LightTransport::parse(t).context("[render] light_transport")?);
             }
-            if let Some(x) = r.reflections {
-                s.reflections = x;
-            }
-            if let Some(c) = r.clip {
-                s.clip = Some((Vec3::new(c[0], c[1], c[2]), c[3]));
-            }
-            if let Some(x) = r.exposure {
-                s.exposure = x;
-            }
+            o.reflections = r.reflections;
+            o.clip = r.clip.map(|c| Some((Vec3::new(c[0], c[1], c[2]), c[3])));
+            o.exposure = r.exposure;
             if let Some(t) = r.tonemap {
-                s.tonemap = parse_tonemap(&t).context("[render]")?;
+                o.tonemap = Some(parse_tonemap(&t).context("[render]")?);
             }
         }
+        s.apply(o);
         // Everything checkable without the GPU, now, with the scene's name on it.
         s.render_options()?;
         s.tone_map()?;
