@@ -1,0 +1,402 @@
+//! The command line's syntax (clap): every subcommand, flag and its help text.
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+
+#[derive(Parser)]
+#[command(
+    name = "refrakt",
+    version,
+    about = "Vulkan volume renderer with refraction, caustics, soft shadows and tinted media",
+    long_about = "refrakt renders volumes after Magnus & Bruckner, 'Interactive Dynamic Volume \
+Illumination with Refraction and Caustics'. It runs headless on any Vulkan 1.3 device, \
+including Mesa's lavapipe (CPU) when there is no GPU.\n\nSet RUST_LOG=debug for detail; \
+REFRAKT_VALIDATE=1 is the same as --validate."
+)]
+pub struct Cli {
+    #[command(flatten)]
+    pub gpu: GpuArgs,
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Args)]
+pub struct GpuArgs {
+    /// Vulkan device to use: an index from `refrakt info` or part of its name
+    /// (e.g. "llvmpipe"). Default: discrete > integrated > virtual > CPU.
+    #[arg(long, global = true, value_name = "NAME|INDEX")]
+    pub device: Option<String>,
+    /// Enable the Khronos validation layer with synchronization validation; the command
+    /// exits with status 3 if the layer reports any warning or error.
+    #[arg(long, global = true)]
+    pub validate: bool,
+}
+
+#[derive(Subcommand)]
+pub enum Command {
+    /// Show the Vulkan loader, the devices and the limits that matter to refrakt.
+    Info,
+    /// Render a scene to an image (.png = 8-bit sRGB, .exr = linear float) and print the
+    /// GPU time of each pass.
+    Render(Box<RenderArgs>),
+    /// Open a window and render the scene every frame: left-drag orbits, the wheel zooms,
+    /// right-drag or the arrow keys move the light, H prints every key. Takes the same
+    /// scene options as `render`.
+    View(Box<ViewArgs>),
+    /// Reference CPU photon tracer: the irradiance of the scene's light on one plane of
+    /// the sweep (--plane K, as `render --dump light-colour@K`) or at a view depth,
+    /// written as linear EXR; the oracle for the sweep's caustics, shadows and power.
+    Photons(Box<PhotonsArgs>),
+    /// Generate (and cache) thesis stand-ins ahead of time, printing the time each took;
+    /// `render` and `bench` generate missing ones themselves.
+    Generate(GenerateArgs),
+    /// Benchmarks: the thesis' timing tables (6.1, 6.2) on this device, and how the
+    /// sweep's cost scales with planes and pixels. GPU timestamps; see docs/BENCH.md.
+    #[command(subcommand)]
+    Bench(BenchCommand),
+}
+
+#[derive(Subcommand)]
+pub enum BenchCommand {
+    /// One row per data set of Tables 6.1 and 6.2 (stand-ins at the thesis' resolutions
+    /// unless --data-dir holds the originals): 768² viewport, sample distance 1, 100
+    /// frames, the camera orbiting 0.5° per frame; the thesis' figures beside ours.
+    Thesis(ThesisArgs),
+    /// Sweep time against plane count (several sample distances) and against pixel count
+    /// (several viewports), with least-squares fits.
+    Scaling(ScalingArgs),
+}
+
+#[derive(Args)]
+pub struct GenerateArgs {
+    /// Stand-ins to generate (supernova, piggy-bank, glass, hand, head, water, ship,
+    /// kiwi); default: all.
+    #[arg(value_delimiter = ',')]
+    pub names: Vec<String>,
+    /// Fraction of the thesis resolution.
+    #[arg(long, default_value_t = 1.0)]
+    pub scale: f64,
+}
+
+#[derive(Args)]
+pub struct ThesisArgs {
+    /// Shrinks viewport and volume together (e.g. 0.25 on lavapipe, where a full-size
+    /// frame takes tens of seconds). Printed in the table.
+    #[arg(long, default_value_t = 1.0)]
+    pub scale: f64,
+    /// Measured frames per row (the thesis: 100).
+    #[arg(long, default_value_t = 100)]
+    pub frames: u32,
+    /// Warm-up frames per row and variant, excluded from the statistics (reported).
+    #[arg(long, default_value_t = 3)]
+    pub warmup: u32,
+    /// Rows to run, comma-separated (supernova, piggy-bank, glass, hand, head, water, ship,
+    /// kiwi). Default: all.
+    #[arg(long, value_delimiter = ',')]
+    pub rows: Vec<String>,
+    /// Also time the EA ray marcher and the sweep's floor variant (same buffers, trivial
+    /// shader) per row, and print the ratios.
+    #[arg(long)]
+    pub baselines: bool,
+    /// Folder with the thesis originals (<name>.<ext>, e.g. supernova.nrrd) that replace
+    /// the stand-ins. Default: $REFRAKT_DATA_DIR or ~/.cache/refrakt/data.
+    #[arg(long, value_name = "DIR")]
+    pub data_dir: Option<PathBuf>,
+    /// Write every frame time with the full context as CSV.
+    #[arg(long, value_name = "FILE.csv")]
+    pub csv: Option<PathBuf>,
+    /// Write the whole report as JSON (schema in docs/BENCH.md).
+    #[arg(long, value_name = "FILE.json")]
+    pub json: Option<PathBuf>,
+    /// Draw the thesis' mean frame times beside ours as an SVG bar chart.
+    #[arg(long, value_name = "FILE.svg")]
+    pub plot: Option<PathBuf>,
+    /// No progress bar on stderr.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+#[derive(Args)]
+pub struct ScalingArgs {
+    /// Scene to time (any `refrakt render` scene).
+    #[arg(long, default_value = "sphere-on-floor")]
+    pub scene: String,
+    /// Voxels per side for a procedural scene.
+    #[arg(long, default_value_t = 64)]
+    pub volume_size: u32,
+    /// Sample distances for the plane-count series.
+    #[arg(long, value_delimiter = ',', default_value = "0.5,1,2,4")]
+    pub sample_distances: Vec<f32>,
+    /// Viewport sides for the pixel-count series.
+    #[arg(long, value_delimiter = ',', default_value = "64,96,128,192")]
+    pub sides: Vec<u32>,
+    /// Viewport side for the plane-count series.
+    #[arg(long, default_value_t = 128)]
+    pub side: u32,
+    /// Measured frames per point (after one warm-up).
+    #[arg(long, default_value_t = 3)]
+    pub frames: u32,
+    /// Write the report as JSON.
+    #[arg(long, value_name = "FILE.json")]
+    pub json: Option<PathBuf>,
+    /// Folder of fetched data (see `render --data-dir`).
+    #[arg(long, value_name = "DIR")]
+    pub data_dir: Option<PathBuf>,
+    /// No progress bar on stderr.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum ToneArg {
+    Aces,
+    Reinhard,
+    None,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum ModelArg {
+    /// The refractive plane sweep: refraction, caustics, soft shadows, tinted media.
+    Refract,
+    /// Emission-absorption ray marcher (the baseline).
+    Ea,
+}
+
+/// Scene options shared by `render` and `view`.
+#[derive(Args, Clone)]
+pub struct SceneArgs {
+    /// What to render: a built-in scene name (see --list-scenes; default
+    /// sphere-on-floor), a scene file (.toml, see README "Scene files"), or a volume file
+    /// (.raw, .nrrd, .nhdr, .nii, .nii.gz, .mhd, .mha, .vti, or a DICOM directory).
+    /// Flags below override the scene's fields.
+    #[arg(value_name = "SCENE")]
+    pub scene: Option<String>,
+    /// Same as the SCENE argument (kept for scripts).
+    #[arg(long = "scene", value_name = "SCENE", conflicts_with = "scene")]
+    pub scene_flag: Option<String>,
+    /// Folder of fetched data (scripts/fetch-data) and of thesis originals that replace the
+    /// stand-ins (<name>.<ext>, e.g. supernova.nrrd). Default: $REFRAKT_DATA_DIR or
+    /// ~/.cache/refrakt/data.
+    #[arg(long, value_name = "DIR")]
+    pub data_dir: Option<PathBuf>,
+    /// Voxels per side of a procedural scene [scene default: 128].
+    #[arg(long)]
+    pub volume_size: Option<u32>,
+    /// Fraction of a thesis stand-in's resolution (e.g. 0.25) [scene default: 1].
+    #[arg(long)]
+    pub scale: Option<f64>,
+    /// Raw volume files: dimensions "X,Y,Z" (with --type). Files named
+    /// <name>_<X>x<Y>x<Z>_<type>.raw need neither.
+    #[arg(long, value_name = "X,Y,Z")]
+    pub dims: Option<String>,
+    /// Raw volume files: voxel type u8, u16, i16 or f32 (little endian).
+    #[arg(long = "type", value_name = "TYPE")]
+    pub voxel_type: Option<String>,
+    /// Voxel spacing "X,Y,Z" (overrides the file's).
+    #[arg(long, value_name = "X,Y,Z")]
+    pub spacing: Option<String>,
+    /// Mirror the volume along these axes after loading, e.g. "xy" (two axes = a 180°
+    /// turn, keeping handedness), or "none" to undo a scene's flip.
+    #[arg(long, value_name = "AXES")]
+    pub flip: Option<String>,
+    /// Value window "LO,HI" mapped to [0,1] for signed or float data (e.g. CT Hounsfield
+    /// units -1000,2000); default: the data's minimum and maximum. See docs/FORMATS.md.
+    #[arg(long, value_name = "LO,HI", allow_hyphen_values = true)]
+    pub window: Option<String>,
+    /// Transfer functions: a preset (see README) or a TOML file [scene default].
+    #[arg(long, value_name = "PRESET|FILE")]
+    pub tf: Option<String>,
+    /// Rendering model [default: refract].
+    #[arg(long, value_enum)]
+    pub model: Option<ModelArg>,
+    /// Sample the transfer function at each step instead of using the preintegration table.
+    #[arg(long)]
+    pub no_preintegration: bool,
+    /// Image width in pixels [default: 512; thesis stand-ins 768].
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height in pixels [default: 512; thesis stand-ins 768].
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Distance between samples in units of the smallest voxel side (1 = one sample per
+    /// voxel, as in the thesis' chapter 6) [default: 1].
+    #[arg(long, allow_negative_numbers = true)]
+    pub sample_distance: Option<f32>,
+    /// Camera azimuth in degrees around the vertical axis [scene default].
+    #[arg(long, allow_negative_numbers = true)]
+    pub azimuth: Option<f32>,
+    /// Camera elevation in degrees, -90 (looking straight up) to 90 (straight down)
+    /// [scene default].
+    #[arg(long, allow_negative_numbers = true)]
+    pub elevation: Option<f32>,
+    /// Camera distance from the target, the volume centre unless --target (the volume's
+    /// longest side is 1) [scene default].
+    #[arg(long, allow_negative_numbers = true)]
+    pub distance: Option<f32>,
+    /// Vertical field of view in degrees [default: 35].
+    #[arg(long, allow_negative_numbers = true)]
+    pub fov: Option<f32>,
+    /// World-space point "x,y,z" the camera orbits and looks at; --azimuth, --elevation
+    /// and --distance are taken around it [scene default: 0,0,0, the volume centre].
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    pub target: Option<String>,
+    /// Background colour behind the volume, linear "r,g,b" or "r,g,b,a" (seen with
+    /// --env none) [default: 0.08,0.08,0.1,1].
+    #[arg(long, allow_hyphen_values = true)]
+    pub background: Option<String>,
+    /// World-space direction towards the light, "x,y,z" (refract). It must lie in the
+    /// viewer's hemisphere: the sweep runs front to back, so light cannot come from behind
+    /// the volume. Default: from above, tilted towards the camera.
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    pub light: Option<String>,
+    /// Light colour, linear "r,g,b" (refract) [default: 1,1,1].
+    #[arg(long)]
+    pub light_colour: Option<String>,
+    /// Light softness: radius, in voxels, of the elliptical filter applied to the light at
+    /// every plane; 0 = hard shadows and sharp caustics (refract) [default: 0.5].
+    #[arg(long, allow_negative_numbers = true)]
+    pub softness: Option<f32>,
+    /// GGX roughness of the specular highlights (refract) [default: 0.3].
+    #[arg(long, allow_negative_numbers = true)]
+    pub roughness: Option<f32>,
+    /// Specular strength; 0 turns highlights off (refract) [default: 1].
+    #[arg(long, allow_negative_numbers = true)]
+    pub specular: Option<f32>,
+    /// Refractive-index scale k: the sweep uses eta' = 1 + k (eta_tf - 1); 0 turns
+    /// refraction off, 1 is the transfer function's eta (refract) [default: 1].
+    #[arg(long, allow_negative_numbers = true)]
+    pub eta_scale: Option<f32>,
+    /// How light travels from plane to plane (refract): "forward" advances every light
+    /// ray on its own and splats its flux onto each plane, so light is conserved through
+    /// foci and caustics land where geometric optics puts them; "backward" is the thesis'
+    /// semi-Lagrangian step (one direction per pixel, gain bounded per plane), kept for
+    /// comparison [default: forward].
+    #[arg(long, value_name = "forward|backward")]
+    pub light_transport: Option<String>,
+    /// Forward light transport: light rays per screen pixel, 1 to 8 (refract). The rays
+    /// cover the light's whole domain at the nearest plane's pixel pitch as far as this
+    /// budget allows; more resolve oblique light and caustics more finely, at a cost
+    /// proportional to their number [default: 2].
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
+    pub light_rays: Option<u32>,
+    /// Fresnel reflection of viewing rays at changes of η (refract): the reflected part
+    /// sees the environment (or background) in the mirrored direction, not occluded by
+    /// the volume; "off" is the thesis' model, everything transmitted [default: on].
+    #[arg(long, value_name = "on|off")]
+    pub reflections: Option<String>,
+    /// Clipping plane "nx,ny,nz,offset" in world space: opacity is zero where
+    /// n·p > offset, the medium and refraction stay (refract, thesis Fig. 6.6); "none"
+    /// removes a scene's plane.
+    #[arg(long, value_name = "NX,NY,NZ,D|none", allow_hyphen_values = true)]
+    pub clip: Option<String>,
+    /// Environment map behind the volume (refract): an equirectangular .exr or .hdr
+    /// (linear), .png or .jpg (sRGB), twice as wide as high; "sky" for the built-in sky,
+    /// sun and checkered ground; "none" for the flat --background [default: sky].
+    #[arg(long, value_name = "FILE|sky|none")]
+    pub env: Option<String>,
+    /// Rotation of the environment map about the vertical axis, degrees [default: 0].
+    #[arg(long, allow_negative_numbers = true)]
+    pub env_rotation: Option<f32>,
+    /// Exposure in stops applied before tone mapping (PNG output and the window)
+    /// [default: 0].
+    #[arg(long, allow_negative_numbers = true)]
+    pub exposure: Option<f32>,
+    /// Tone mapping for PNG output: aces (filmic), reinhard, or none (clamp). EXR output is
+    /// always the linear HDR image [default: aces].
+    #[arg(long, value_enum)]
+    pub tonemap: Option<ToneArg>,
+}
+
+#[derive(Args)]
+pub struct RenderArgs {
+    /// List the built-in scenes and exit.
+    #[arg(long)]
+    pub list_scenes: bool,
+    /// Output image; the extension picks the format: .png (8-bit sRGB) or .exr (linear).
+    #[arg(short, long, default_value = "refrakt.png")]
+    pub output: PathBuf,
+    /// Write state buffers after given planes as EXR: "BUFFER@PLANE[,...]" with BUFFER one
+    /// of light-colour, light-direction, view-position, view-direction, colour-opacity,
+    /// medium, light-rays, light-ray-directions (refract). With the forward light transport
+    /// light-colour is the plane's irradiance and light-direction its luminance-weighted
+    /// direction sum (weight in alpha); light-rays / light-ray-directions are the rays
+    /// themselves. Files go to --dump-dir as BUFFER-PLANE.exr; each header (and the log)
+    /// gives the plane's view depth and world-space plane n·p = d and the camera.
+    #[arg(long, value_name = "BUFFER@PLANE,...")]
+    pub dump: Option<String>,
+    /// Folder for --dump files (default: the output image's folder).
+    #[arg(long)]
+    pub dump_dir: Option<PathBuf>,
+    /// Also render the EA baseline with the same volume, view, image size and sample
+    /// distance in the same run, and print its GPU time and the ratio to this model's
+    /// (the comparison the thesis' cost discussion needs; compare ratios on lavapipe).
+    #[arg(long)]
+    pub with_baseline: bool,
+    #[command(flatten)]
+    pub scene: SceneArgs,
+}
+
+#[derive(Args)]
+pub struct ViewArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Present without waiting for the display's vertical blank (mailbox or immediate
+    /// presentation where the surface offers one).
+    #[arg(long)]
+    pub no_vsync: bool,
+    /// Render this many frames, then exit (for tests and scripts).
+    #[arg(long, value_name = "N")]
+    pub frames: Option<u64>,
+    /// With --frames: write the last frame as shown (PNG, read back from the window's
+    /// swapchain image) and as linear EXR, to FILE and FILE with the other extension.
+    #[arg(long, value_name = "FILE", requires = "frames")]
+    pub screenshot: Option<PathBuf>,
+    /// Ask for a new window size before frame N, "WxH@N" (for tests and scripts); the
+    /// viewer waits for the window to take it.
+    #[arg(long, value_name = "WxH@N")]
+    pub resize: Option<String>,
+    /// Folder for the screenshots the P key writes.
+    #[arg(long, default_value = ".", value_name = "DIR")]
+    pub screenshot_dir: PathBuf,
+    /// Do not reload the scene when its files (scene file, volume, transfer functions,
+    /// environment map) change on disk (R still reloads).
+    #[arg(long)]
+    pub no_watch: bool,
+}
+
+#[derive(Args)]
+pub struct PhotonsArgs {
+    /// Plane of the sweep (0-based, with the scene's --sample-distance), as in
+    /// `render --dump light-colour@K`.
+    #[arg(
+        long,
+        value_name = "K",
+        required_unless_present = "depth",
+        conflicts_with = "depth"
+    )]
+    pub plane: Option<u32>,
+    /// View depth of the plane instead of a plane number.
+    #[arg(long, value_name = "Z")]
+    pub depth: Option<f32>,
+    /// Output image (.exr only: rgb = irradiance, a = 0, the layout of the dumps).
+    #[arg(short, long, default_value = "photons.exr")]
+    pub output: PathBuf,
+    /// Photons per pixel of the plane (round(sqrt(N)) per axis).
+    #[arg(long, default_value_t = 64)]
+    pub photons_per_pixel: u32,
+    /// RK4 step in voxels.
+    #[arg(long, default_value_t = 0.1)]
+    pub step: f32,
+    /// Jitter photons within their launch cells (stratified) instead of a regular grid.
+    #[arg(long)]
+    pub jitter: bool,
+    /// Seed of the jitter.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Worker threads [default: all cores].
+    #[arg(long)]
+    pub threads: Option<usize>,
+    #[command(flatten)]
+    pub scene: SceneArgs,
+}

@@ -1,0 +1,109 @@
+//! `refrakt generate` and `refrakt bench`: the thesis stand-ins and the timing tables.
+
+use std::process::ExitCode;
+
+use anyhow::{ensure, Context as _, Result};
+
+use refrakt::scene::{self, Scene, VolumeSource};
+use refrakt::vk::{Context, ContextDesc};
+use refrakt::volume::standins;
+
+use super::args::*;
+use super::info::*;
+
+pub fn generate(args: &GenerateArgs) -> Result<ExitCode> {
+    let rows = refrakt::bench::select_rows(&args.names)?;
+    let dir = standins::cache_dir();
+    for d in rows {
+        let dims = standins::scaled_dims(d.dims, args.scale).context("--scale")?;
+        let file = standins::cache_file(&dir, d.name, dims);
+        let t = std::time::Instant::now();
+        let (_, cached) = standins::load_or_generate(d.name, dims, &dir)?;
+        println!(
+            "{:<11} {}x{}x{} {} in {:.2} s: {}",
+            d.name,
+            dims[0],
+            dims[1],
+            dims[2],
+            if cached {
+                "read from cache"
+            } else {
+                "generated"
+            },
+            t.elapsed().as_secs_f64(),
+            file.display()
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+pub fn bench_thesis(desc: &ContextDesc, args: &ThesisArgs) -> Result<ExitCode> {
+    standins::scaled_dims([1, 1, 1], args.scale).context("--scale")?;
+    ensure!(args.frames >= 1, "--frames must be at least 1");
+    refrakt::bench::select_rows(&args.rows).context("--rows")?;
+    if let Some(p) = &args.csv {
+        refrakt::bench::check_output(p, "csv").context("--csv")?;
+    }
+    if let Some(p) = &args.json {
+        refrakt::bench::check_output(p, "json").context("--json")?;
+    }
+    if let Some(p) = &args.plot {
+        refrakt::bench::check_output(p, "svg").context("--plot")?;
+    }
+    let ctx = Context::new(desc)?;
+    let settings = refrakt::bench::ThesisSettings {
+        scale: args.scale,
+        frames: args.frames,
+        warmup: args.warmup,
+        rows: args.rows.clone(),
+        baselines: args.baselines,
+        data_dir: args.data_dir.clone().unwrap_or_else(scene::data_dir),
+        progress: !args.quiet,
+    };
+    let report = refrakt::bench::thesis(&ctx, &settings)?;
+    print!("{}", refrakt::bench::markdown(&report));
+    if let Some(p) = &args.csv {
+        refrakt::bench::write_csv(&report, p)?;
+        println!("\nwrote {}", p.display());
+    }
+    if let Some(p) = &args.json {
+        refrakt::bench::write_json(&report, p)?;
+        println!("wrote {}", p.display());
+    }
+    if let Some(p) = &args.plot {
+        refrakt::bench::plot_svg(&report, p)?;
+        println!("wrote {}", p.display());
+    }
+    finish(ctx)
+}
+
+pub fn bench_scaling(desc: &ContextDesc, args: &ScalingArgs) -> Result<ExitCode> {
+    let mut s = Scene::resolve(&args.scene)?;
+    if let VolumeSource::Procedural { size, .. } = &mut s.volume {
+        *size = args.volume_size;
+    }
+    s.width = args.side;
+    s.height = args.side;
+    s.render_options()?;
+    if let Some(p) = &args.json {
+        refrakt::bench::check_output(p, "json").context("--json")?;
+    }
+    let ctx = Context::new(desc)?;
+    let data_dir = args.data_dir.clone().unwrap_or_else(scene::data_dir);
+    let r = refrakt::bench::scaling(
+        &ctx,
+        &s,
+        &data_dir,
+        &args.sample_distances,
+        &args.sides,
+        args.frames,
+        !args.quiet,
+    )?;
+    print!("{}", refrakt::bench::scaling_markdown(&r));
+    if let Some(p) = &args.json {
+        std::fs::write(p, serde_json::to_string_pretty(&r)? + "\n")
+            .with_context(|| format!("{}: cannot write", p.display()))?;
+        println!("wrote {}", p.display());
+    }
+    finish(ctx)
+}

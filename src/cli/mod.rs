@@ -1,0 +1,10 @@
+//! The command line, split by job: the syntax (`args`), the scene a command draws
+//! (`scene_args`), and one module per subcommand.
+
+pub mod args;
+pub mod bench;
+pub mod info;
+pub mod photons;
+pub mod render;
+pub mod scene_args;
+pub mod view;

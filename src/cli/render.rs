@@ -1,0 +1,215 @@
+//! `refrakt render`: one frame to an image, with the GPU time of every pass, the sweep's
+//! statistics and optional state-buffer dumps.
+
+use std::path::Path;
+use std::process::ExitCode;
+
+use anyhow::{bail, Result};
+
+use refrakt::output;
+use refrakt::render::{Camera, Model, Renderer, StateBuffer};
+use refrakt::scene::LoadedScene;
+use refrakt::vk::{self, Context, ContextDesc};
+
+use super::args::*;
+use super::info::*;
+use super::scene_args::*;
+
+/// GPU time of a frame's rendering passes, without the one-off builds (preintegration
+/// table, environment SAT) that happen only when their inputs change.
+pub fn main_pass_ms(frame: &refrakt::render::Frame) -> f64 {
+    frame.timings.get("render").unwrap_or(0.0)
+}
+
+pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
+    if args.list_scenes {
+        return list_scenes();
+    }
+    // Everything that can be checked without the GPU is checked first, so bad input fails
+    // at once with a clear message.
+    output::format_for(&args.output)?;
+    let dumps = match &args.dump {
+        Some(d) => parse_dumps(d)?,
+        None => Vec::new(),
+    };
+    let dump_dir = match &args.dump_dir {
+        Some(d) => d.clone(),
+        None => args
+            .output
+            .parent()
+            .map(|p| p.to_path_buf())
+            .unwrap_or_default(),
+    };
+    if !dumps.is_empty() && !dump_dir.as_os_str().is_empty() && !dump_dir.is_dir() {
+        bail!(
+            "--dump-dir {}: the folder does not exist",
+            dump_dir.display()
+        );
+    }
+    let LoadedScene {
+        name,
+        volume,
+        tf,
+        env,
+        model,
+        camera,
+        mut opts,
+        tone,
+        ..
+    } = build_scene(&args.scene)?;
+    opts.sweep.dumps = dumps;
+
+    let ctx = Context::new(desc)?;
+    println!(
+        "device: {} ({})",
+        ctx.info().name,
+        vk::device_type_name(ctx.info().device_type)
+    );
+    let mut renderer = Renderer::new(&ctx, &volume, &tf)?;
+    let env_timings = if model == Model::Refract {
+        renderer.set_environment(env.as_ref())?
+    } else {
+        Default::default()
+    };
+    let mut frame = renderer.render(model, &camera, &opts)?;
+    // One-off builds first (the gradient volume once per volume, the environment's SAT
+    // once per map), then the frame's own passes.
+    let mut all = renderer.gradient_timings().clone();
+    all.extend(env_timings);
+    all.extend(std::mem::take(&mut frame.timings));
+    frame.timings = all;
+    output::write(&frame, &args.output, &tone)?;
+    println!(
+        "rendered {}x{} of the {} scene ({}x{}x{}, transfer functions {}), model {}{}, sample distance {}, up to {} steps per ray",
+        opts.width,
+        opts.height,
+        name,
+        volume.dims[0],
+        volume.dims[1],
+        volume.dims[2],
+        tf.name,
+        model.name(),
+        if opts.preintegrated { " (preintegrated)" } else { "" },
+        opts.sample_distance,
+        frame.max_steps
+    );
+    if let refrakt::render::gradient::GradientStatus::TooLarge { needed, budget } =
+        renderer.gradient_status()
+    {
+        println!(
+            "note: the gradient volume would need {} MiB (budget {} MiB, half the device's \
+             largest heap): surface normals computed on the fly instead (3D Sobel, ~1.5° \
+             less accurate at faces of glass; docs/NOTES.md)",
+            needed >> 20,
+            budget >> 20
+        );
+    }
+    if frame.timings.scopes.is_empty() {
+        println!("GPU timings: this device has no timestamp queries");
+    } else {
+        println!("GPU time per pass:");
+        for (name, ms) in frame.timings.scopes.iter().filter(|(n, _)| n != "render") {
+            println!("  {name:<16} {ms:9.3} ms");
+        }
+        if let Some(ms) = frame.timings.get("render") {
+            println!(
+                "  {:<16} {ms:9.3} ms (the whole frame: passes and barriers)",
+                "frame"
+            );
+        }
+    }
+    if let Some(stats) = &frame.sweep {
+        let planes = stats.planes.count;
+        println!(
+            "sweep: {planes} planes, spacing {:.5}, {:.1} MiB of state-buffer traffic per plane",
+            stats.planes.spacing,
+            stats.bytes_per_plane as f64 / (1 << 20) as f64
+        );
+        if let Some(ms) = frame.timings.get("sweep") {
+            println!("  {:.3} ms per plane", ms / planes as f64);
+        }
+        let c = stats.clamps;
+        println!(
+            "light transport: {}; clamps (pixel-planes): light direction {}, light rays \
+             turned back and dropped {}, viewing direction {}, gain {}",
+            stats.light_transport.name(),
+            c.light_direction,
+            c.light_dropped,
+            c.view_direction,
+            c.gain
+        );
+    }
+    if args.with_baseline {
+        let main_ms = main_pass_ms(&frame);
+        let ea = renderer.render(Model::Ea, &camera, &opts)?;
+        let ea_ms = main_pass_ms(&ea);
+        println!("baseline: ea raymarch {ea_ms:.3} ms");
+        if ea_ms > 0.0 {
+            println!(
+                "ratio {} / ea: {:.2} (same volume, view, image and sample distance)",
+                model.name(),
+                main_ms / ea_ms
+            );
+        }
+    }
+    write_dumps(&frame, &camera, &dump_dir)?;
+    println!("wrote {}", args.output.display());
+    drop(renderer);
+    finish(ctx)
+}
+
+/// Writes the --dump state buffers as EXR. Each file's header says where the buffer lives:
+/// the plane's index and view depth, the world-space plane `n·p = d` (n the camera's
+/// forward, d = n·eye + depth) and the camera; the log line says the same.
+pub fn write_dumps(frame: &refrakt::render::Frame, camera: &Camera, dir: &Path) -> Result<()> {
+    use output::HeaderValue::{Text, Vec3 as V3, F32, I32};
+    if frame.dumps.is_empty() {
+        return Ok(());
+    }
+    let (eye, forward, _, _) = camera.frame();
+    let t = camera.target;
+    // (+ 0.0 turns -0 into 0 for the log.)
+    let v = |v: glam::Vec3| format!("({:.4},{:.4},{:.4})", v.x + 0.0, v.y + 0.0, v.z + 0.0);
+    println!(
+        "dump camera: eye {} target {} vertical fov {}°",
+        v(eye),
+        v(t),
+        camera.fov_y
+    );
+    let spacing = frame.sweep.as_ref().map(|s| s.planes.spacing);
+    for d in &frame.dumps {
+        let path = dir.join(format!("{}-{}.exr", d.buffer.name(), d.plane));
+        let offset = forward.dot(eye) + d.depth;
+        let mut attrs = vec![
+            ("refrakt.buffer", Text(d.buffer.name().into())),
+            ("refrakt.plane", I32(d.plane as i32)),
+            ("refrakt.viewDepth", F32(d.depth)),
+            ("refrakt.planeNormal", V3(forward.to_array())),
+            ("refrakt.planeOffset", F32(offset)),
+            ("refrakt.cameraEye", V3(eye.to_array())),
+            ("refrakt.cameraTarget", V3(t.to_array())),
+            ("refrakt.cameraFovY", F32(camera.fov_y)),
+        ];
+        // The pass for plane k leaves the viewing rays on plane k+1 (see Dump::depth).
+        let mut next = String::new();
+        if let (StateBuffer::ViewPosition, Some(s)) = (d.buffer, spacing) {
+            let depth = d.depth + s;
+            attrs.push(("refrakt.positionsViewDepth", F32(depth)));
+            attrs.push(("refrakt.positionsPlaneOffset", F32(offset + s)));
+            next = format!(
+                "; positions on the next plane: view depth {depth:.4}, d={:.4}",
+                offset + s
+            );
+        }
+        output::write_pixels_with_attributes(d.width, d.height, &d.pixels, &path, &attrs)?;
+        println!(
+            "dumped {} after plane {} (view depth {:.4}, world plane n={} d={offset:.4}{next}) to {}",
+            d.buffer.name(),
+            d.plane,
+            d.depth,
+            v(forward),
+            path.display()
+        );
+    }
+    Ok(())
+}

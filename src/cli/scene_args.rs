@@ -1,0 +1,232 @@
+//! The scene a command draws, from its arguments: the scene (built-in name, scene file or
+//! volume file) with the command line's overrides applied (scene::Overrides), and the
+//! parsers of the flags' values.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::{bail, ensure, Context as _, Result};
+
+use refrakt::output;
+use refrakt::render::{Model, StateBuffer};
+use refrakt::scene::{self, EnvSource, LoadedScene, Scene, TransferSource, VolumeSource};
+use refrakt::volume::formats::RawLayout;
+
+use super::args::*;
+
+pub fn parse_floats<const N: usize>(flag: &str, s: &str) -> Result<[f32; N]> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    if parts.len() != N {
+        bail!("{flag} '{s}': expected {N} comma-separated numbers");
+    }
+    let mut out = [0.0; N];
+    for (i, p) in parts.iter().enumerate() {
+        out[i] = p
+            .parse::<f32>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .with_context(|| format!("{flag} '{s}': '{p}' is not a finite number"))?;
+    }
+    Ok(out)
+}
+
+pub fn parse_dumps(s: &str) -> Result<Vec<(StateBuffer, u32)>> {
+    s.split(',')
+        .map(|item| {
+            let (b, p) = item.trim().split_once('@').with_context(|| {
+                format!("--dump '{item}': expected BUFFER@PLANE, e.g. light-colour@10")
+            })?;
+            let plane = p
+                .parse::<u32>()
+                .with_context(|| format!("--dump '{item}': '{p}' is not a plane number"))?;
+            Ok((
+                StateBuffer::parse(b).with_context(|| format!("--dump '{item}'"))?,
+                plane,
+            ))
+        })
+        .collect()
+}
+
+pub fn parse_background(s: &str) -> Result<[f32; 4]> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    if parts.len() != 3 && parts.len() != 4 {
+        bail!("--background '{s}': expected 3 or 4 comma-separated numbers");
+    }
+    let mut out = [0.0, 0.0, 0.0, 1.0];
+    for (i, p) in parts.iter().enumerate() {
+        out[i] = p
+            .parse::<f32>()
+            .with_context(|| format!("--background '{s}': '{p}' is not a number"))?;
+    }
+    Ok(out)
+}
+
+/// The scene the arguments name, with every given flag applied over it.
+pub fn scene_from_args(args: &SceneArgs) -> Result<Scene> {
+    let name = args
+        .scene
+        .as_deref()
+        .or(args.scene_flag.as_deref())
+        .unwrap_or("sphere-on-floor");
+    let mut s = Scene::resolve(name)?;
+    if let Some(n) = args.volume_size {
+        match &mut s.volume {
+            VolumeSource::Procedural { size, .. } => *size = n,
+            _ => bail!("--volume-size applies to procedural scenes; '{name}' is not one"),
+        }
+    }
+    if let Some(f) = args.scale {
+        match &mut s.volume {
+            VolumeSource::Standin { scale, .. } => *scale = f,
+            _ => bail!("--scale applies to the thesis stand-ins; '{name}' is not one"),
+        }
+    }
+    let window = match &args.window {
+        Some(w) => {
+            let [lo, hi] = parse_floats::<2>("--window", w)?;
+            ensure!(lo < hi, "--window '{w}': low must be below high");
+            Some((lo, hi))
+        }
+        None => None,
+    };
+    let raw = match (&args.dims, &args.voxel_type) {
+        (Some(d), Some(t)) => {
+            let d = parse_floats::<3>("--dims", d)?;
+            ensure!(
+                d.iter()
+                    .all(|&x| x >= 1.0 && x.fract() == 0.0 && x <= u32::MAX as f32),
+                "--dims: expected three positive whole numbers"
+            );
+            Some(RawLayout {
+                dims: d.map(|x| x as u32),
+                kind: scene::parse_scalar_kind(t).context("--type")?,
+                spacing: None,
+            })
+        }
+        (None, None) => None,
+        _ => bail!("--dims and --type go together (raw files)"),
+    };
+    if raw.is_some() || window.is_some() {
+        match &mut s.volume {
+            VolumeSource::File {
+                raw: r, window: w, ..
+            } => {
+                if raw.is_some() {
+                    *r = raw;
+                }
+                if window.is_some() {
+                    *w = window;
+                }
+            }
+            VolumeSource::Fetched { window: w, .. } if raw.is_none() => *w = window,
+            _ => bail!("--dims/--type/--window apply to volume files; '{name}' is not one"),
+        }
+    }
+    if let Some(sp) = &args.spacing {
+        s.spacing = Some(parse_floats::<3>("--spacing", sp)?);
+    }
+    let mut o = scene::Overrides::default();
+    if let Some(f) = &args.flip {
+        o.flip = Some(scene::parse_flip(f).context("--flip")?);
+    }
+    o.transfer = args.tf.clone().map(TransferSource::Named);
+    o.model = args.model.map(|m| match m {
+        ModelArg::Ea => Model::Ea,
+        ModelArg::Refract => Model::Refract,
+    });
+    if args.no_preintegration {
+        o.preintegrated = Some(false);
+    }
+    o.width = args.width;
+    o.height = args.height;
+    o.sample_distance = args.sample_distance;
+    o.azimuth = args.azimuth;
+    o.elevation = args.elevation;
+    o.distance = args.distance;
+    o.fov = args.fov;
+    if let Some(t) = &args.target {
+        o.target = Some(glam::Vec3::from(parse_floats::<3>("--target", t)?));
+    }
+    o.softness = args.softness;
+    o.roughness = args.roughness;
+    o.specular = args.specular;
+    o.eta_scale = args.eta_scale;
+    o.light_rays = args.light_rays;
+    if let Some(t) = &args.light_transport {
+        o.light_transport =
+            Some(refrakt::render::LightTransport::parse(t).context("--light-transport")?);
+    }
+    if let Some(r) = &args.reflections {
+        o.reflections = Some(refrakt::scene::parse_on_off(r).context("--reflections")?);
+    }
+    o.env_rotation = args.env_rotation;
+    if let Some(e) = args.exposure {
+        ensure!(
+            e.is_finite(),
+            "--exposure {e} must be a finite number of stops"
+        );
+        o.exposure = Some(e);
+    }
+    if let Some(b) = &args.background {
+        o.background = Some(parse_background(b)?);
+    }
+    if let Some(l) = &args.light {
+        o.light_towards = Some(glam::Vec3::from(parse_floats::<3>("--light", l)?));
+    }
+    if let Some(c) = &args.light_colour {
+        o.light_colour = Some(parse_floats::<3>("--light-colour", c)?);
+    }
+    if let Some(c) = &args.clip {
+        o.clip = Some(if c == "none" {
+            None
+        } else {
+            let v = parse_floats::<4>("--clip", c)?;
+            Some((glam::Vec3::new(v[0], v[1], v[2]), v[3]))
+        });
+    }
+    if let Some(e) = &args.env {
+        o.environment = Some(match e.as_str() {
+            "sky" => EnvSource::Sky,
+            "none" => EnvSource::None,
+            f => EnvSource::File(PathBuf::from(f)),
+        });
+    }
+    o.tonemap = args.tonemap.map(|t| match t {
+        ToneArg::Aces => output::ToneOperator::Aces,
+        ToneArg::Reinhard => output::ToneOperator::Reinhard,
+        ToneArg::None => output::ToneOperator::None,
+    });
+    s.apply(o);
+    Ok(s)
+}
+
+/// The scene the options describe, loaded: the one place `render` and `view` (and the
+/// viewer's reload) get a scene from.
+pub fn build_scene(args: &SceneArgs) -> Result<LoadedScene> {
+    let scene = scene_from_args(args)?;
+    let data_dir = args.data_dir.clone().unwrap_or_else(scene::data_dir);
+    scene.load_all(&data_dir)
+}
+
+pub fn list_scenes() -> Result<ExitCode> {
+    println!("Built-in scenes (refrakt render NAME):");
+    for (n, d) in scene::builtin_names() {
+        println!("  {n:<16} {d}");
+    }
+    println!("\nA scene file (.toml) or a volume file works too; see README.md.");
+    Ok(ExitCode::SUCCESS)
+}
+
+/// "WxH@N" of --resize.
+pub fn parse_resize(s: &str) -> Result<([u32; 2], u64)> {
+    let bad = || format!("--resize '{s}': expected WIDTHxHEIGHT@FRAME, e.g. 320x200@2");
+    let (size, frame) = s.split_once('@').with_context(bad)?;
+    let (w, h) = size.split_once(['x', 'X']).with_context(bad)?;
+    let w: u32 = w.trim().parse().ok().with_context(bad)?;
+    let h: u32 = h.trim().parse().ok().with_context(bad)?;
+    let frame: u64 = frame.trim().parse().ok().with_context(bad)?;
+    if w == 0 || h == 0 || w > 16384 || h > 16384 {
+        bail!("--resize '{s}': the size must be between 1 and 16384 per side");
+    }
+    Ok(([w, h], frame))
+}

@@ -1,0 +1,52 @@
+//! `refrakt view`: the interactive viewer.
+
+use std::process::ExitCode;
+
+use anyhow::{bail, Result};
+
+use refrakt::output;
+use refrakt::viewer::{self, ViewOptions};
+use refrakt::vk::ContextDesc;
+
+use super::args::*;
+use super::scene_args::*;
+
+pub fn view(desc: &ContextDesc, args: ViewArgs) -> Result<ExitCode> {
+    if let Some(path) = &args.screenshot {
+        output::format_for(path)?;
+    }
+    if args.frames == Some(0) {
+        bail!("--frames must be at least 1");
+    }
+    let resize = args.resize.as_deref().map(parse_resize).transpose()?;
+    if !args.screenshot_dir.is_dir() {
+        bail!(
+            "--screenshot-dir {}: the folder does not exist",
+            args.screenshot_dir.display()
+        );
+    }
+    let scene_args = args.scene.clone();
+    let scene = build_scene(&scene_args)?;
+    let options = ViewOptions {
+        vsync: !args.no_vsync,
+        frames: args.frames,
+        screenshot: args.screenshot.clone(),
+        resize,
+        screenshot_dir: args.screenshot_dir.clone(),
+        watch: !args.no_watch,
+    };
+    let report = viewer::run(
+        desc.clone(),
+        scene,
+        Box::new(move || build_scene(&scene_args)),
+        options,
+    )?;
+    if report.validation_messages > 0 {
+        eprintln!(
+            "validation: {} message(s) reported (see above)",
+            report.validation_messages
+        );
+        return Ok(ExitCode::from(3));
+    }
+    Ok(ExitCode::SUCCESS)
+}
