@@ -1347,10 +1347,8 @@ mod tests {
     use super::*;
     use crate::vk::spirv::check_block;
 
-    /// The std140 and push-constant mirrors against the blocks glslang laid out.
-    #[test]
-    fn host_structs_match_the_shaders_blocks() {
-        let params = crate::host_layout!(SweepParams {
+    fn sweep_params_layout() -> Vec<(&'static str, usize, usize)> {
+        crate::host_layout!(SweepParams {
             view_to_tex,
             view_to_world,
             camera,
@@ -1369,7 +1367,13 @@ mod tests {
             termination_alpha,
             unlit,
             pad0,
-        });
+        })
+    }
+
+    /// The std140 and push-constant mirrors against the blocks glslang laid out.
+    #[test]
+    fn host_structs_match_the_shaders_blocks() {
+        let params = sweep_params_layout();
         let size = std::mem::size_of::<SweepParams>();
         for spirv in [
             shaders::SWEEP_FRAG,
@@ -1402,26 +1406,7 @@ mod tests {
     /// The check fails when a host field is missing or moved (it can fail).
     #[test]
     fn a_moved_field_fails_the_block_check() {
-        let mut params = crate::host_layout!(SweepParams {
-            view_to_tex,
-            view_to_world,
-            camera,
-            planes,
-            light_dir,
-            light_colour,
-            volume_dims,
-            specular,
-            clip,
-            background,
-            refraction,
-            light_grid,
-            transport,
-            light_rays,
-            max_gain,
-            termination_alpha,
-            unlit,
-            pad0,
-        });
+        let mut params = sweep_params_layout();
         let size = std::mem::size_of::<SweepParams>();
         params.swap(2, 3);
         params[2].0 = "camera";
