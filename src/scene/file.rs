@@ -1,0 +1,352 @@
+//! Scene files (TOML): the schema and its resolution into a [`Scene`] (relative paths are
+//! relative to the file; every section parses into [`Overrides`], applied by
+//! [`Scene::apply`] like the command line's).
+
+use super::*;
+
+// ---- the file format -------------------------------------------------------------------
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct SceneFile {
+    name: Option<String>,
+    volume: VolumeTable,
+    transfer: Option<TransferTable>,
+    camera: Option<CameraTable>,
+    light: Option<LightTable>,
+    environment: Option<EnvTable>,
+    render: Option<RenderTable>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct VolumeTable {
+    /// A volume file (relative to the scene file).
+    file: Option<String>,
+    /// A procedural volume, a thesis stand-in, or a fetched scan, by name.
+    builtin: Option<String>,
+    /// Voxels per side of a procedural volume.
+    size: Option<u32>,
+    /// Fraction of a stand-in's resolution.
+    scale: Option<f64>,
+    /// Raw files: dimensions and type.
+    dims: Option<[u32; 3]>,
+    #[serde(rename = "type")]
+    kind: Option<String>,
+    spacing: Option<[f32; 3]>,
+    window: Option<[f32; 2]>,
+    /// Axes to mirror, e.g. "xy" (a 180° turn about z).
+    flip: Option<String>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TransferTable {
+    preset: Option<String>,
+    file: Option<String>,
+    colour: Option<toml::Value>,
+    opacity: Option<toml::Value>,
+    medium: Option<toml::Value>,
+    eta: Option<toml::Value>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CameraTable {
+    azimuth: Option<f32>,
+    elevation: Option<f32>,
+    distance: Option<f32>,
+    fov: Option<f32>,
+    eye: Option<[f32; 3]>,
+    target: Option<[f32; 3]>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LightTable {
+    towards: Option<[f32; 3]>,
+    colour: Option<[f32; 3]>,
+    softness: Option<f32>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct EnvTable {
+    map: Option<String>,
+    rotation: Option<f32>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RenderTable {
+    model: Option<String>,
+    width: Option<u32>,
+    height: Option<u32>,
+    sample_distance: Option<f32>,
+    preintegrated: Option<bool>,
+    background: Option<[f32; 4]>,
+    roughness: Option<f32>,
+    specular: Option<f32>,
+    eta_scale: Option<f32>,
+    light_transport: Option<String>,
+    light_rays: Option<u32>,
+    reflections: Option<bool>,
+    clip: Option<[f32; 4]>,
+    exposure: Option<f32>,
+    tonemap: Option<String>,
+}
+
+/// "x", "xy", "xyz", ... (or "none") to the axes to mirror.
+pub fn parse_flip(s: &str) -> Result<[bool; 3]> {
+    let mut axes = [false; 3];
+    if s == "none" {
+        return Ok(axes);
+    }
+    ensure!(
+        !s.is_empty(),
+        "'' names no axes (use x, y, z, e.g. \"xy\", or \"none\")"
+    );
+    for c in s.chars() {
+        let i = match c {
+            'x' => 0,
+            'y' => 1,
+            'z' => 2,
+            _ => bail!("'{s}': '{c}' is not an axis (use x, y, z, e.g. \"xy\", or \"none\")"),
+        };
+        ensure!(!axes[i], "'{s}' names {c} twice");
+        axes[i] = true;
+    }
+    Ok(axes)
+}
+
+pub fn parse_model(s: &str) -> Result<Model> {
+    match s {
+        "refract" => Ok(Model::Refract),
+        "ea" => Ok(Model::Ea),
+        _ => bail!("model '{s}' is not one of refract, ea"),
+    }
+}
+
+pub fn parse_tonemap(s: &str) -> Result<ToneOperator> {
+    match s {
+        "aces" => Ok(ToneOperator::Aces),
+        "reinhard" => Ok(ToneOperator::Reinhard),
+        "none" => Ok(ToneOperator::None),
+        _ => bail!("tone map '{s}' is not one of aces, reinhard, none"),
+    }
+}
+
+/// Parses "u8|u16|i16|f32" (and the open-scivis spellings uint8, ...).
+pub fn parse_scalar_kind(s: &str) -> Result<crate::volume::formats::ScalarKind> {
+    crate::volume::formats::ScalarKind::parse(s)
+        .with_context(|| format!("voxel type '{s}' is not one of u8, u16, i16, f32"))
+}
+
+impl SceneFile {
+    pub(super) fn resolve(self, path: &Path) -> Result<Scene> {
+        let base = path.parent().unwrap_or(Path::new("."));
+        let rel = |p: &str| -> Result<PathBuf> {
+            let q = base.join(p);
+            ensure!(q.exists(), "{}: referenced file not found", q.display());
+            Ok(q)
+        };
+        let v = &self.volume;
+        let mut s = match (&v.file, &v.builtin) {
+            (Some(_), Some(_)) => bail!("[volume]: give either file or builtin, not both"),
+            (None, None) => bail!("[volume]: needs file = \"...\" or builtin = \"...\""),
+            (None, Some(b)) => {
+                let mut s = Scene::builtin(b)?.with_context(|| {
+                    let names: Vec<String> = builtin_names().into_iter().map(|(n, _)| n).collect();
+                    format!("[volume] builtin '{b}' is not one of {}", names.join(", "))
+                })?;
+                match &mut s.volume {
+                    VolumeSource::Procedural { size, .. } => {
+                        if let Some(n) = v.size {
+                            *size = n;
+                        }
+                        ensure!(v.scale.is_none(), "[volume] scale is for thesis stand-ins");
+                    }
+                    VolumeSource::Standin { scale, .. } => {
+                        if let Some(f) = v.scale {
+                            *scale = f;
+                        }
+                        ensure!(
+                            v.size.is_none(),
+                            "[volume] size is for procedural volumes; stand-ins take scale"
+                        );
+                    }
+                    _ => ensure!(
+                        v.size.is_none() && v.scale.is_none(),
+                        "[volume] size/scale apply to procedural volumes and stand-ins only"
+                    ),
+                }
+                s
+            }
+            (Some(f), None) => {
+                let file = rel(f)?;
+                let raw = match (v.dims, &v.kind) {
+                    (Some(dims), Some(k)) => Some(crate::volume::formats::RawLayout {
+                        dims,
+                        kind: parse_scalar_kind(k)?,
+                        spacing: v.spacing,
+                    }),
+                    (None, None) => None,
+                    _ => bail!("[volume] raw files need both dims and type"),
+                };
+                let mut s = Scene::for_volume_file(&file);
+                s.volume = VolumeSource::File {
+                    path: file,
+                    raw,
+                    window: None,
+                };
+                s
+            }
+        };
+        if let Some(w) = v.window {
+            ensure!(
+                w[0].is_finite() && w[1].is_finite() && w[0] < w[1],
+                "[volume] window {w:?} must be two finite numbers, low < high"
+            );
+            match &mut s.volume {
+                VolumeSource::File { window, .. } | VolumeSource::Fetched { window, .. } => {
+                    *window = Some((w[0], w[1]))
+                }
+                _ => bail!("[volume] window applies to volume files only"),
+            }
+        }
+        s.spacing = v.spacing;
+        s.file = Some(path.to_path_buf());
+        let mut o = Overrides::default();
+        if let Some(f) = &v.flip {
+            o.flip = Some(parse_flip(f).context("[volume] flip")?);
+        }
+        if let Some(n) = self.name {
+            s.name = n;
+        } else if let Some(stem) = path.file_stem() {
+            s.name = stem.to_string_lossy().into_owned();
+        }
+        if let Some(t) = self.transfer {
+            let inline =
+                t.colour.is_some() || t.opacity.is_some() || t.medium.is_some() || t.eta.is_some();
+            let count = t.preset.is_some() as u32 + t.file.is_some() as u32 + inline as u32;
+            ensure!(
+                count <= 1,
+                "[transfer]: give one of preset, file, or inline functions"
+            );
+            if let Some(p) = t.preset {
+                TransferFunctions::load(&p)
+                    .map_err(|_| anyhow::anyhow!("[transfer] preset '{p}' does not exist"))?;
+                o.transfer = Some(TransferSource::Named(p));
+            } else if let Some(f) = t.file {
+                let p = rel(&f)?;
+                o.transfer = Some(TransferSource::Named(p.to_string_lossy().into_owned()));
+            } else if inline {
+                let mut table = toml::Table::new();
+                for (k, v) in [
+                    ("colour", t.colour),
+                    ("opacity", t.opacity),
+                    ("medium", t.medium),
+                    ("eta", t.eta),
+                ] {
+                    if let Some(v) = v {
+                        table.insert(k.into(), v);
+                    }
+                }
+                let tf = TransferFunctions::parse(&table.to_string(), "[transfer]")?;
+                o.transfer = Some(TransferSource::Inline(Box::new(tf)));
+            }
+        }
+        if let Some(c) = self.camera {
+            let mut target = s.camera.target;
+            if let Some(t) = c.target {
+                target = Vec3::from(t);
+                ensure!(
+                    target.is_finite(),
+                    "[camera] target {t:?} must be finite numbers"
+                );
+                o.target = Some(target);
+            }
+            if let Some(eye) = c.eye {
+                ensure!(
+                    c.azimuth.is_none() && c.elevation.is_none() && c.distance.is_none(),
+                    "[camera]: give eye (and target) or azimuth/elevation/distance, not both"
+                );
+                let eye = Vec3::from(eye);
+                ensure!(eye.is_finite(), "[camera] eye {eye} must be finite numbers");
+                // The camera orbits the target (the origin unless given) and looks at it.
+                let e = eye - target;
+                let d = e.length();
+                ensure!(
+                    d > 0.0 && d.is_finite(),
+                    "[camera] eye must differ from target"
+                );
+                o.distance = Some(d);
+                o.elevation = Some(
+                    (e.y / d)
+                        .clamp(-1.0, 1.0)
+                        .asin()
+                        .to_degrees()
+                        .clamp(-90.0, 90.0),
+                );
+                o.azimuth = Some(e.x.atan2(e.z).to_degrees());
+            }
+            o.azimuth = c.azimuth.or(o.azimuth);
+            o.elevation = c.elevation.or(o.elevation);
+            o.distance = c.distance.or(o.distance);
+            o.fov = c.fov;
+        }
+        if let Some(l) = self.light {
+            o.light_towards = l.towards.map(Vec3::from);
+            o.light_colour = l.colour;
+            o.softness = l.softness;
+        }
+        if let Some(e) = self.environment {
+            if let Some(m) = e.map {
+                o.environment = Some(match m.as_str() {
+                    "sky" => EnvSource::Sky,
+                    "none" => EnvSource::None,
+                    f => EnvSource::File(rel(f)?),
+                });
+            }
+            o.env_rotation = e.rotation;
+        }
+        if let Some(r) = self.render {
+            if let Some(m) = r.model {
+                o.model = Some(parse_model(&m).context("[render]")?);
+            }
+            o.width = r.width;
+            o.height = r.height;
+            o.sample_distance = r.sample_distance;
+            o.preintegrated = r.preintegrated;
+            o.background = r.background;
+            o.roughness = r.roughness;
+            o.specular = r.specular;
+            o.eta_scale = r.eta_scale;
+            o.light_rays = r.light_rays;
+            if let Some(t) = &r.light_transport {
+                o.light_transport =
+                    Some(LightTransport::parse(t).context("[render] light_transport")?);
+            }
+            o.reflections = r.reflections;
+            o.clip = r.clip.map(|c| Some((Vec3::new(c[0], c[1], c[2]), c[3])));
+            o.exposure = r.exposure;
+            if let Some(t) = r.tonemap {
+                o.tonemap = Some(parse_tonemap(&t).context("[render]")?);
+            }
+        }
+        s.apply(o);
+        // Everything checkable without the GPU, now, with the scene's name on it.
+        s.render_options()?;
+        s.tone_map()?;
+        Ok(s)
+    }
+}
+
+/// "on" / "off" (also "true" / "false", "yes" / "no"), for switches given as flags.
+pub fn parse_on_off(text: &str) -> Result<bool> {
+    match text.to_ascii_lowercase().as_str() {
+        "on" | "true" | "yes" => Ok(true),
+        "off" | "false" | "no" => Ok(false),
+        other => bail!("\"{other}\" is neither on nor off"),
+    }
+}
