@@ -1,0 +1,457 @@
+//! Benchmark mode: the protocol of the thesis' Tables 6.1 and 6.2 on the local device
+//! (`refrakt bench thesis`), and how the sweep's cost scales with planes and pixels
+//! (`refrakt bench scaling`). Every time is a GPU timestamp difference; a frame's time is
+//! the `render` scope of `Renderer::record` (all passes and barriers of the frame).
+//! docs/BENCH.md documents the protocol and the CSV/JSON schema.
+
+use std::path::{Path, PathBuf};
+use std::time::SystemTime;
+
+use anyhow::{bail, ensure, Context as _, Result};
+use indicatif::{ProgressBar, ProgressStyle};
+use serde::{Deserialize, Serialize};
+
+use crate::render::{Camera, Frame, Model, RenderOptions, Renderer};
+use crate::scene::{Scene, VolumeSource};
+use crate::vk::{self, Context};
+use crate::volume::standins::{self, Dataset, DATASETS};
+
+/// Version of the JSON layout; bump when a field changes meaning or goes away.
+pub const SCHEMA: &str = "refrakt-bench-thesis/1";
+
+/// Degrees the camera orbits per frame (warm-up included), so that every frame renders a
+/// new view and nothing can be reused between frames.
+pub const ORBIT_DEG_PER_FRAME: f32 = 0.5;
+
+/// The thesis' viewport side and sample distance (Tables 6.1 and 6.2).
+pub const THESIS_VIEWPORT: u32 = 768;
+pub const THESIS_SAMPLE_DISTANCE: f32 = 1.0;
+
+#[derive(Clone, Debug)]
+pub struct ThesisSettings {
+    pub scale: f64,
+    pub frames: u32,
+    pub warmup: u32,
+    pub rows: Vec<String>,
+    pub baselines: bool,
+    pub data_dir: PathBuf,
+    pub progress: bool,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Stats {
+    pub mean: f64,
+    pub median: f64,
+    pub min: f64,
+    pub max: f64,
+    /// Sample standard deviation (n − 1); 0 for one frame.
+    pub std_dev: f64,
+}
+
+impl Stats {
+    pub fn of(v: &[f64]) -> Result<Stats> {
+        ensure!(!v.is_empty(), "no frames to summarise");
+        let n = v.len() as f64;
+        let mean = v.iter().sum::<f64>() / n;
+        let mut s = v.to_vec();
+        s.sort_by(|a, b| a.total_cmp(b));
+        let median = if s.len() % 2 == 1 {
+            s[s.len() / 2]
+        } else {
+            0.5 * (s[s.len() / 2 - 1] + s[s.len() / 2])
+        };
+        let var = if v.len() > 1 {
+            v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)
+        } else {
+            0.0
+        };
+        Ok(Stats {
+            mean,
+            median,
+            min: s[0],
+            max: s[s.len() - 1],
+            std_dev: var.sqrt(),
+        })
+    }
+}
+
+/// Mean GPU ms per pass over the measured frames.
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Passes {
+    pub setup_ms: f64,
+    pub sweep_ms: f64,
+    pub composite_ms: f64,
+    /// EA only: the ray marcher.
+    pub raymarch_ms: f64,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Variant {
+    /// "refract", "ea" or "floor".
+    pub variant: String,
+    pub warmup_ms: Vec<f64>,
+    pub frames_ms: Vec<f64>,
+    pub stats: Stats,
+    pub fps: f64,
+    pub passes: Passes,
+    /// Per-frame sweep pass ms (refract and floor), for the per-plane figures.
+    pub sweep_ms: Vec<f64>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Thesis {
+    pub table: String,
+    pub gpu: String,
+    pub resolution: [u32; 3],
+    pub ms: f64,
+    pub fps: f64,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Row {
+    pub dataset: String,
+    pub title: String,
+    pub thesis: Thesis,
+    /// "stand-in" or the original's path from --data-dir.
+    pub source: String,
+    pub resolution: [u32; 3],
+    pub viewport: [u32; 2],
+    pub planes: u32,
+    /// One table build at this row's transfer functions (not part of the frame time: the
+    /// table is rebuilt only when the transfer functions change).
+    pub preintegration_ms: f64,
+    pub refract: Variant,
+    pub ms_per_plane: f64,
+    /// planes × pixels / sweep seconds.
+    pub plane_pixels_per_s: f64,
+    /// State-buffer bytes read and written per plane pixel (attachment loads and stores,
+    /// sampled reads including the filter taps).
+    pub bytes_per_plane_pixel: f64,
+    /// bytes_per_plane_pixel × plane_pixels_per_s.
+    pub effective_gb_per_s: f64,
+    pub ea: Option<Variant>,
+    pub floor: Option<Variant>,
+    pub sweep_over_ea: Option<f64>,
+    pub sweep_over_floor: Option<f64>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Meta {
+    pub device: String,
+    pub device_type: String,
+    pub driver: String,
+    pub driver_info: String,
+    pub vulkan: String,
+    pub refrakt_version: String,
+    pub git_commit: String,
+    /// UTC, RFC 3339.
+    pub date: String,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SettingsRecord {
+    pub scale: f64,
+    pub frames: u32,
+    pub warmup: u32,
+    pub baselines: bool,
+    pub sample_distance: f32,
+    pub orbit_deg_per_frame: f32,
+    pub rows: Vec<String>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Report {
+    pub schema: String,
+    pub meta: Meta,
+    pub settings: SettingsRecord,
+    pub rows: Vec<Row>,
+}
+
+pub fn meta(ctx: &Context) -> Meta {
+    let i = ctx.info();
+    Meta {
+        device: i.name.clone(),
+        device_type: vk::device_type_name(i.device_type).to_string(),
+        driver: i.driver_name.clone(),
+        driver_info: i.driver_info.clone(),
+        vulkan: vk::version_string(i.api_version),
+        refrakt_version: env!("CARGO_PKG_VERSION").to_string(),
+        git_commit: env!("REFRAKT_GIT_COMMIT").to_string(),
+        date: humantime::format_rfc3339_seconds(SystemTime::now()).to_string(),
+    }
+}
+
+/// The rows `--rows` names (all eight when empty), in table order.
+pub fn select_rows(names: &[String]) -> Result<Vec<&'static Dataset>> {
+    if names.is_empty() {
+        return Ok(DATASETS.iter().collect());
+    }
+    for n in names {
+        standins::dataset(n)?;
+    }
+    Ok(DATASETS
+        .iter()
+        .filter(|d| names.iter().any(|n| n == d.name))
+        .collect())
+}
+
+fn frame_ms(f: &Frame) -> Result<f64> {
+    f.timings
+        .get("render")
+        .context("the device reports no timestamps; the benchmark needs them")
+}
+
+fn progress_bar(total: u64, show: bool) -> ProgressBar {
+    if !show {
+        return ProgressBar::hidden();
+    }
+    let pb = ProgressBar::new(total);
+    pb.set_style(
+        ProgressStyle::with_template(
+            "{elapsed_precise} [{bar:30}] {pos}/{len} frames, ETA {eta} {msg}",
+        )
+        .expect("static template")
+        .progress_chars("=> "),
+    );
+    pb
+}
+
+/// Renders warm-up and measured frames of one variant, orbiting the camera.
+#[allow(clippy::too_many_arguments)]
+fn run_variant(
+    renderer: &mut Renderer,
+    name: &str,
+    model: Model,
+    camera: &Camera,
+    opts: &RenderOptions,
+    warmup: u32,
+    frames: u32,
+    pb: &ProgressBar,
+) -> Result<(Variant, Option<u32>, Option<u64>)> {
+    let mut warm = Vec::new();
+    let mut times = Vec::new();
+    let mut sweep = Vec::new();
+    let mut passes = Passes::default();
+    let mut planes = None;
+    let mut bytes = None;
+    for k in 0..warmup + frames {
+        let cam = Camera {
+            azimuth: camera.azimuth + ORBIT_DEG_PER_FRAME * k as f32,
+            ..*camera
+        };
+        let f = renderer.render(model, &cam, opts)?;
+        let ms = frame_ms(&f)?;
+        pb.inc(1);
+        if k < warmup {
+            warm.push(ms);
+            continue;
+        }
+        times.push(ms);
+        let get = |n: &str| f.timings.get(n).unwrap_or(0.0);
+        passes.setup_ms += get("sweep setup");
+        passes.sweep_ms += get("sweep");
+        passes.composite_ms += get("composite");
+        passes.raymarch_ms += get("ea raymarch");
+        if let Some(s) = &f.sweep {
+            sweep.push(get("sweep"));
+            planes = Some(s.planes.count);
+            bytes = Some(s.bytes_per_plane);
+        }
+    }
+    let n = frames.max(1) as f64;
+    passes.setup_ms /= n;
+    passes.sweep_ms /= n;
+    passes.composite_ms /= n;
+    passes.raymarch_ms /= n;
+    let stats = Stats::of(&times)?;
+    Ok((
+        Variant {
+            variant: name.to_string(),
+            warmup_ms: warm,
+            frames_ms: times,
+            fps: 1000.0 / stats.mean,
+            stats,
+            passes,
+            sweep_ms: sweep,
+        },
+        planes,
+        bytes,
+    ))
+}
+
+/// Runs the thesis protocol on every selected row.
+pub fn thesis(ctx: &Context, s: &ThesisSettings) -> Result<Report> {
+    ensure!(s.frames >= 1, "--frames must be at least 1");
+    let rows = select_rows(&s.rows)?;
+    let variants = if s.baselines { 3 } else { 1 };
+    let total = rows.len() as u64 * (s.warmup + s.frames) as u64 * variants;
+    let pb = progress_bar(total, s.progress);
+    let side = ((THESIS_VIEWPORT as f64 * s.scale).round() as u32).max(8);
+    let mut out = Vec::new();
+    for d in rows {
+        let mut scene = Scene::builtin(d.name)?.context("stand-in scene")?;
+        if let VolumeSource::Standin { scale, .. } = &mut scene.volume {
+            *scale = s.scale;
+        }
+        scene.width = side;
+        scene.height = side;
+        scene.sample_distance = THESIS_SAMPLE_DISTANCE;
+        pb.set_message(format!("{}: preparing the volume", d.name));
+        let original = crate::scene::original_in(&s.data_dir, d.name);
+        let volume = scene.load_volume(&s.data_dir)?;
+        let tf = scene.transfer_functions()?;
+        let mut renderer = Renderer::new(ctx, &volume, &tf)?;
+        renderer.set_environment(scene.environment_map()?.as_ref())?;
+        let preintegration_ms = renderer
+            .update_preintegration()?
+            .get("preintegration")
+            .unwrap_or(0.0);
+        let opts = scene.render_options()?;
+        pb.set_message(d.name.to_string());
+        let (refract, planes, bytes) = run_variant(
+            &mut renderer,
+            "refract",
+            Model::Refract,
+            &scene.camera,
+            &opts,
+            s.warmup,
+            s.frames,
+            &pb,
+        )?;
+        let planes = planes.context("the sweep reported no planes")?;
+        let bytes = bytes.unwrap_or(0);
+        let (ea, floor) = if s.baselines {
+            pb.set_message(format!("{}: EA baseline", d.name));
+            let ea = run_variant(
+                &mut renderer,
+                "ea",
+                Model::Ea,
+                &scene.camera,
+                &opts,
+                s.warmup,
+                s.frames,
+                &pb,
+            )?
+            .0;
+            pb.set_message(format!("{}: floor baseline", d.name));
+            let mut fo = opts.clone();
+            fo.sweep.floor = true;
+            let floor = run_variant(
+                &mut renderer,
+                "floor",
+                Model::Refract,
+                &scene.camera,
+                &fo,
+                s.warmup,
+                s.frames,
+                &pb,
+            )?
+            .0;
+            (Some(ea), Some(floor))
+        } else {
+            (None, None)
+        };
+        let pixels = side as f64 * side as f64;
+        let sweep_s = refract.passes.sweep_ms / 1000.0;
+        let plane_pixels_per_s = if sweep_s > 0.0 {
+            planes as f64 * pixels / sweep_s
+        } else {
+            0.0
+        };
+        let bytes_per_plane_pixel = bytes as f64 / pixels;
+        out.push(Row {
+            dataset: d.name.to_string(),
+            title: d.title.to_string(),
+            thesis: Thesis {
+                table: d.table.to_string(),
+                gpu: d.thesis_gpu.to_string(),
+                resolution: d.dims,
+                ms: d.thesis_ms,
+                fps: d.thesis_fps,
+            },
+            source: original
+                .map(|p| p.display().to_string())
+                .unwrap_or_else(|| "stand-in".into()),
+            resolution: volume.dims,
+            viewport: [side, side],
+            planes,
+            preintegration_ms,
+            ms_per_plane: refract.passes.sweep_ms / planes as f64,
+            plane_pixels_per_s,
+            bytes_per_plane_pixel,
+            effective_gb_per_s: bytes_per_plane_pixel * plane_pixels_per_s / 1e9,
+            sweep_over_ea: ea.as_ref().map(|e| refract.stats.mean / e.stats.mean),
+            sweep_over_floor: floor.as_ref().map(|f| refract.stats.mean / f.stats.mean),
+            refract,
+            ea,
+            floor,
+        });
+    }
+    pb.finish_and_clear();
+    Ok(Report {
+        schema: SCHEMA.into(),
+        meta: meta(ctx),
+        settings: SettingsRecord {
+            scale: s.scale,
+            frames: s.frames,
+            warmup: s.warmup,
+            baselines: s.baselines,
+            sample_distance: THESIS_SAMPLE_DISTANCE,
+            orbit_deg_per_frame: ORBIT_DEG_PER_FRAME,
+            rows: out.iter().map(|r| r.dataset.clone()).collect(),
+        },
+        rows: out,
+    })
+}
+
+mod scaling;
+mod writers;
+
+pub use scaling::*;
+pub use writers::*;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stats_of_known_samples() {
+        let s = Stats::of(&[2.0, 4.0, 4.0, 4.0, 5.0, 5.0, 7.0, 9.0]).unwrap();
+        assert_eq!(s.mean, 5.0);
+        assert_eq!(s.median, 4.5);
+        assert_eq!((s.min, s.max), (2.0, 9.0));
+        // Sample variance 32/7.
+        assert!((s.std_dev - (32.0f64 / 7.0).sqrt()).abs() < 1e-12);
+        assert!(Stats::of(&[]).is_err());
+    }
+
+    #[test]
+    fn fit_recovers_a_line() {
+        let x = [10.0, 20.0, 40.0, 80.0];
+        let y: Vec<f64> = x.iter().map(|v| 3.0 + 0.5 * v).collect();
+        let f = fit(&x, &y).unwrap();
+        assert!((f.slope - 0.5).abs() < 1e-12 && (f.intercept - 3.0).abs() < 1e-9);
+        assert!((f.r2 - 1.0).abs() < 1e-12);
+        assert!(fit(&[1.0, 1.0], &[2.0, 3.0]).is_err());
+    }
+
+    #[test]
+    fn rows_select_in_table_order_and_unknown_is_an_error() {
+        let r = select_rows(&["kiwi".into(), "supernova".into()]).unwrap();
+        assert_eq!(
+            r.iter().map(|d| d.name).collect::<Vec<_>>(),
+            ["supernova", "kiwi"]
+        );
+        assert_eq!(select_rows(&[]).unwrap().len(), 8);
+        let e = select_rows(&["teapot".into()]).unwrap_err().to_string();
+        assert!(e.contains("teapot") && e.contains("supernova"), "{e}");
+    }
+}

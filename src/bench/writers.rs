@@ -1,0 +1,254 @@
+//! The benchmark's outputs: Markdown tables (with the thesis' figures beside ours), CSV,
+//! JSON and the SVG chart.
+
+use super::*;
+
+fn dims(d: [u32; 3]) -> String {
+    format!("{}×{}×{}", d[0], d[1], d[2])
+}
+
+/// The report as Markdown: the thesis table beside ours, the per-pass breakdown, and the
+/// baselines when measured.
+pub fn markdown(r: &Report) -> String {
+    let m = &r.meta;
+    let mut s = format!(
+        "Device: {} ({}, {} {}, Vulkan {}); refrakt {} ({}); {}\n\
+         Protocol: viewport {}² × scale {} , sample distance {}, {} frames after {} warm-up, camera orbiting {}°/frame; GPU timestamps of the whole frame.\n\n",
+        m.device,
+        m.device_type,
+        m.driver,
+        m.driver_info,
+        m.vulkan,
+        m.refrakt_version,
+        m.git_commit,
+        m.date,
+        THESIS_VIEWPORT,
+        r.settings.scale,
+        r.settings.sample_distance,
+        r.settings.frames,
+        r.settings.warmup,
+        r.settings.orbit_deg_per_frame
+    );
+    s += "| Dataset | Thesis resolution | Ours | Viewport | Planes | Thesis ms | Thesis FPS | Thesis GPU | Mean ms | FPS | Median | Min | Max | Std-dev |\n";
+    s += "|---|---|---|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|\n";
+    for row in &r.rows {
+        let st = &row.refract.stats;
+        s += &format!(
+            "| {} | {} | {}{} | {}² | {} | {:.2} | {:.2} | {} | {:.2} | {:.3} | {:.2} | {:.2} | {:.2} | {:.2} |\n",
+            row.title,
+            dims(row.thesis.resolution),
+            dims(row.resolution),
+            if row.source == "stand-in" { " (stand-in)" } else { " (original)" },
+            row.viewport[0],
+            row.planes,
+            row.thesis.ms,
+            row.thesis.fps,
+            row.thesis.gpu.replace("NVIDIA GeForce ", ""),
+            st.mean,
+            row.refract.fps,
+            st.median,
+            st.min,
+            st.max,
+            st.std_dev
+        );
+    }
+    s += "\nPer pass (mean GPU ms) and state-buffer traffic:\n\n";
+    s += "| Dataset | Preintegration | Setup | Sweep | Composite | ms/plane | Plane-pixels/s | B/plane-pixel | Effective GB/s |\n";
+    s += "|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    for row in &r.rows {
+        let p = &row.refract.passes;
+        s += &format!(
+            "| {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.3} | {:.3e} | {:.0} | {:.2} |\n",
+            row.title,
+            row.preintegration_ms,
+            p.setup_ms,
+            p.sweep_ms,
+            p.composite_ms,
+            row.ms_per_plane,
+            row.plane_pixels_per_s,
+            row.bytes_per_plane_pixel,
+            row.effective_gb_per_s
+        );
+    }
+    if r.settings.baselines {
+        s += "\nBaselines in the same run (mean GPU ms per frame):\n\n";
+        s += "| Dataset | Refract | EA ray marcher | Sweep floor | Refract / EA | Refract / floor |\n";
+        s += "|---|---:|---:|---:|---:|---:|\n";
+        for row in &r.rows {
+            let f = |v: &Option<Variant>| {
+                v.as_ref()
+                    .map(|v| format!("{:.2}", v.stats.mean))
+                    .unwrap_or_default()
+            };
+            let g = |x: Option<f64>| x.map(|x| format!("{x:.2}")).unwrap_or_default();
+            s += &format!(
+                "| {} | {:.2} | {} | {} | {} | {} |\n",
+                row.title,
+                row.refract.stats.mean,
+                f(&row.ea),
+                f(&row.floor),
+                g(row.sweep_over_ea),
+                g(row.sweep_over_floor)
+            );
+        }
+    }
+    s
+}
+
+/// One CSV record per measured or warm-up frame of every variant, each carrying the whole
+/// context (device, commit, settings), so a file is self-describing and files concatenate.
+pub fn write_csv(r: &Report, path: &Path) -> Result<()> {
+    let mut w = csv::Writer::from_path(path)
+        .with_context(|| format!("{}: cannot create the CSV file", path.display()))?;
+    w.write_record([
+        "schema",
+        "dataset",
+        "variant",
+        "frame",
+        "warmup",
+        "frame_ms",
+        "res_x",
+        "res_y",
+        "res_z",
+        "viewport",
+        "planes",
+        "scale",
+        "sample_distance",
+        "thesis_ms",
+        "thesis_gpu",
+        "device",
+        "driver",
+        "vulkan",
+        "refrakt_version",
+        "git_commit",
+        "date",
+    ])?;
+    for row in &r.rows {
+        let variants = [Some(&row.refract), row.ea.as_ref(), row.floor.as_ref()];
+        for v in variants.into_iter().flatten() {
+            let all = v
+                .warmup_ms
+                .iter()
+                .map(|t| (true, t))
+                .chain(v.frames_ms.iter().map(|t| (false, t)));
+            for (k, (warm, t)) in all.enumerate() {
+                w.write_record([
+                    SCHEMA.to_string(),
+                    row.dataset.clone(),
+                    v.variant.clone(),
+                    k.to_string(),
+                    warm.to_string(),
+                    format!("{t:.6}"),
+                    row.resolution[0].to_string(),
+                    row.resolution[1].to_string(),
+                    row.resolution[2].to_string(),
+                    row.viewport[0].to_string(),
+                    row.planes.to_string(),
+                    r.settings.scale.to_string(),
+                    r.settings.sample_distance.to_string(),
+                    row.thesis.ms.to_string(),
+                    row.thesis.gpu.clone(),
+                    r.meta.device.clone(),
+                    r.meta.driver.clone(),
+                    r.meta.vulkan.clone(),
+                    r.meta.refrakt_version.clone(),
+                    r.meta.git_commit.clone(),
+                    r.meta.date.clone(),
+                ])?;
+            }
+        }
+    }
+    w.flush()
+        .with_context(|| format!("{}: writing the CSV file", path.display()))?;
+    Ok(())
+}
+
+pub fn write_json(r: &Report, path: &Path) -> Result<()> {
+    let text = serde_json::to_string_pretty(r)?;
+    std::fs::write(path, text + "\n")
+        .with_context(|| format!("{}: cannot write the JSON file", path.display()))
+}
+
+/// Checks an output path before hours of benchmarking, not after.
+pub fn check_output(path: &Path, ext: &str) -> Result<()> {
+    let e = path.extension().and_then(|e| e.to_str()).unwrap_or("");
+    if !e.eq_ignore_ascii_case(ext) {
+        bail!("{}: expected a .{ext} file", path.display());
+    }
+    let parent = path.parent().filter(|p| !p.as_os_str().is_empty());
+    if let Some(p) = parent {
+        ensure!(p.is_dir(), "{}: the folder does not exist", p.display());
+    }
+    ensure!(!path.is_dir(), "{}: is a folder", path.display());
+    Ok(())
+}
+
+/// Bar chart of the thesis' mean frame time beside ours per row (log scale: on lavapipe
+/// the two differ by orders of magnitude), as SVG.
+pub fn plot_svg(r: &Report, path: &Path) -> Result<()> {
+    use plotters::prelude::*;
+    let err = |e: &dyn std::fmt::Display| anyhow::anyhow!("{}: plotting: {e}", path.display());
+    let n = r.rows.len();
+    ensure!(n > 0, "no rows to plot");
+    let all: Vec<f64> = r
+        .rows
+        .iter()
+        .flat_map(|row| [row.thesis.ms, row.refract.stats.mean])
+        .collect();
+    let lo = all.iter().cloned().fold(f64::INFINITY, f64::min) / 2.0;
+    let hi = all.iter().cloned().fold(0.0, f64::max) * 2.0;
+    let root = SVGBackend::new(path, (120 * n as u32 + 160, 480)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| err(&e))?;
+    let caption = format!(
+        "Mean frame time, thesis GPU vs {} (scale {})",
+        r.meta.device, r.settings.scale
+    );
+    let mut chart = ChartBuilder::on(&root)
+        .caption(caption, ("sans-serif", 18))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d(0f64..n as f64, (lo..hi).log_scale())
+        .map_err(|e| err(&e))?;
+    let names: Vec<String> = r.rows.iter().map(|row| row.title.clone()).collect();
+    chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .x_labels(n)
+        .x_label_formatter(&|x| {
+            let i = x.floor() as usize;
+            names.get(i).cloned().unwrap_or_default()
+        })
+        .y_desc("ms per frame (log)")
+        .draw()
+        .map_err(|e| err(&e))?;
+    let thesis = RGBColor(120, 120, 120);
+    let ours = RGBColor(200, 80, 40);
+    chart
+        .draw_series(r.rows.iter().enumerate().map(|(i, row)| {
+            let x = i as f64;
+            Rectangle::new([(x + 0.15, lo), (x + 0.48, row.thesis.ms)], thesis.filled())
+        }))
+        .map_err(|e| err(&e))?
+        .label("thesis (GTX 1070 / 980)")
+        .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 10, y + 5)], thesis.filled()));
+    chart
+        .draw_series(r.rows.iter().enumerate().map(|(i, row)| {
+            let x = i as f64;
+            Rectangle::new(
+                [(x + 0.52, lo), (x + 0.85, row.refract.stats.mean)],
+                ours.filled(),
+            )
+        }))
+        .map_err(|e| err(&e))?
+        .label("ours")
+        .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 10, y + 5)], ours.filled()));
+    chart
+        .configure_series_labels()
+        .border_style(BLACK)
+        .background_style(WHITE)
+        .draw()
+        .map_err(|e| err(&e))?;
+    root.present().map_err(|e| err(&e))?;
+    Ok(())
+}
