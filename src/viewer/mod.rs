@@ -1,0 +1,262 @@
+//! `refrakt view`: a window (winit) that shows the scene, rendered every frame by the same
+//! [`Renderer`] the headless `render` uses, then tone mapped on the GPU into the swapchain
+//! image by [`ToneMapPass`] (the arithmetic of the PNG path). Nothing is read back to the
+//! CPU except for screenshots.
+//!
+//! Two threads. The main thread runs the winit event loop: input changes the shared view
+//! state ([`ViewState`]: model, camera, render options, tone map), and actions (pause,
+//! reload, screenshot, quit) go to the render thread as messages. The render thread owns
+//! the swapchain, renderer and tone-map pass and draws frame after frame, each with the
+//! view state as it is when the frame is recorded ("every change takes effect on the next
+//! frame"). It is a thread of its own because presentation may block until the frame is
+//! rendered (Mesa's software WSI does, so on lavapipe a 512² sweep would freeze the window
+//! for seconds per frame); the event loop never waits for the GPU.
+//!
+//! Per frame: the renderer's recording (preintegration if the transfer functions changed,
+//! sweep or EA) and the tone-map pass go into one command buffer with the swapchain's
+//! acquire/present synchronization ([`Swapchain::frame`]); up to
+//! [`crate::vk::FRAMES_IN_FLIGHT`] frames are in flight. Everything that could free
+//! something a frame in flight uses (resize, reload, a new environment) first waits until
+//! the device is idle.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender, TryRecvError};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant, SystemTime};
+
+use anyhow::{anyhow, Context as _, Result};
+use glam::Vec3;
+use winit::application::ApplicationHandler;
+use winit::dpi::PhysicalSize;
+use winit::event::{ElementState, KeyEvent, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop, EventLoopProxy};
+use winit::keyboard::{Key, ModifiersState, NamedKey};
+use winit::window::{Window, WindowId};
+
+use crate::output;
+use crate::output::ToneMap;
+use crate::render::{Camera, Frame, Model, RenderOptions, Renderer, ToneMapPass, MAX_ETA_SCALE};
+use crate::scene::LoadedScene;
+use crate::vk::{
+    Buffer, Context, ContextDesc, FrameStatus, Framebuffer, LayerView, Swapchain, SwapchainDesc,
+    Timings, ValidationLog,
+};
+
+/// Reloads the scene from its sources (the command line's options and files).
+pub type SceneLoader = Box<dyn FnMut() -> Result<LoadedScene>>;
+
+/// What the controls change and every frame reads.
+#[derive(Clone, Debug)]
+pub struct ViewState {
+    pub model: Model,
+    pub camera: Camera,
+    /// The size is replaced by the swapchain's at each frame.
+    pub opts: RenderOptions,
+    pub tone: ToneMap,
+}
+
+/// Main thread → render thread.
+pub(super) enum ToRender {
+    /// Stop drawing (minimised, occluded) or go on.
+    Pause(bool),
+    /// New data for the scene (the view state stays).
+    Reload(Box<LoadedScene>),
+    /// Write a screenshot of the next frame.
+    Screenshot,
+    Quit,
+}
+
+/// Render thread → main thread (wakes the event loop).
+#[derive(Debug)]
+pub(super) enum FromRender {
+    /// The render thread has ended (--frames done, quit, or an error it returns).
+    Finished,
+}
+
+/// How the viewer runs, besides the scene.
+#[derive(Clone, Debug)]
+pub struct ViewOptions {
+    /// FIFO presentation.
+    pub vsync: bool,
+    /// Exit after this many frames.
+    pub frames: Option<u64>,
+    /// With `frames`: write the last frame here (and with the other extension).
+    pub screenshot: Option<PathBuf>,
+    /// Ask for this window size before this frame (tests, scripts).
+    pub resize: Option<([u32; 2], u64)>,
+    /// Where the P key writes screenshots.
+    pub screenshot_dir: PathBuf,
+    /// Reload when the scene's files change on disk.
+    pub watch: bool,
+}
+
+/// What a viewer session leaves behind.
+#[derive(Clone, Debug, Default)]
+pub struct ViewReport {
+    /// Frames presented.
+    pub frames: u64,
+    /// Warnings and errors the validation layer reported over the whole session.
+    pub validation_messages: usize,
+    /// GPU milliseconds of each completed frame (the "frame" scope), in order.
+    pub frame_ms: Vec<f64>,
+}
+
+/// The key map `H` prints (and the README documents).
+pub const KEY_MAP: &str = "\
+refrakt view keys:
+  left-drag         orbit the camera
+  wheel             zoom
+  right-drag, arrows  move the light (kept within 80 degrees of the view direction)
+  [ / ]             light softness - / +
+  - / =             refractive-index scale - / +
+  , / .             sample distance - / + (finer / coarser)
+  ; / '             specular roughness - / +
+  M                 model: refract / ea
+  C                 clipping plane on / off
+  R                 reload the scene and transfer-function files (also automatic on change)
+  P                 screenshot (PNG as shown + linear EXR)
+  H                 this help
+  Esc, Q            quit";
+
+/// Largest angle between the light and the direction back to the camera that controls
+/// allow; the sweep's limit is about 84 degrees (MIN_FORWARD).
+pub const MAX_LIGHT_ANGLE_DEG: f32 = 80.0;
+/// Degrees per pixel of a drag.
+pub(super) const DRAG_DEG_PER_PIXEL: f32 = 0.4;
+/// Degrees per arrow-key press.
+pub(super) const KEY_LIGHT_DEG: f32 = 5.0;
+pub(super) const LIMITS_SOFTNESS: (f32, f32) = (0.0, 8.0);
+pub(super) const LIMITS_SAMPLE_DISTANCE: (f32, f32) = (0.25, 8.0);
+pub(super) const LIMITS_ROUGHNESS: (f32, f32) = (0.01, 1.0);
+pub(super) const MAX_DISTANCE: f32 = 20.0;
+pub(super) const WATCH_INTERVAL: Duration = Duration::from_millis(500);
+pub(super) const RESIZE_TIMEOUT: Duration = Duration::from_secs(10);
+
+/// `towards` (a direction to the light), moved into the cone of [`MAX_LIGHT_ANGLE_DEG`]
+/// around the direction from the volume to the camera if it is outside, keeping its
+/// azimuth about that axis.
+pub fn clamp_light(towards: Vec3, camera: &Camera) -> Vec3 {
+    let (_, forward, _, up) = camera.frame();
+    let back = -forward;
+    let t = towards.normalize_or(back);
+    let max = MAX_LIGHT_ANGLE_DEG.to_radians();
+    if t.dot(back) >= max.cos() {
+        return t;
+    }
+    let side = (t - t.dot(back) * back).normalize_or(up);
+    (max.cos() * back + max.sin() * side).normalize()
+}
+
+/// The light turned by `yaw` (to the viewer's right) and `pitch` (up) degrees in the
+/// camera's frame, then clamped with [`clamp_light`].
+pub fn turn_light(towards: Vec3, camera: &Camera, yaw: f32, pitch: f32) -> Vec3 {
+    let (_, forward, right, up) = camera.frame();
+    let back = -forward;
+    let t = clamp_light(towards, camera);
+    let (x, y, z) = (t.dot(right), t.dot(up), t.dot(back));
+    let az = x.atan2(z) + yaw.to_radians();
+    let el = (y.clamp(-1.0, 1.0).asin() + pitch.to_radians()).clamp(
+        -MAX_LIGHT_ANGLE_DEG.to_radians(),
+        MAX_LIGHT_ANGLE_DEG.to_radians(),
+    );
+    let l = el.cos() * az.sin() * right + el.sin() * up + el.cos() * az.cos() * back;
+    clamp_light(l, camera)
+}
+
+/// Open the window and run until it is closed (or `--frames` are done).
+pub fn run(
+    desc: ContextDesc,
+    scene: LoadedScene,
+    loader: SceneLoader,
+    options: ViewOptions,
+) -> Result<ViewReport> {
+    let event_loop = EventLoop::<FromRender>::with_user_event()
+        .build()
+        .map_err(|e| {
+            anyhow!(
+                "cannot open a window: {e}. `refrakt view` needs a display (X11 or Wayland; \
+                 DISPLAY or WAYLAND_DISPLAY); for a headless machine use Xvfb (Debian package \
+                 xvfb, installed by scripts/setup.sh), e.g. `xvfb-run refrakt view`"
+            )
+        })?;
+    let proxy = event_loop.create_proxy();
+    let mut app = App::new(desc, scene, loader, options, proxy);
+    let looped = event_loop.run_app(&mut app);
+    // The render thread holds everything on the GPU; it ends on Quit (or has ended).
+    if let Some(tx) = &app.to_render {
+        let _ = tx.send(ToRender::Quit);
+    }
+    let mut report = ViewReport::default();
+    let mut error = app.error.take();
+    if let Some(handle) = app.render_thread.take() {
+        match handle.join() {
+            Ok((r, result)) => {
+                report = r;
+                if let (Err(e), None) = (result, &error) {
+                    error = Some(e);
+                }
+            }
+            Err(_) => error = error.or(Some(anyhow!("the render thread panicked"))),
+        }
+    }
+    report.validation_messages = app.validation.as_ref().map(|l| l.count()).unwrap_or(0);
+    // The window goes last, on this thread.
+    drop(app);
+    looped.map_err(|e| anyhow!("window event loop: {e}"))?;
+    match error {
+        Some(e) => Err(e),
+        None => Ok(report),
+    }
+}
+
+mod app;
+mod render_loop;
+
+use app::*;
+use render_loop::*;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn angle_to_camera(t: Vec3, c: &Camera) -> f32 {
+        let (_, forward, _, _) = c.frame();
+        t.normalize()
+            .dot(-forward)
+            .clamp(-1.0, 1.0)
+            .acos()
+            .to_degrees()
+    }
+
+    #[test]
+    fn light_is_kept_in_the_viewers_cone() {
+        let c = Camera::default();
+        let (_, forward, right, _) = c.frame();
+        // From behind the volume: clamped to the cone's edge, on the same side.
+        let behind = (forward + 0.3 * right).normalize();
+        let l = clamp_light(behind, &c);
+        assert!((angle_to_camera(l, &c) - MAX_LIGHT_ANGLE_DEG).abs() < 0.01);
+        assert!(l.dot(right) > 0.0);
+        // Inside: unchanged.
+        let inside = (-forward + 0.2 * right).normalize();
+        assert!((clamp_light(inside, &c) - inside).length() < 1e-6);
+    }
+
+    #[test]
+    fn turning_the_light_moves_it_and_stays_in_the_cone() {
+        let c = Camera::default();
+        let (_, forward, right, up) = c.frame();
+        let l0 = -forward;
+        let l1 = turn_light(l0, &c, 20.0, 0.0);
+        assert!(l1.dot(right) > 0.3, "yaw right moves the light right");
+        let l2 = turn_light(l0, &c, 0.0, 20.0);
+        assert!(l2.dot(up) > 0.3, "pitch up moves the light up");
+        let mut l = l0;
+        for _ in 0..100 {
+            l = turn_light(l, &c, 7.0, 3.0);
+            assert!(angle_to_camera(l, &c) <= MAX_LIGHT_ANGLE_DEG + 0.01);
+        }
+    }
+}

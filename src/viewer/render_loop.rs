@@ -1,0 +1,380 @@
+//! The render thread: the swapchain, the renderer and the tone-map pass, frame after frame
+//! with the view state as it is when each frame is recorded; screenshots.
+
+use super::*;
+
+/// Everything on the GPU, owned by the render thread. Dropped in field order after
+/// [`Gpu::drop`] waited for the device: what the frames use, then the swapchain, the
+/// context (device, surface).
+pub(super) struct Gpu {
+    pub(super) framebuffers: Vec<Framebuffer>,
+    pub(super) views: Vec<LayerView>,
+    pub(super) tonemap: ToneMapPass,
+    pub(super) renderer: Renderer,
+    pub(super) swapchain: Swapchain,
+    pub(super) ctx: Context,
+    pub(super) window: Arc<Window>,
+}
+
+impl Drop for Gpu {
+    fn drop(&mut self) {
+        let _ = self.swapchain.wait_idle();
+    }
+}
+
+impl Gpu {
+    /// Framebuffers over the current swapchain images (after a (re)creation).
+    pub(super) fn rebuild_targets(&mut self) -> Result<()> {
+        self.framebuffers.clear();
+        self.views.clear();
+        if self.swapchain.format() != self.tonemap.format() {
+            self.tonemap = ToneMapPass::new(
+                &self.ctx,
+                self.swapchain.format(),
+                self.swapchain.encodes_srgb(),
+            )?;
+        }
+        let [w, h] = self.swapchain.extent();
+        for image in self.swapchain.images() {
+            self.views.push(image.layer_view(0)?);
+        }
+        for (i, view) in self.views.iter().enumerate() {
+            self.framebuffers.push(Framebuffer::new(
+                &self.ctx,
+                self.tonemap.render_pass(),
+                &[view],
+                w,
+                h,
+                &format!("swapchain framebuffer {i}"),
+            )?);
+        }
+        Ok(())
+    }
+}
+
+/// Host copies of a frame for a screenshot, read once it completes.
+pub(super) struct Shot {
+    pub(super) png: PathBuf,
+    pub(super) exr: PathBuf,
+    pub(super) width: u32,
+    pub(super) height: u32,
+    /// The swapchain image as shown (None when its images cannot be copied from).
+    pub(super) shown: Option<Buffer>,
+    pub(super) bgra: bool,
+    /// The renderer's linear frame.
+    pub(super) linear: Buffer,
+}
+
+/// The render thread: draws frames until told to quit or `--frames` are done.
+pub(super) struct RenderLoop {
+    pub(super) gpu: Gpu,
+    pub(super) state: Arc<Mutex<ViewState>>,
+    pub(super) rx: Receiver<ToRender>,
+    pub(super) options: ViewOptions,
+    pub(super) scene_name: String,
+    pub(super) volume: crate::volume::Volume,
+    pub(super) report: ViewReport,
+    pub(super) paused: bool,
+    pub(super) shot_requested: bool,
+    pub(super) shot_counter: u32,
+    pub(super) resize_done: bool,
+    /// Planes of each frame in flight, for the title once its timings arrive.
+    pub(super) planes: HashMap<u64, Option<u32>>,
+    pub(super) last_print: Option<Instant>,
+    pub(super) last_check_error: Option<String>,
+}
+
+impl RenderLoop {
+    pub(super) fn run(&mut self) -> Result<()> {
+        loop {
+            if !self.messages()? {
+                return Ok(());
+            }
+            if self.done() {
+                self.gpu.swapchain.wait_idle()?;
+                self.collect_timings();
+                return Ok(());
+            }
+            self.draw()?;
+            self.collect_timings();
+        }
+    }
+
+    /// Handle what the main thread sent; false once told to quit. Blocks while paused
+    /// (or while the window has no area), so a minimised window costs nothing.
+    pub(super) fn messages(&mut self) -> Result<bool> {
+        loop {
+            let size = self.gpu.window.inner_size();
+            let idle = self.paused || size.width == 0 || size.height == 0;
+            let msg = if idle {
+                match self.rx.recv_timeout(Duration::from_millis(250)) {
+                    Ok(m) => m,
+                    Err(RecvTimeoutError::Timeout) => continue,
+                    Err(RecvTimeoutError::Disconnected) => return Ok(false),
+                }
+            } else {
+                match self.rx.try_recv() {
+                    Ok(m) => m,
+                    Err(TryRecvError::Empty) => return Ok(true),
+                    Err(TryRecvError::Disconnected) => return Ok(false),
+                }
+            };
+            match msg {
+                ToRender::Pause(p) => self.paused = p,
+                ToRender::Reload(scene) => self.reload(*scene)?,
+                ToRender::Screenshot => self.shot_requested = true,
+                ToRender::Quit => return Ok(false),
+            }
+        }
+    }
+
+    pub(super) fn done(&self) -> bool {
+        self.options
+            .frames
+            .map(|n| self.report.frames >= n)
+            .unwrap_or(false)
+    }
+
+    pub(super) fn reload(&mut self, new: LoadedScene) -> Result<()> {
+        let gpu = &mut self.gpu;
+        gpu.swapchain.wait_idle()?;
+        if new.volume != self.volume {
+            gpu.renderer = Renderer::new(&gpu.ctx, &new.volume, &new.tf)?;
+            self.volume = new.volume;
+        } else {
+            gpu.renderer.set_transfer_functions(&new.tf)?;
+        }
+        gpu.renderer.set_environment(new.env.as_ref())?;
+        self.scene_name = new.name;
+        Ok(())
+    }
+
+    /// --resize: ask for the size before frame N and wait (up to RESIZE_TIMEOUT) until the
+    /// window has it.
+    pub(super) fn scripted_resize(&mut self) {
+        let Some((size, at)) = self.options.resize else {
+            return;
+        };
+        if at != self.report.frames || self.resize_done {
+            return;
+        }
+        self.resize_done = true;
+        let window = &self.gpu.window;
+        let _ = window.request_inner_size(PhysicalSize::new(size[0], size[1]));
+        let deadline = Instant::now() + RESIZE_TIMEOUT;
+        loop {
+            let s = window.inner_size();
+            if [s.width, s.height] == size {
+                return;
+            }
+            if Instant::now() >= deadline {
+                eprintln!(
+                    "warning: the window did not take the size {}x{} within {:?}; going on",
+                    size[0], size[1], RESIZE_TIMEOUT
+                );
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        }
+    }
+
+    /// Record and present one frame.
+    pub(super) fn draw(&mut self) -> Result<()> {
+        self.scripted_resize();
+        let size = self.gpu.window.inner_size();
+        if size.width == 0 || size.height == 0 {
+            return Ok(());
+        }
+        let gpu = &mut self.gpu;
+        if gpu.swapchain.is_stale() || gpu.swapchain.extent() != [size.width, size.height] {
+            gpu.swapchain.recreate([size.width, size.height])?;
+            gpu.rebuild_targets()?;
+        }
+        let [w, h] = gpu.swapchain.extent();
+        let mut view = self.state.lock().unwrap().clone();
+        view.opts.width = w;
+        view.opts.height = h;
+        // Controls keep every value in range; anything left (a reloaded scene the renderer
+        // refuses) is reported once and nothing is drawn until it changes.
+        if let Err(e) = gpu.renderer.check(view.model, &view.camera, &view.opts) {
+            let msg = format!("{e:#}");
+            if self.last_check_error.as_deref() != Some(&msg) {
+                eprintln!("cannot render: {msg}");
+                self.last_check_error = Some(msg);
+            }
+            std::thread::sleep(Duration::from_millis(100));
+            return Ok(());
+        }
+        self.last_check_error = None;
+        let frame_no = self.report.frames;
+        let last = self
+            .options
+            .frames
+            .map(|n| frame_no + 1 == n)
+            .unwrap_or(false);
+        let shot = if self.shot_requested || (last && self.options.screenshot.is_some()) {
+            self.shot_requested = false;
+            Some(self.prepare_shot(last, w, h)?)
+        } else {
+            None
+        };
+        let mut planes = None;
+        let Gpu {
+            framebuffers,
+            tonemap,
+            renderer,
+            swapchain,
+            ..
+        } = &mut self.gpu;
+        let status = swapchain.frame(|rec, index, target| {
+            rec.begin_scope("frame");
+            let out = renderer.record(rec, view.model, &view.camera, &view.opts)?;
+            planes = out.sweep.as_ref().map(|s| s.planes.count);
+            tonemap.record(rec, out.image, target, &framebuffers[index], &view.tone)?;
+            if let Some(shot) = &shot {
+                if let Some(buf) = &shot.shown {
+                    rec.copy_image_to_buffer(target, 0, buf);
+                }
+                rec.copy_image_to_buffer(out.image, 0, &shot.linear);
+            }
+            rec.end_scope();
+            Ok(())
+        })?;
+        if let FrameStatus::Presented(n) = status {
+            self.planes.insert(n, planes);
+            self.report.frames += 1;
+            if let Some(shot) = shot {
+                self.gpu.swapchain.wait_idle()?;
+                write_shot(&shot)?;
+            }
+        }
+        Ok(())
+    }
+
+    pub(super) fn prepare_shot(&mut self, last: bool, w: u32, h: u32) -> Result<Shot> {
+        let (png, exr) = match (&self.options.screenshot, last) {
+            (Some(path), true) => match output::format_for(path)? {
+                output::ImageFormat::Png => (path.clone(), path.with_extension("exr")),
+                output::ImageFormat::Exr => (path.with_extension("png"), path.clone()),
+            },
+            _ => loop {
+                self.shot_counter += 1;
+                let stem = format!("refrakt-{}-{:03}", self.scene_name, self.shot_counter);
+                let png = self.options.screenshot_dir.join(format!("{stem}.png"));
+                if !png.exists() {
+                    break (png.clone(), png.with_extension("exr"));
+                }
+            },
+        };
+        let gpu = &self.gpu;
+        let shown = if gpu.swapchain.can_copy_from() {
+            Some(Buffer::readback(
+                &gpu.ctx,
+                w as u64 * h as u64 * 4,
+                "screenshot (shown)",
+            )?)
+        } else {
+            None
+        };
+        Ok(Shot {
+            png,
+            exr,
+            width: w,
+            height: h,
+            shown,
+            bgra: gpu.swapchain.is_bgra(),
+            linear: Buffer::readback(&gpu.ctx, w as u64 * h as u64 * 16, "screenshot (linear)")?,
+        })
+    }
+
+    /// Timings of completed frames: the window title and, at most once a second (every
+    /// frame with --frames), a line on stdout.
+    pub(super) fn collect_timings(&mut self) {
+        let done = self.gpu.swapchain.take_timings();
+        for (n, t) in done {
+            let planes = self.planes.remove(&n).flatten();
+            let line = summary(&t, planes);
+            if let Some(ms) = t.get("frame") {
+                self.report.frame_ms.push(ms);
+            }
+            let [w, h] = self.gpu.swapchain.extent();
+            let model = self.state.lock().unwrap().model;
+            self.gpu.window.set_title(&format!(
+                "refrakt view: {} ({}) {w}x{h} | {line}",
+                self.scene_name,
+                model.name()
+            ));
+            let due = self
+                .last_print
+                .map(|t| t.elapsed() >= Duration::from_secs(1))
+                .unwrap_or(true);
+            if self.options.frames.is_some() || due {
+                println!("frame {n}: {line}");
+                self.last_print = Some(Instant::now());
+            }
+        }
+    }
+}
+
+/// "GPU ms per frame, ms in the sweep, plane count" of one frame.
+pub(super) fn summary(t: &Timings, planes: Option<u32>) -> String {
+    let total = t.get("frame");
+    let mut s = match total {
+        Some(ms) => format!("{ms:.1} ms GPU"),
+        None => "no GPU timestamps".to_string(),
+    };
+    if let Some(ms) = t.get("sweep") {
+        s += &format!(", sweep {ms:.1} ms");
+    }
+    if let Some(ms) = t.get("ea raymarch") {
+        s += &format!(", ea {ms:.1} ms");
+    }
+    if let Some(p) = planes {
+        s += &format!(", {p} planes");
+    }
+    if let Some(ms) = t.get("preintegration") {
+        s += &format!(" (incl. preintegration {ms:.1} ms)");
+    }
+    s
+}
+
+pub(super) fn write_shot(shot: &Shot) -> Result<()> {
+    let (w, h) = (shot.width, shot.height);
+    let linear: Vec<[f32; 4]> = shot.linear.read_values(w as usize * h as usize)?;
+    output::write_pixels(w, h, &linear, &shot.exr)?;
+    match &shot.shown {
+        Some(buf) => {
+            let mut bytes: Vec<u8> = buf.read_values(w as usize * h as usize * 4)?;
+            if shot.bgra {
+                for px in bytes.chunks_exact_mut(4) {
+                    px.swap(0, 2);
+                }
+            }
+            image::save_buffer(&shot.png, &bytes, w, h, image::ExtendedColorType::Rgba8)
+                .with_context(|| format!("writing {}", shot.png.display()))?;
+        }
+        None => {
+            // The surface's images cannot be copied from: the PNG path's CPU tone mapping
+            // of the same linear frame instead.
+            let frame = Frame {
+                width: w,
+                height: h,
+                pixels: linear,
+                timings: Timings::default(),
+                max_steps: 0,
+                dumps: Vec::new(),
+                sweep: None,
+            };
+            output::write(&frame, &shot.png, &output::ToneMap::default())?;
+            eprintln!(
+                "note: the swapchain images cannot be copied; the PNG is tone mapped on the CPU"
+            );
+        }
+    }
+    println!(
+        "screenshot: {} (as shown), {} (linear)",
+        shot.png.display(),
+        shot.exr.display()
+    );
+    Ok(())
+}
