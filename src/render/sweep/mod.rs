@@ -1,0 +1,490 @@
+//! The refractive plane sweep (thesis ch. 4, ch. 5, Algorithm 1) on Vulkan.
+//!
+//! Per frame, in ONE command buffer: a compute setup pass initialises six state buffers
+//! (light colour, light direction, viewing-ray position, viewing-ray direction, colour +
+//! opacity, medium) and, for the forward light transport, the light rays and the
+//! irradiance; then the view-aligned planes; then a compute pass composites the
+//! background. Each buffer is ONE 2D image with 2 array layers; plane i renders layer
+//! i % 2 through a framebuffer of per-layer views and samples layer 1 - i % 2 through
+//! per-layer sampled views. The read layer arrives as a push constant: nothing is rebound
+//! or updated between planes.
+//!
+//! Per plane, the thesis' backward transport is one full-screen draw that moves light
+//! (semi-Lagrangian) and viewing rays together. The forward transport (the default) is
+//! three draws: the light rays advance (over the ray images, whose size follows the ray
+//! budget, not the screen), they splat their flux into the plane's irradiance (additive
+//! point sprites), and the viewing rays cross the segment that ends on the plane. All
+//! plane pipelines are made from one descriptor set, so switching pipelines leaves it
+//! bound (a set bind per plane costs ~4 ms and 3 MB on lavapipe, a pipeline switch ~0).
+//!
+//! Synchronization: the images live in GENERAL layout, so the only barriers between
+//! planes are memory dependencies on exactly the layers that change role (the layer just
+//! written becomes sampled, the layer just sampled becomes an attachment), batched into
+//! one vkCmdPipelineBarrier2 per role change. GENERAL is what lets one descriptor set name
+//! both layers: the validation layer checks the layout of every statically used
+//! descriptor at every draw (see docs/NOTES.md).
+
+use anyhow::{bail, ensure, Result};
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3};
+
+use super::{Camera, FrameTarget, RenderOptions, VolumeInfo};
+use crate::shaders;
+use crate::vk::{
+    self, Access, Binding, Buffer, ComputePipeline, Context, DescriptorSet, Framebuffer,
+    GraphicsPipeline, Image, ImageDesc, ImageKind, LayerView, Primitives, Recorder, RenderPass,
+    Sampler,
+};
+
+/// The six state buffers, in attachment order, and what else a plane can be dumped as.
+///
+/// With the forward light transport `LightColour` and `LightDirection` dump the plane's
+/// light as the viewing rays see it (the splatted irradiance, and the luminance-weighted
+/// sum of light directions with the weight in w), and `LightRays` / `LightRayDirections`
+/// the light rays themselves (flux rgb + view x on the plane; v = η dx/ds + view y; ray
+/// r of the grid in [`SweepStats::light_grid`] / [`SweepStats::light_rays`] at texel r).
+/// With the backward transport the latter two are the same images as the former.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StateBuffer {
+    LightColour,
+    LightDirection,
+    ViewPosition,
+    ViewDirection,
+    ColourOpacity,
+    Medium,
+    LightRays,
+    LightRayDirections,
+}
+
+impl StateBuffer {
+    pub const ALL: [StateBuffer; 6] = [
+        StateBuffer::LightColour,
+        StateBuffer::LightDirection,
+        StateBuffer::ViewPosition,
+        StateBuffer::ViewDirection,
+        StateBuffer::ColourOpacity,
+        StateBuffer::Medium,
+    ];
+
+    /// Everything `--dump` accepts.
+    pub const DUMPABLE: [StateBuffer; 8] = [
+        StateBuffer::LightColour,
+        StateBuffer::LightDirection,
+        StateBuffer::ViewPosition,
+        StateBuffer::ViewDirection,
+        StateBuffer::ColourOpacity,
+        StateBuffer::Medium,
+        StateBuffer::LightRays,
+        StateBuffer::LightRayDirections,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            StateBuffer::LightColour => "light-colour",
+            StateBuffer::LightDirection => "light-direction",
+            StateBuffer::ViewPosition => "view-position",
+            StateBuffer::ViewDirection => "view-direction",
+            StateBuffer::ColourOpacity => "colour-opacity",
+            StateBuffer::Medium => "medium",
+            StateBuffer::LightRays => "light-rays",
+            StateBuffer::LightRayDirections => "light-ray-directions",
+        }
+    }
+
+    pub fn parse(s: &str) -> Result<Self> {
+        Self::DUMPABLE
+            .into_iter()
+            .find(|b| b.name() == s)
+            .ok_or_else(|| {
+                let names: Vec<_> = Self::DUMPABLE.iter().map(|b| b.name()).collect();
+                anyhow::anyhow!("unknown state buffer '{s}'; one of {}", names.join(", "))
+            })
+    }
+
+    /// The state image this buffer lives in.
+    fn index(self) -> usize {
+        match self {
+            StateBuffer::LightRays => 0,
+            StateBuffer::LightRayDirections => 1,
+            b => b as usize,
+        }
+    }
+}
+
+/// Every state buffer is RGBA32F: 16 bytes per pixel per layer. 32-bit floats because
+/// light and medium are products over hundreds of planes, and the equality with the EA
+/// baseline (1/255) and the Beer–Lambert test (1 %) must survive that many roundings.
+pub const STATE_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+pub const STATE_BYTES_PER_PIXEL: u64 = 16;
+
+pub use crate::light::Light;
+
+/// How light is carried from plane to plane.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LightTransport {
+    /// Light rays advanced forward one by one (each texel of the light state is a ray with
+    /// its own position, direction and flux), each ray's flux spread over its cell on every
+    /// plane (glsl/light_splat.*). Conserves flux through focal crossings; the default
+    /// since issue 12 (docs/NOTES.md, "Light transport for caustics").
+    Forward,
+    /// The thesis' backward (semi-Lagrangian) step with the intensity law (eqs. 4.4–4.8):
+    /// one direction per pixel, gain bounded per plane. The default.
+    Backward,
+}
+
+impl LightTransport {
+    pub fn name(self) -> &'static str {
+        match self {
+            LightTransport::Forward => "forward",
+            LightTransport::Backward => "backward",
+        }
+    }
+
+    pub fn parse(s: &str) -> Result<Self> {
+        match s {
+            "forward" => Ok(LightTransport::Forward),
+            "backward" => Ok(LightTransport::Backward),
+            _ => bail!("unknown light transport '{s}'; one of forward, backward"),
+        }
+    }
+}
+
+/// Largest half-width, in pixels, of one light ray's splat (its cell on the plane): a ray
+/// whose neighbours have spread further deposits its flux over this many pixels at most
+/// (still all of it: the box is normalised). Large enough for the coarsest regular grid:
+/// light 80° from the sweep axis drifts ~6 pixels per plane, the grid must reach far
+/// aside and its pitch grows past 8 pixels; at 4 (8 pixels across) the boxes no longer
+/// tiled the plane and a lit floor showed dark columns (column means −63 % / +22 %,
+/// measured), at 16 it is uniform (0.000 %).
+pub const MAX_SPLAT_HALF_WIDTH: f32 = 16.0;
+
+pub use super::limits::MIN_FORWARD;
+
+/// Largest refractive-index scale ([`SweepOptions::eta_scale`]).
+pub const MAX_ETA_SCALE: f32 = 3.0;
+
+/// Options of the refractive model beyond the common [`RenderOptions`].
+#[derive(Clone, Debug)]
+pub struct SweepOptions {
+    pub light: Light,
+    /// GGX roughness of the Cook–Torrance specular term.
+    pub roughness: f32,
+    /// Scale of the specular term (0 = no specular).
+    pub specular: f32,
+    /// Bound on the intensity gain I = S_{i-1}/S_i per plane (chapter 7's bright spots).
+    /// Focusing by a strong lens stays well below it except right at a focus.
+    pub max_gain: f32,
+    /// Clipping plane in world space: opacity (not the medium or η) is zero where
+    /// dot(normal, p) > offset (thesis Fig. 6.6).
+    pub clip: Option<(Vec3, f32)>,
+    /// Diagnostic: diffuse light 1 and no specular, so with η ≡ 1 the sweep must equal the
+    /// EA baseline.
+    pub unlit: bool,
+    /// Copy these buffers after these planes (0-based) for inspection.
+    pub dumps: Vec<(StateBuffer, u32)>,
+    /// Test-only: skip the inter-plane barrier before this plane, to prove synchronization
+    /// validation notices.
+    pub drop_barrier_before_plane: Option<u32>,
+    /// Rotation of the environment map about the world's up axis, degrees.
+    pub env_rotation: f32,
+    /// Average the environment over each pixel's refracted footprint with the summed-area
+    /// table (thesis Fig. 4.5); false = one bilinear lookup per pixel (for comparison).
+    pub env_footprint: bool,
+    /// Refractive-index scale k: the sweep uses η' = 1 + k (η_tf − 1), so 0 turns refraction
+    /// off and 1 (default) is the transfer function's η.
+    pub eta_scale: f32,
+    /// How light travels between planes.
+    pub light_transport: LightTransport,
+    /// Forward transport: light rays per screen pixel (1 to `MAX_LIGHT_RAYS`). The rays
+    /// cover the light's whole domain at plane 0's pixel pitch as far as this budget
+    /// allows; more rays resolve oblique light and crossing rays more finely, at a cost
+    /// proportional to their number.
+    pub light_rays: u32,
+    /// Fresnel reflection of viewing rays at changes of η: the reflected fraction sees the
+    /// environment (or background) in the mirrored direction, unoccluded; false = the
+    /// thesis' model (no reflection, everything transmitted).
+    pub reflections: bool,
+    /// Benchmark baseline: run every plane with glsl/sweep_floor.frag, which only carries
+    /// the state forward (same passes, barriers, attachments and reads). The image is not
+    /// a rendering; the time is the floor the sweep's optics add to.
+    pub floor: bool,
+}
+
+impl Default for SweepOptions {
+    fn default() -> Self {
+        Self {
+            light: Light::default(),
+            roughness: 0.3,
+            specular: 1.0,
+            max_gain: 4.0,
+            clip: None,
+            unlit: false,
+            dumps: Vec::new(),
+            drop_barrier_before_plane: None,
+            env_rotation: 0.0,
+            env_footprint: true,
+            eta_scale: 1.0,
+            light_transport: LightTransport::Forward,
+            light_rays: 2,
+            reflections: true,
+            floor: false,
+        }
+    }
+}
+
+impl SweepOptions {
+    pub fn validate(&self) -> Result<()> {
+        let l = &self.light;
+        ensure!(
+            l.towards.is_finite() && l.towards.length() > 1e-6,
+            "light direction {:?} must be a finite non-zero vector",
+            l.towards.to_array()
+        );
+        ensure!(
+            l.colour.iter().all(|c| c.is_finite() && *c >= 0.0),
+            "light colour {:?} must be finite and non-negative",
+            l.colour
+        );
+        ensure!(
+            l.softness.is_finite() && (0.0..=8.0).contains(&l.softness),
+            "light softness {} must be in [0, 8] (filter radius in voxels)",
+            l.softness
+        );
+        ensure!(
+            self.roughness.is_finite() && (0.01..=1.0).contains(&self.roughness),
+            "roughness {} must be in [0.01, 1]",
+            self.roughness
+        );
+        ensure!(
+            self.specular.is_finite() && self.specular >= 0.0,
+            "specular strength {} must be >= 0",
+            self.specular
+        );
+        ensure!(
+            self.max_gain.is_finite() && self.max_gain >= 1.0,
+            "intensity gain bound {} must be >= 1",
+            self.max_gain
+        );
+        ensure!(
+            self.env_rotation.is_finite(),
+            "environment rotation {} must be a finite number of degrees",
+            self.env_rotation
+        );
+        ensure!(
+            self.eta_scale.is_finite() && (0.0..=MAX_ETA_SCALE).contains(&self.eta_scale),
+            "refractive-index scale {} must be in [0, {MAX_ETA_SCALE}]",
+            self.eta_scale
+        );
+        ensure!(
+            (1..=MAX_LIGHT_RAYS).contains(&self.light_rays),
+            "light rays per pixel {} must be in 1..={MAX_LIGHT_RAYS}",
+            self.light_rays
+        );
+        if let Some((n, o)) = self.clip {
+            ensure!(
+                n.is_finite() && n.length() > 1e-6 && o.is_finite(),
+                "clipping plane needs a finite non-zero normal and a finite offset"
+            );
+        }
+        Ok(())
+    }
+}
+
+/// The view-aligned planes of one frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Planes {
+    pub first_depth: f32,
+    pub spacing: f32,
+    pub count: u32,
+}
+
+impl Planes {
+    /// Planes from the box's nearest to its farthest depth, `spacing` apart (thesis ch. 6:
+    /// sample distance × the smallest voxel side).
+    pub fn for_box(camera: &Camera, half_extent: Vec3, spacing: f32) -> Result<Self> {
+        let (eye, forward, _, _) = camera.frame();
+        let mut near = f32::INFINITY;
+        let mut far = f32::NEG_INFINITY;
+        for i in 0..8 {
+            let corner = Vec3::new(
+                if i & 1 == 0 { -1.0 } else { 1.0 },
+                if i & 2 == 0 { -1.0 } else { 1.0 },
+                if i & 4 == 0 { -1.0 } else { 1.0 },
+            ) * half_extent;
+            let d = (corner - eye).dot(forward);
+            near = near.min(d);
+            far = far.max(d);
+        }
+        if near <= spacing {
+            bail!(
+                "the plane sweep needs the camera outside the volume box (nearest box depth \
+                 {near:.3}); increase the camera distance"
+            );
+        }
+        let count = ((far - near) / spacing).floor() as u32 + 2;
+        Ok(Self {
+            first_depth: near,
+            spacing,
+            count,
+        })
+    }
+
+    pub fn depth(&self, i: u32) -> f32 {
+        self.first_depth + i as f32 * self.spacing
+    }
+}
+
+/// The planes of a frame, after the checks that depend on the camera and the light: the
+/// light must come from the viewer's side, the camera must be outside the volume box, and
+/// dumps must name planes the frame has.
+pub(super) fn check(
+    info: VolumeInfo,
+    camera: &Camera,
+    opts: &RenderOptions,
+    sweep: &SweepOptions,
+) -> Result<Planes> {
+    let (_, forward, _, _) = camera.frame();
+    let travel = -sweep.light.towards.normalize();
+    let forwardness = travel.dot(forward);
+    if forwardness < MIN_FORWARD {
+        bail!(
+            "the light must come from the viewer's side: the sweep runs front to back, so \
+             light travelling against it cannot be propagated (light direction makes {:.1}° \
+             with the view direction; at most {:.1}° is supported)",
+            forwardness.clamp(-1.0, 1.0).acos().to_degrees(),
+            MIN_FORWARD.acos().to_degrees()
+        );
+    }
+    let planes = Planes::for_box(
+        camera,
+        info.half_extent,
+        opts.sample_distance * info.ref_step,
+    )?;
+    for (b, plane) in &sweep.dumps {
+        ensure!(
+            *plane < planes.count,
+            "--dump {}@{plane}: this frame has planes 0..{}",
+            b.name(),
+            planes.count - 1
+        );
+    }
+    Ok(planes)
+}
+
+/// What recording a sweep leaves for after the submission: the plane stats and the
+/// buffers the requested dumps are copied into (alive until the submission completes).
+pub(crate) struct SweepRecording {
+    pub stats: SweepStats,
+    pub dumps: Vec<(StateBuffer, u32, Buffer)>,
+    /// Where the clamp counters are copied to; `None` for frames that are not read back
+    /// (the viewer's): the copy would outlive this recording's buffer.
+    clamp_readback: Option<Buffer>,
+}
+
+impl SweepRecording {
+    /// The clamp counters, once the submission has completed.
+    pub fn read_clamps(&mut self) -> Result<()> {
+        let Some(buf) = &self.clamp_readback else {
+            return Ok(());
+        };
+        let c: Vec<u32> = buf.read_values(4)?;
+        self.stats.clamps = Clamps {
+            light_direction: c[0] as u64,
+            light_dropped: c[1] as u64,
+            view_direction: c[2] as u64,
+            gain: c[3] as u64,
+        };
+        Ok(())
+    }
+
+    /// The dumps, once the submission has completed.
+    pub fn read_dumps(&self, width: u32, height: u32) -> Result<Vec<Dump>> {
+        self.dumps
+            .iter()
+            .map(|(b, plane, buf)| {
+                // The forward transport's rays live in images of their own size.
+                let (width, height) = match (self.stats.light_transport, b) {
+                    (
+                        LightTransport::Forward,
+                        StateBuffer::LightRays | StateBuffer::LightRayDirections,
+                    ) => (self.stats.light_rays[2], self.stats.light_rays[3]),
+                    _ => (width, height),
+                };
+                Ok(Dump {
+                    buffer: *b,
+                    plane: *plane,
+                    depth: self.stats.planes.depth(*plane),
+                    width,
+                    height,
+                    pixels: buf.read_values(width as usize * height as usize)?,
+                })
+            })
+            .collect()
+    }
+}
+
+/// A state buffer copied out after a plane.
+#[derive(Clone, Debug)]
+pub struct Dump {
+    pub buffer: StateBuffer,
+    pub plane: u32,
+    /// Depth of `plane`. The pass for plane k advances the viewing rays to plane k+1, so
+    /// the view position buffer holds points one spacing deeper than this.
+    pub depth: f32,
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<[f32; 4]>,
+}
+
+/// Diagnostics of one sweep, for performance engineers.
+#[derive(Clone, Debug)]
+pub struct SweepStats {
+    pub planes: Planes,
+    /// State-buffer bytes read and written per plane (render-pass loads, sampled reads
+    /// including filter taps, attachment writes), over the whole viewport.
+    pub bytes_per_plane: u64,
+    /// How light travelled.
+    pub light_transport: LightTransport,
+    /// Forward transport: the light rays' grid on the launch plane (one spacing before
+    /// plane 0): view x, y of ray (0, 0)'s cell corner, cell width and height; ray (i, j)
+    /// starts at the centre of its cell.
+    pub light_grid: [f32; 4],
+    /// Forward transport: the grid's columns and rows, and the ray images' width and
+    /// height. Ray r = j * columns + i is texel (r % width, r / width) of the
+    /// `light-rays` / `light-ray-directions` dumps.
+    pub light_rays: [u32; 4],
+    /// How often physics was bent, summed over pixels and planes (read back after the
+    /// frame; zero for recorded frames that were not read back): see [`Clamps`].
+    pub clamps: Clamps,
+}
+
+/// Pixel-planes at which the sweep had to depart from its model (glsl/sweep_light.glsl).
+/// None of them creates light: clamped directions keep their flux, dropped rays lose it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Clamps {
+    /// Light directions bent back to 84° from the sweep direction.
+    pub light_direction: u64,
+    /// Light rays turned back against the sweep (total internal reflection): dropped.
+    pub light_dropped: u64,
+    /// Viewing-ray directions bent back to 84°.
+    pub view_direction: u64,
+    /// Backward transport: intensity gains bounded per plane.
+    pub gain: u64,
+}
+
+impl Clamps {
+    pub fn total(&self) -> u64 {
+        self.light_direction + self.light_dropped + self.view_direction + self.gain
+    }
+}
+
+/// Most light rays per screen pixel (`SweepOptions::light_rays`).
+pub const MAX_LIGHT_RAYS: u32 = 8;
+
+mod params;
+mod pass;
+mod record;
+
+pub(crate) use params::EnvInputs;
+use params::*;
+pub(crate) use pass::SweepPass;

@@ -1,0 +1,344 @@
+//! Recording one frame of the sweep: the setup pass, the planes with their barriers, the
+//! composite, dumps and timestamps.
+
+use super::*;
+
+impl SweepPass {
+    /// Record one frame into `rec`: setup, every plane, and the composite into
+    /// [`SweepPass::output`]. Parameters travel in the command stream, so earlier frames
+    /// may still be in flight.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn record(
+        &mut self,
+        rec: &mut Recorder,
+        ctx: &Context,
+        info: VolumeInfo,
+        volume_dims: [u32; 3],
+        camera: &Camera,
+        opts: &RenderOptions,
+        sweep: &SweepOptions,
+        inputs: [&Image; 4],
+        env: &EnvInputs,
+        read_back: bool,
+    ) -> Result<SweepRecording> {
+        let (eye, forward, right, up) = camera.frame();
+        let travel = -sweep.light.towards.normalize();
+        let planes = check(info, camera, opts, sweep)?;
+        let view_to_world = Mat4::from_cols(
+            right.extend(0.0),
+            up.extend(0.0),
+            forward.extend(0.0),
+            eye.extend(1.0),
+        );
+        let view_to_tex = Mat4::from_translation(Vec3::splat(0.5))
+            * Mat4::from_scale(0.5 / info.half_extent)
+            * view_to_world;
+        let light_view = Vec3::new(travel.dot(right), travel.dot(up), travel.dot(forward));
+        let (clip_n, clip_o) = sweep
+            .clip
+            .map(|(n, o)| (n.normalize(), o))
+            .unwrap_or((Vec3::ZERO, 0.0));
+        let forward = match (sweep.light_transport, &self.forward) {
+            (LightTransport::Backward, _) => None,
+            (LightTransport::Forward, Some(f)) => Some(f),
+            (LightTransport::Forward, None) => bail!(
+                "the forward light transport needs point sizes above 1 and fragment-shader \
+                 atomics (largePoints, fragmentStoresAndAtomics), which device '{}' lacks; \
+                 use --light-transport backward",
+                ctx.info().name
+            ),
+        };
+        let tan_half = (camera.fov_y.to_radians() * 0.5).tan();
+        let aspect = self.width as f32 / self.height as f32;
+        let ray_image = [
+            self.rays[0].image.extent()[0],
+            self.rays[0].image.extent()[1],
+        ];
+        let (grid, grid_dims) = light_grid(
+            &planes,
+            light_view,
+            tan_half,
+            aspect,
+            [self.width, self.height],
+            ray_image[0] as u64 * ray_image[1] as u64,
+        );
+        let soft = sweep.light.softness > 0.0;
+        let (diffusion_w, diffusion_stride) = diffusion(
+            sweep.light.softness * info.ref_step,
+            (grid[2] * grid[3]).sqrt(),
+        );
+        let p = SweepParams {
+            view_to_tex: view_to_tex.to_cols_array(),
+            view_to_world: view_to_world.to_cols_array(),
+            camera: [
+                (camera.fov_y.to_radians() * 0.5).tan(),
+                self.width as f32 / self.height as f32,
+                self.width as f32,
+                self.height as f32,
+            ],
+            planes: [
+                planes.first_depth,
+                planes.spacing,
+                planes.count as f32,
+                info.ref_step,
+            ],
+            light_dir: [
+                light_view.x,
+                light_view.y,
+                light_view.z,
+                sweep.light.softness,
+            ],
+            light_colour: [
+                sweep.light.colour[0],
+                sweep.light.colour[1],
+                sweep.light.colour[2],
+                0.0,
+            ],
+            volume_dims: [
+                volume_dims[0] as f32,
+                volume_dims[1] as f32,
+                volume_dims[2] as f32,
+                0.0,
+            ],
+            specular: [sweep.roughness, sweep.specular, 0.0, 0.0],
+            clip: [clip_n.x, clip_n.y, clip_n.z, clip_o],
+            background: opts.background,
+            refraction: [
+                sweep.eta_scale,
+                if sweep.reflections { 1.0 } else { 0.0 },
+                if env.enabled { 1.0 } else { 0.0 },
+                sweep.env_rotation.to_radians(),
+            ],
+            light_grid: grid,
+            light_rays: [
+                grid_dims[0] as f32,
+                grid_dims[1] as f32,
+                ray_image[0] as f32,
+                ray_image[1] as f32,
+            ],
+            transport: [
+                if forward.is_some() { 1.0 } else { 0.0 },
+                diffusion_w,
+                diffusion_stride as f32,
+                forward.map_or(MAX_SPLAT_HALF_WIDTH, |f| f.max_half_width),
+            ],
+            max_gain: sweep.max_gain,
+            termination_alpha: opts.termination_alpha,
+            unlit: sweep.unlit as u32,
+            pad0: 0,
+        };
+        let e = EnvParams {
+            info: [
+                if env.enabled { 1.0 } else { 0.0 },
+                sweep.env_rotation.to_radians(),
+                if sweep.env_footprint { 1.0 } else { 0.0 },
+                0.0,
+            ],
+            mean: env.mean,
+        };
+
+        // Only frames read back by the caller (dumps are the same case) copy the counters
+        // out: a recorded frame's buffers die with the recording, before the GPU runs it.
+        let clamp_readback = if read_back {
+            Some(Buffer::readback(ctx, 16, "sweep clamp counters readback")?)
+        } else {
+            None
+        };
+        let dump_buffers: Vec<(StateBuffer, u32, Buffer)> = sweep
+            .dumps
+            .iter()
+            .map(|&(b, plane)| {
+                let image = match (forward.is_some(), b) {
+                    (true, StateBuffer::LightRays) => &self.rays[0].image,
+                    (true, StateBuffer::LightRayDirections) => &self.rays[1].image,
+                    _ => &self.states[b.index()].image,
+                };
+                let buf = Buffer::readback(
+                    ctx,
+                    image.layer_bytes()?,
+                    &format!("dump {}@{plane}", b.name()),
+                )?;
+                Ok((b, plane, buf))
+            })
+            .collect::<Result<_>>()?;
+
+        let groups = [self.width.div_ceil(8), self.height.div_ceil(8), 1];
+        rec.update_uniform(&self.params, bytemuck::bytes_of(&p))?;
+        rec.update_uniform(&self.env_params, bytemuck::bytes_of(&e))?;
+        for img in inputs.into_iter().chain([env.map, env.sat]) {
+            rec.transition_all(img, Access::Sampled);
+        }
+        rec.begin_scope("sweep setup");
+        rec.clear_storage(&self.counters);
+        rec.transition_many(&self.every_layer(Access::ComputeStorage));
+        // The setup covers the screen and the ray images (rays_per_pixel times taller).
+        let setup_groups = [ray_image[0].div_ceil(8), ray_image[1].div_ceil(8), 1];
+        rec.dispatch(&self.setup, &self.setup_set, &[], setup_groups)?;
+        // Both layers become sampled: every draw's set names both (see module docs).
+        rec.transition_many(&self.every_layer(Access::SampledGeneral));
+        rec.end_scope();
+
+        rec.begin_scope("sweep");
+        // Bound once: between planes only push constants change, and the forward
+        // transport switches pipelines (same layout, so the set stays bound).
+        let forward = forward.filter(|_| !sweep.floor);
+        let plane_pipeline = match (sweep.floor, forward) {
+            (true, _) => &self.floor,
+            (false, Some(f)) if soft => &f.light_soft,
+            (false, Some(f)) => &f.light,
+            (false, None) => &self.sweep,
+        };
+        rec.bind_graphics(plane_pipeline, &self.sweep_set, self.width, self.height);
+        let light_images = [&self.rays[0].image, &self.rays[1].image];
+        for i in 0..planes.count {
+            let write = i % 2;
+            let read = 1 - write;
+            let push = PlanePush {
+                plane: i,
+                read_layer: read,
+                depth: planes.depth(i),
+                pad: 0,
+            };
+            // The layer the previous plane wrote becomes sampled (one batched barrier
+            // over the six images); begin_render_pass then makes the layer the previous
+            // plane sampled an attachment (a second one). Nothing else is synchronised.
+            if sweep.drop_barrier_before_plane == Some(i) {
+                for s in &self.states {
+                    rec.assume_without_barrier(&s.image, read..read + 1, Access::SampledGeneral);
+                }
+            } else {
+                // With the forward transport the previous plane's irradiance, which this
+                // plane's viewing rays read, is in the same batch (a dump may have copied
+                // it out).
+                let mut items = self.state_layers(read..read + 1, Access::SampledGeneral);
+                if forward.is_some() {
+                    for img in self.irradiance.iter().map(|i| &i.image).chain(light_images) {
+                        items.push((img, read..read + 1, Access::SampledGeneral));
+                    }
+                }
+                rec.transition_many(&items);
+            }
+            match forward {
+                None => {
+                    let attachments: Vec<(&Image, u32)> =
+                        self.states.iter().map(|s| (&s.image, write)).collect();
+                    rec.begin_render_pass(
+                        &self.render_pass,
+                        &self.framebuffers[write as usize],
+                        &attachments,
+                    )?;
+                    rec.draw_fullscreen(plane_pipeline, bytemuck::bytes_of(&push))?;
+                    rec.end_render_pass();
+                }
+                Some(f) => {
+                    // 1. The light rays advance to plane i (over the ray images).
+                    rec.begin_render_pass(
+                        &self.light_pass,
+                        &self.light_framebuffers[write as usize],
+                        &[(light_images[0], write), (light_images[1], write)],
+                    )?;
+                    // Only the rows that hold rays.
+                    let rows = (grid_dims[0] * grid_dims[1]).div_ceil(ray_image[0]);
+                    rec.set_viewport(ray_image[0], rows.clamp(1, ray_image[1]));
+                    rec.draw_fullscreen(plane_pipeline, bytemuck::bytes_of(&push))?;
+                    rec.end_render_pass();
+                    rec.set_viewport(self.width, self.height);
+                    // 2. They deposit their flux on plane i: irradiance layer `write`
+                    // (plane i - 2's, read by no draw any more) becomes an attachment.
+                    rec.transition_many(&[
+                        (light_images[0], write..write + 1, Access::SampledGeneral),
+                        (light_images[1], write..write + 1, Access::SampledGeneral),
+                    ]);
+                    rec.begin_render_pass(
+                        &self.splat_pass,
+                        &self.splat_framebuffers[write as usize],
+                        &[
+                            (&self.irradiance[0].image, write),
+                            (&self.irradiance[1].image, write),
+                        ],
+                    )?;
+                    rec.bind_pipeline(&f.splat);
+                    let splat_push = PlanePush {
+                        read_layer: write,
+                        ..push
+                    };
+                    rec.draw(
+                        &f.splat,
+                        bytemuck::bytes_of(&splat_push),
+                        grid_dims[0] * grid_dims[1],
+                    )?;
+                    rec.end_render_pass();
+                    // 3. The viewing rays cross the segment from plane i - 1 to plane i,
+                    // lit by the irradiance of both (layers `read` and `write`).
+                    rec.transition_many(&[
+                        (
+                            &self.irradiance[0].image,
+                            write..write + 1,
+                            Access::SampledGeneral,
+                        ),
+                        (
+                            &self.irradiance[1].image,
+                            write..write + 1,
+                            Access::SampledGeneral,
+                        ),
+                    ]);
+                    let views: Vec<(&Image, u32)> =
+                        self.states[2..].iter().map(|s| (&s.image, write)).collect();
+                    rec.begin_render_pass(
+                        &self.view_pass,
+                        &self.view_framebuffers[write as usize],
+                        &views,
+                    )?;
+                    rec.bind_pipeline(&f.view);
+                    rec.draw_fullscreen(&f.view, bytemuck::bytes_of(&push))?;
+                    rec.end_render_pass();
+                    rec.bind_pipeline(plane_pipeline);
+                }
+            }
+            let splat = forward;
+            for (b, plane, buf) in &dump_buffers {
+                if *plane != i {
+                    continue;
+                }
+                // With the forward transport what a plane's light is, is the splatted
+                // irradiance; the rays are in images of their own.
+                let image = match (splat.is_some(), b) {
+                    (true, StateBuffer::LightColour) => &self.irradiance[0].image,
+                    (true, StateBuffer::LightDirection) => &self.irradiance[1].image,
+                    (true, StateBuffer::LightRays) => &self.rays[0].image,
+                    (true, StateBuffer::LightRayDirections) => &self.rays[1].image,
+                    _ => &self.states[b.index()].image,
+                };
+                rec.copy_image_to_buffer(image, write, buf);
+            }
+        }
+        rec.end_scope();
+
+        rec.begin_scope("composite");
+        let last = (planes.count - 1) % 2;
+        rec.transition_many(&self.state_layers(0..2, Access::SampledGeneral));
+        rec.transition_all(&self.output.image, Access::ComputeStorage);
+        rec.dispatch(
+            &self.composite,
+            &self.composite_set,
+            &last.to_le_bytes(),
+            groups,
+        )?;
+        rec.end_scope();
+        if let Some(buf) = &clamp_readback {
+            rec.copy_storage_to_host(&self.counters, buf);
+        }
+        Ok(SweepRecording {
+            stats: SweepStats {
+                planes,
+                bytes_per_plane: self.bytes_per_plane(soft, sweep.specular > 0.0),
+                light_transport: sweep.light_transport,
+                light_grid: grid,
+                light_rays: [grid_dims[0], grid_dims[1], ray_image[0], ray_image[1]],
+                clamps: Clamps::default(),
+            },
+            dumps: dump_buffers,
+            clamp_readback,
+        })
+    }
+}
