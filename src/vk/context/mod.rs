@@ -16,7 +16,13 @@ use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use raw_window_handle::{HasDisplayHandle, HasWindowHandle};
 
-const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
+mod device;
+mod instance;
+mod selection;
+
+use instance::*;
+use selection::*;
+pub use selection::{device_type_name, version_string, DeviceInfo};
 
 /// A window the context presents to: anything with raw display and window handles (a
 /// winit `Window`). The context keeps it alive until its surface is destroyed.
@@ -75,57 +81,6 @@ impl ValidationLog {
     }
 }
 
-/// What `refrakt info` prints and what the renderer checks against.
-#[derive(Clone, Debug)]
-pub struct DeviceInfo {
-    pub index: usize,
-    pub name: String,
-    pub device_type: vk::PhysicalDeviceType,
-    pub api_version: u32,
-    pub driver_version: u32,
-    pub driver_name: String,
-    pub driver_info: String,
-    pub limits: vk::PhysicalDeviceLimits,
-    /// (bytes, device-local) per heap.
-    pub memory_heaps: Vec<(u64, bool)>,
-    pub timestamps: bool,
-    /// Point sizes above 1 (the `largePoints` feature), enabled when offered: the plane
-    /// sweep's forward light transport splats each light ray as one point.
-    pub large_points: bool,
-    /// Storage-buffer atomics in fragment shaders (`fragmentStoresAndAtomics`), enabled
-    /// when offered: the plane sweep counts its clamps with them.
-    pub fragment_atomics: bool,
-}
-
-pub fn version_string(v: u32) -> String {
-    format!(
-        "{}.{}.{}",
-        vk::api_version_major(v),
-        vk::api_version_minor(v),
-        vk::api_version_patch(v)
-    )
-}
-
-pub fn device_type_name(t: vk::PhysicalDeviceType) -> &'static str {
-    match t {
-        vk::PhysicalDeviceType::DISCRETE_GPU => "discrete GPU",
-        vk::PhysicalDeviceType::INTEGRATED_GPU => "integrated GPU",
-        vk::PhysicalDeviceType::VIRTUAL_GPU => "virtual GPU",
-        vk::PhysicalDeviceType::CPU => "CPU",
-        _ => "other",
-    }
-}
-
-fn type_rank(t: vk::PhysicalDeviceType) -> u32 {
-    match t {
-        vk::PhysicalDeviceType::DISCRETE_GPU => 4,
-        vk::PhysicalDeviceType::INTEGRATED_GPU => 3,
-        vk::PhysicalDeviceType::VIRTUAL_GPU => 2,
-        vk::PhysicalDeviceType::CPU => 1,
-        _ => 0,
-    }
-}
-
 /// The window surface of a presenting context, destroyed before the instance.
 pub(crate) struct SurfaceState {
     pub(crate) loader: ash::khr::surface::Instance,
@@ -159,49 +114,6 @@ pub(crate) struct Shared {
 #[derive(Clone)]
 pub struct Context {
     pub(crate) shared: Arc<Shared>,
-}
-
-unsafe extern "system" fn debug_callback(
-    severity: vk::DebugUtilsMessageSeverityFlagsEXT,
-    types: vk::DebugUtilsMessageTypeFlagsEXT,
-    data: *const vk::DebugUtilsMessengerCallbackDataEXT<'_>,
-    user: *mut c_void,
-) -> vk::Bool32 {
-    // SAFETY: the layer passes a valid callback-data pointer; `user` points into the
-    // `Arc<ValidationLog>` that `Shared` owns until after the messenger is destroyed.
-    let (msg, log) = unsafe {
-        let data = &*data;
-        let msg = if data.p_message.is_null() {
-            String::from("(no message)")
-        } else {
-            CStr::from_ptr(data.p_message)
-                .to_string_lossy()
-                .into_owned()
-        };
-        (msg, &*(user as *const ValidationLog))
-    };
-    let counted = severity.intersects(
-        vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
-            | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
-    );
-    if counted {
-        log::error!("[vulkan {types:?} {severity:?}] {msg}");
-        log.messages.lock().unwrap().push(msg);
-    } else {
-        log::debug!("[vulkan {types:?} {severity:?}] {msg}");
-    }
-    vk::FALSE
-}
-
-fn load_entry() -> Result<ash::Entry> {
-    // SAFETY: loading the system Vulkan loader library; nothing else runs concurrently with
-    // its initialisation in this process that could observe a half-loaded library.
-    unsafe { ash::Entry::load() }.map_err(|e| {
-        anyhow!(
-            "cannot load the Vulkan loader (libvulkan.so.1): {e}. Install it with \
-             `sudo apt-get install libvulkan1 mesa-vulkan-drivers` or run scripts/setup.sh"
-        )
-    })
 }
 
 impl Context {
@@ -386,117 +298,6 @@ impl Context {
         })
     }
 
-    fn create_device(
-        instance: &ash::Instance,
-        desc: &ContextDesc,
-        surface: Option<(&ash::khr::surface::Instance, vk::SurfaceKHR)>,
-    ) -> Result<(vk::PhysicalDevice, DeviceInfo, ash::Device, u32)> {
-        // SAFETY: valid instance.
-        let physicals = unsafe { instance.enumerate_physical_devices() }?;
-        if physicals.is_empty() {
-            bail!(
-                "no Vulkan device found. On a machine without a GPU install Mesa's lavapipe: \
-                 `sudo apt-get install mesa-vulkan-drivers` (scripts/setup.sh does this)"
-            );
-        }
-        let infos: Vec<DeviceInfo> = physicals
-            .iter()
-            .enumerate()
-            .map(|(i, &p)| query_info(instance, p, i))
-            .collect();
-        // With a window, a device qualifies only if its graphics+compute family can present
-        // to the surface and it has VK_KHR_swapchain.
-        let presents = |i: usize| -> bool {
-            let Some((loader, surface)) = surface else {
-                return true;
-            };
-            queue_family(instance, physicals[i], Some((loader, surface))).is_some()
-                && has_device_extension(instance, physicals[i], ash::khr::swapchain::NAME)
-        };
-        let chosen = match &desc.device {
-            Some(sel) => {
-                let i = select_device(&infos, sel)?;
-                if !presents(i) {
-                    bail!(
-                        "device '{}' cannot present to this window (no queue with graphics, \
-                         compute and presentation, or no VK_KHR_swapchain)",
-                        infos[i].name
-                    );
-                }
-                i
-            }
-            None => infos
-                .iter()
-                .filter(|i| i.api_version >= vk::API_VERSION_1_3 && presents(i.index))
-                .max_by_key(|i| (type_rank(i.device_type), usize::MAX - i.index))
-                .map(|i| i.index)
-                .ok_or_else(|| {
-                    anyhow!(
-                        "no Vulkan 1.3 device{} found; devices seen: {}",
-                        if surface.is_some() {
-                            " that can present to this window"
-                        } else {
-                            ""
-                        },
-                        device_list(&infos)
-                    )
-                })?,
-        };
-        let info = infos[chosen].clone();
-        if info.api_version < vk::API_VERSION_1_3 {
-            bail!(
-                "device '{}' supports Vulkan {}, refrakt needs 1.3",
-                info.name,
-                version_string(info.api_version)
-            );
-        }
-        let physical = physicals[chosen];
-        // SAFETY: valid physical device.
-        let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
-        let family = queue_family(instance, physical, surface)
-            .ok_or_else(|| anyhow!("device '{}' has no graphics+compute queue", info.name))?;
-        let mut info = info;
-        info.timestamps = info.limits.timestamp_compute_and_graphics == vk::TRUE
-            && families[family as usize].timestamp_valid_bits > 0;
-
-        let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
-        let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut f13);
-        // SAFETY: valid physical device and a well-formed pNext chain.
-        unsafe { instance.get_physical_device_features2(physical, &mut f2) };
-        let core = f2.features;
-        if f13.synchronization2 != vk::TRUE {
-            bail!("device '{}' lacks synchronization2", info.name);
-        }
-        info.large_points = core.large_points == vk::TRUE;
-        info.fragment_atomics = core.fragment_stores_and_atomics == vk::TRUE;
-        let core_features = vk::PhysicalDeviceFeatures::default()
-            .large_points(info.large_points)
-            .fragment_stores_and_atomics(info.fragment_atomics);
-        let priorities = [1.0f32];
-        let queue_infos = [vk::DeviceQueueCreateInfo::default()
-            .queue_family_index(family)
-            .queue_priorities(&priorities)];
-        // maintenance4 is required by Vulkan 1.3; glslang targeting 1.3 emits LocalSizeId, which
-        // needs it enabled.
-        let mut enable13 = vk::PhysicalDeviceVulkan13Features::default()
-            .synchronization2(true)
-            .maintenance4(true);
-        let device_exts: Vec<*const std::ffi::c_char> = if surface.is_some() {
-            vec![ash::khr::swapchain::NAME.as_ptr()]
-        } else {
-            vec![]
-        };
-        let device_info = vk::DeviceCreateInfo::default()
-            .queue_create_infos(&queue_infos)
-            .enabled_extension_names(&device_exts)
-            .enabled_features(&core_features)
-            .push_next(&mut enable13);
-        // SAFETY: create info references locals that outlive the call.
-        let device = unsafe { instance.create_device(physical, &device_info, None) }
-            .with_context(|| format!("creating a logical device on '{}'", info.name))?;
-        Ok((physical, info, device, family))
-    }
-
     pub fn info(&self) -> &DeviceInfo {
         &self.shared.info
     }
@@ -569,163 +370,5 @@ impl Drop for Shared {
             }
             self.instance.destroy_instance(None);
         }
-    }
-}
-
-fn create_instance(
-    entry: &ash::Entry,
-    validate: bool,
-    debug_utils: bool,
-    extra_extensions: &[*const std::ffi::c_char],
-) -> Result<ash::Instance> {
-    let app = vk::ApplicationInfo::default()
-        .application_name(c"refrakt")
-        .engine_name(c"refrakt")
-        .api_version(vk::API_VERSION_1_3);
-    let layers: Vec<*const i8> = if validate {
-        vec![VALIDATION_LAYER.as_ptr()]
-    } else {
-        vec![]
-    };
-    let mut exts: Vec<*const i8> = vec![];
-    if debug_utils {
-        exts.push(ash::ext::debug_utils::NAME.as_ptr());
-    }
-    exts.extend_from_slice(extra_extensions);
-    // Synchronization validation is off by default in the layer; it is the check that
-    // vouches for our barriers (plane sweep, compute passes), so it is always on with
-    // --validate.
-    let enabled = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
-    let mut features = vk::ValidationFeaturesEXT::default().enabled_validation_features(&enabled);
-    let mut info = vk::InstanceCreateInfo::default()
-        .application_info(&app)
-        .enabled_layer_names(&layers)
-        .enabled_extension_names(&exts);
-    if validate {
-        info = info.push_next(&mut features);
-    }
-    // SAFETY: create info references locals that outlive the call.
-    unsafe { entry.create_instance(&info, None) }.context("creating the Vulkan instance")
-}
-
-/// The first queue family with graphics and compute (and presentation to `surface`, if
-/// given).
-fn queue_family(
-    instance: &ash::Instance,
-    physical: vk::PhysicalDevice,
-    surface: Option<(&ash::khr::surface::Instance, vk::SurfaceKHR)>,
-) -> Option<u32> {
-    // SAFETY: valid physical device.
-    let families = unsafe { instance.get_physical_device_queue_family_properties(physical) };
-    families.iter().enumerate().find_map(|(i, f)| {
-        let i = i as u32;
-        let usable = f
-            .queue_flags
-            .contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE);
-        let presents = match surface {
-            // SAFETY: valid physical device, family index and surface of this instance.
-            Some((loader, s)) => {
-                unsafe { loader.get_physical_device_surface_support(physical, i, s) }
-                    .unwrap_or(false)
-            }
-            None => true,
-        };
-        (usable && presents).then_some(i)
-    })
-}
-
-fn has_device_extension(
-    instance: &ash::Instance,
-    physical: vk::PhysicalDevice,
-    name: &CStr,
-) -> bool {
-    // SAFETY: valid physical device.
-    unsafe { instance.enumerate_device_extension_properties(physical) }
-        .map(|exts| {
-            exts.iter()
-                .any(|e| e.extension_name_as_c_str().ok() == Some(name))
-        })
-        .unwrap_or(false)
-}
-
-fn query_info(instance: &ash::Instance, p: vk::PhysicalDevice, index: usize) -> DeviceInfo {
-    let mut driver = vk::PhysicalDeviceDriverProperties::default();
-    let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
-    // SAFETY: valid physical device and pNext chain.
-    unsafe { instance.get_physical_device_properties2(p, &mut props2) };
-    let props = props2.properties;
-    let mem = unsafe { instance.get_physical_device_memory_properties(p) };
-    let heaps = mem.memory_heaps[..mem.memory_heap_count as usize]
-        .iter()
-        .map(|h| (h.size, h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL)))
-        .collect();
-    DeviceInfo {
-        index,
-        name: props
-            .device_name_as_c_str()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default(),
-        device_type: props.device_type,
-        api_version: props.api_version,
-        driver_version: props.driver_version,
-        driver_name: driver
-            .driver_name_as_c_str()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default(),
-        driver_info: driver
-            .driver_info_as_c_str()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default(),
-        limits: props.limits,
-        memory_heaps: heaps,
-        timestamps: props.limits.timestamp_compute_and_graphics == vk::TRUE,
-        large_points: false,
-        fragment_atomics: false,
-    }
-}
-
-fn device_list(infos: &[DeviceInfo]) -> String {
-    infos
-        .iter()
-        .map(|i| {
-            format!(
-                "[{}] {} ({})",
-                i.index,
-                i.name,
-                device_type_name(i.device_type)
-            )
-        })
-        .collect::<Vec<_>>()
-        .join(", ")
-}
-
-/// `--device` accepts an index or a case-insensitive substring of the device name.
-fn select_device(infos: &[DeviceInfo], sel: &str) -> Result<usize> {
-    if let Ok(idx) = sel.trim().parse::<usize>() {
-        if idx < infos.len() {
-            return Ok(idx);
-        }
-        bail!(
-            "--device {sel}: there is no device with index {idx}; devices: {}",
-            device_list(infos)
-        );
-    }
-    let needle = sel.to_lowercase();
-    let matches: Vec<usize> = infos
-        .iter()
-        .filter(|i| i.name.to_lowercase().contains(&needle))
-        .map(|i| i.index)
-        .collect();
-    match matches.as_slice() {
-        [one] => Ok(*one),
-        [] => bail!(
-            "--device '{sel}' matches no Vulkan device; devices: {}",
-            device_list(infos)
-        ),
-        many => bail!(
-            "--device '{sel}' matches {} devices ({}); give an index instead",
-            many.len(),
-            device_list(infos)
-        ),
     }
 }
