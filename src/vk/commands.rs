@@ -10,6 +10,7 @@ use std::ops::Range;
 use anyhow::{bail, Context as _, Result};
 use ash::vk;
 
+use super::barriers::plan_transitions;
 use super::pipeline::PUSH_STAGES;
 use super::resources::color_range;
 use super::{
@@ -547,34 +548,6 @@ fn image_barriers<'a>(
     }
 }
 
-/// The barriers taking `layers` of an image whose layers are in `state` to `to`, as
-/// (layer range, previous access) — consecutive layers in the same state share one — and
-/// `state` updated. None between two reads in the same state; always one around a write
-/// (write after write, read after write, write after read).
-fn plan_transitions(
-    state: &mut [Access],
-    layers: Range<u32>,
-    to: Access,
-) -> Vec<(Range<u32>, Access)> {
-    let mut plan = Vec::new();
-    let mut layer = layers.start;
-    while layer < layers.end {
-        let from = state[layer as usize];
-        let mut end = layer + 1;
-        while end < layers.end && state[end as usize] == from {
-            end += 1;
-        }
-        if from != to || from.writes() || to.writes() {
-            plan.push((layer..end, from));
-        }
-        for l in layer..end {
-            state[l as usize] = to;
-        }
-        layer = end;
-    }
-    plan
-}
-
 fn buffer_image_copy(image: &Image, layer: u32) -> vk::BufferImageCopy {
     let [w, h, d] = image.desc.extent;
     vk::BufferImageCopy {
@@ -810,59 +783,4 @@ fn buffer_barrier(
         .buffer(buffer.raw)
         .offset(0)
         .size(vk::WHOLE_SIZE)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::plan_transitions;
-    use crate::vk::Access;
-
-    #[test]
-    fn reads_in_the_same_state_need_no_barrier() {
-        let mut state = [Access::Sampled; 2];
-        assert!(plan_transitions(&mut state, 0..2, Access::Sampled).is_empty());
-    }
-
-    #[test]
-    fn writes_always_get_a_barrier() {
-        // Write after write in the same state (the sweep's planes rendering into one layer).
-        let mut state = [Access::AttachmentGeneral; 2];
-        let plan = plan_transitions(&mut state, 1..2, Access::AttachmentGeneral);
-        assert_eq!(plan, vec![(1..2, Access::AttachmentGeneral)]);
-        // Read after write, then write after read.
-        let mut state = [Access::ComputeStorage];
-        assert_eq!(
-            plan_transitions(&mut state, 0..1, Access::Sampled),
-            vec![(0..1, Access::ComputeStorage)]
-        );
-        assert_eq!(
-            plan_transitions(&mut state, 0..1, Access::ComputeStorage),
-            vec![(0..1, Access::Sampled)]
-        );
-    }
-
-    #[test]
-    fn layers_in_one_state_share_a_barrier_and_the_state_follows() {
-        let mut state = [
-            Access::Sampled,
-            Access::Sampled,
-            Access::ComputeStorage,
-            Access::Undefined,
-        ];
-        let plan = plan_transitions(&mut state, 0..3, Access::TransferSrc);
-        assert_eq!(
-            plan,
-            vec![(0..2, Access::Sampled), (2..3, Access::ComputeStorage)]
-        );
-        // Untouched layers keep their state.
-        assert_eq!(
-            state,
-            [
-                Access::TransferSrc,
-                Access::TransferSrc,
-                Access::TransferSrc,
-                Access::Undefined
-            ]
-        );
-    }
 }

@@ -7,6 +7,7 @@
 //! [`Swapchain::frame`], which returns with the frame in flight: its caller keeps what the
 //! frame uses alive and calls [`Swapchain::wait_idle`] before freeing any of it.
 
+mod barriers;
 mod commands;
 mod context;
 mod graphics;
@@ -16,6 +17,7 @@ pub mod spirv;
 mod swapchain;
 
 pub use ash::vk::Format;
+pub use barriers::Access;
 pub use commands::{Recorder, Timings};
 pub use context::{
     device_type_name, version_string, Context, ContextDesc, DeviceInfo, ValidationLog, WindowSource,
@@ -23,7 +25,7 @@ pub use context::{
 pub use graphics::{Framebuffer, GraphicsPipeline, Primitives, RenderPass};
 pub use pipeline::{Binding, ComputePipeline, DescriptorSet};
 pub use resources::{
-    format_size, Access, Buffer, Filter, Image, ImageDesc, ImageKind, LayerView, Memory, Sampler,
+    format_size, Buffer, Filter, Image, ImageDesc, ImageKind, LayerView, Memory, Sampler,
 };
 pub use swapchain::{FrameStatus, Swapchain, SwapchainDesc, FRAMES_IN_FLIGHT};
 

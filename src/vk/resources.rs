@@ -11,12 +11,7 @@ use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
 
-use super::Context;
-
-/// The stage at which a frame waits for its swapchain image to be acquired; the first
-/// barrier on an [`Access::Acquired`] image starts from it.
-pub(crate) const ACQUIRE_WAIT_STAGE: vk::PipelineStageFlags2 =
-    vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT;
+use super::{Access, Context};
 
 static NEXT_IMAGE_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
 
@@ -169,99 +164,6 @@ impl Drop for Buffer {
         if let Some(a) = self.allocation.take() {
             let _ = self.ctx.shared.allocator.lock().unwrap().free(a);
         }
-    }
-}
-
-/// How an image is used next; each maps to a layout, pipeline stage and access mask.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Access {
-    Undefined,
-    TransferDst,
-    TransferSrc,
-    /// Sampled (texture()) from a compute, vertex or fragment shader.
-    Sampled,
-    /// Read and written as a storage image from a compute shader.
-    ComputeStorage,
-    /// Written as a colour attachment of a render pass.
-    ColorAttachment,
-    /// Colour attachment in GENERAL layout. With [`Access::SampledGeneral`] this lets one
-    /// image array be rendered to and sampled layer by layer (the plane sweep's ping-pong)
-    /// with memory barriers only: descriptors of both layers stay valid at every draw.
-    AttachmentGeneral,
-    /// Sampled from a compute, vertex or fragment shader, in GENERAL layout.
-    SampledGeneral,
-    /// A swapchain image just acquired: its old contents are discarded (UNDEFINED layout),
-    /// and the stage is the one the acquire semaphore is waited at, so the first barrier
-    /// chains with that wait.
-    Acquired,
-    /// Handed to the presentation engine (PRESENT_SRC_KHR); the submission's signal
-    /// semaphore, not a pipeline stage, orders what comes after.
-    Present,
-}
-
-impl Access {
-    pub(crate) fn layout(self) -> vk::ImageLayout {
-        match self {
-            Access::Undefined => vk::ImageLayout::UNDEFINED,
-            Access::TransferDst => vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-            Access::TransferSrc => vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-            Access::Sampled => vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-            Access::ComputeStorage => vk::ImageLayout::GENERAL,
-            Access::ColorAttachment => vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
-            Access::AttachmentGeneral | Access::SampledGeneral => vk::ImageLayout::GENERAL,
-            Access::Acquired => vk::ImageLayout::UNDEFINED,
-            Access::Present => vk::ImageLayout::PRESENT_SRC_KHR,
-        }
-    }
-    pub(crate) fn stage(self) -> vk::PipelineStageFlags2 {
-        match self {
-            Access::Undefined => vk::PipelineStageFlags2::NONE,
-            Access::TransferDst | Access::TransferSrc => vk::PipelineStageFlags2::COPY,
-            Access::Sampled => {
-                vk::PipelineStageFlags2::COMPUTE_SHADER
-                    | vk::PipelineStageFlags2::FRAGMENT_SHADER
-                    | vk::PipelineStageFlags2::VERTEX_SHADER
-            }
-            Access::ComputeStorage => vk::PipelineStageFlags2::COMPUTE_SHADER,
-            Access::ColorAttachment => vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
-            Access::AttachmentGeneral => vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
-            Access::SampledGeneral => {
-                vk::PipelineStageFlags2::COMPUTE_SHADER
-                    | vk::PipelineStageFlags2::FRAGMENT_SHADER
-                    | vk::PipelineStageFlags2::VERTEX_SHADER
-            }
-            Access::Acquired => ACQUIRE_WAIT_STAGE,
-            Access::Present => vk::PipelineStageFlags2::NONE,
-        }
-    }
-    pub(crate) fn access(self) -> vk::AccessFlags2 {
-        match self {
-            Access::Undefined => vk::AccessFlags2::NONE,
-            Access::TransferDst => vk::AccessFlags2::TRANSFER_WRITE,
-            Access::TransferSrc => vk::AccessFlags2::TRANSFER_READ,
-            Access::Sampled => vk::AccessFlags2::SHADER_SAMPLED_READ,
-            Access::ComputeStorage => {
-                vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE
-            }
-            Access::ColorAttachment => {
-                vk::AccessFlags2::COLOR_ATTACHMENT_WRITE | vk::AccessFlags2::COLOR_ATTACHMENT_READ
-            }
-            Access::AttachmentGeneral => {
-                vk::AccessFlags2::COLOR_ATTACHMENT_WRITE | vk::AccessFlags2::COLOR_ATTACHMENT_READ
-            }
-            Access::SampledGeneral => vk::AccessFlags2::SHADER_SAMPLED_READ,
-            Access::Acquired | Access::Present => vk::AccessFlags2::NONE,
-        }
-    }
-    pub(crate) fn writes(self) -> bool {
-        !matches!(
-            self,
-            Access::Sampled
-                | Access::TransferSrc
-                | Access::Undefined
-                | Access::Acquired
-                | Access::Present
-        )
     }
 }
 

@@ -22,8 +22,8 @@ use std::collections::VecDeque;
 use anyhow::{bail, Context as _, Result};
 use ash::vk;
 
+use super::barriers::ACQUIRE_WAIT_STAGE;
 use super::commands::{create_query_pool, PendingTimings};
-use super::resources::ACQUIRE_WAIT_STAGE;
 use super::{Access, Context, Image, Recorder, Timings};
 
 /// How many frames the CPU may record ahead of the GPU.
