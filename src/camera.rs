@@ -101,3 +101,111 @@ impl Camera {
         (eye, forward, right, up)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cam(azimuth: f32, elevation: f32, target: Vec3) -> Camera {
+        Camera {
+            azimuth,
+            elevation,
+            distance: 2.0,
+            fov_y: 35.0,
+            target,
+        }
+    }
+
+    /// Screen position of `p` in units of the half field of view (0, 0 = image centre).
+    fn project(c: &Camera, p: Vec3) -> (f32, f32) {
+        let (eye, forward, right, up) = c.frame();
+        let v = p - eye;
+        let z = v.dot(forward);
+        assert!(z > 0.0, "{p} is behind the camera");
+        let t = (c.fov_y.to_radians() * 0.5).tan();
+        (v.dot(right) / (z * t), v.dot(up) / (z * t))
+    }
+
+    fn assert_orthonormal_right_handed(c: &Camera) {
+        let (_, f, r, u) = c.frame();
+        for (n, v) in [("forward", f), ("right", r), ("up", u)] {
+            assert!((v.length() - 1.0).abs() < 1e-6, "{n} {v} of {c:?}");
+        }
+        assert!(f.dot(r).abs() < 1e-6 && f.dot(u).abs() < 1e-6 && r.dot(u).abs() < 1e-6);
+        assert!((r.cross(f) - u).length() < 1e-6, "{c:?}");
+    }
+
+    #[test]
+    fn the_camera_orbits_and_looks_at_its_target() {
+        let t = Vec3::new(0.3, -0.2, 0.1);
+        let c = cam(40.0, 25.0, t);
+        let (eye, forward, ..) = c.frame();
+        assert!(((eye - t).length() - 2.0).abs() < 1e-5);
+        assert!((forward - (t - eye).normalize()).length() < 1e-6);
+        // Same orientation as the camera around the origin, translated by the target.
+        let o = cam(40.0, 25.0, Vec3::ZERO);
+        assert_eq!(c.frame().1, o.frame().1);
+        assert!((eye - (o.eye() + t)).length() < 1e-6);
+        let (x, y) = project(&c, t);
+        assert!(x.abs() < 1e-6 && y.abs() < 1e-6);
+        assert!(c.validate().is_ok());
+        assert!(cam(0.0, 0.0, Vec3::new(f32::NAN, 0.0, 0.0))
+            .validate()
+            .is_err());
+        assert!(cam(0.0, 0.0, Vec3::new(0.0, f32::INFINITY, 0.0))
+            .validate()
+            .is_err());
+    }
+
+    #[test]
+    fn straight_down_and_up_views_have_a_continuous_frame() {
+        let t = Vec3::new(0.1, 0.2, -0.3);
+        for az in [0.0f32, 30.0, 135.0, -100.0] {
+            let down = cam(az, 90.0, t);
+            assert!(down.validate().is_ok());
+            assert_orthonormal_right_handed(&down);
+            let (eye, forward, _, up) = down.frame();
+            assert_eq!(forward, Vec3::new(0.0, -1.0, 0.0));
+            assert!((eye - (t + Vec3::new(0.0, 2.0, 0.0))).length() < 1e-6);
+            // Screen-up is the horizontal direction the camera faced at this azimuth.
+            let a = az.to_radians();
+            assert!((up + Vec3::new(a.sin(), 0.0, a.cos())).length() < 1e-6);
+            // A point below the target is in the middle of the image.
+            let (x, y) = project(&down, t - Vec3::new(0.0, 0.7, 0.0));
+            assert!(x.abs() < 1e-6 && y.abs() < 1e-6, "{x} {y}");
+            let up_cam = cam(az, -90.0, t);
+            assert_orthonormal_right_handed(&up_cam);
+            assert_eq!(up_cam.frame().1, Vec3::Y);
+            // Continuity at the poles: just below is nearly the same frame.
+            for (pole, near) in [(down, cam(az, 89.999, t)), (up_cam, cam(az, -89.999, t))] {
+                assert_orthonormal_right_handed(&near);
+                let (a, b) = (pole.frame(), near.frame());
+                for (p, q) in [(a.0, b.0), (a.1, b.1), (a.2, b.2), (a.3, b.3)] {
+                    assert!((p - q).length() < 1e-4, "{p} vs {q} at azimuth {az}");
+                }
+            }
+        }
+        assert!(cam(0.0, 90.01, Vec3::ZERO).validate().is_err());
+        assert!(cam(0.0, -90.01, Vec3::ZERO).validate().is_err());
+    }
+
+    #[test]
+    fn frames_below_the_poles_are_unchanged() {
+        // The formula every image so far was rendered with.
+        for (az, el) in [
+            (30.0f32, 20.0f32),
+            (-45.0, 0.0),
+            (200.0, -89.9),
+            (10.0, 89.99),
+        ] {
+            let c = cam(az, el, Vec3::ZERO);
+            let (a, e) = (az.to_radians(), el.to_radians());
+            let eye = 2.0 * Vec3::new(a.sin() * e.cos(), e.sin(), a.cos() * e.cos());
+            let forward = (-eye).normalize();
+            let right = forward.cross(Vec3::Y).normalize();
+            let up = right.cross(forward);
+            assert_eq!(c.frame(), (eye, forward, right, up));
+            assert_orthonormal_right_handed(&c);
+        }
+    }
+}

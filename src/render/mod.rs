@@ -6,6 +6,7 @@ mod ea;
 pub mod gradient;
 /// Limits shared with the shaders (build.rs defines each as a GLSL macro).
 pub mod limits;
+mod options;
 pub mod preintegration;
 pub mod sat;
 pub mod sweep;
@@ -22,6 +23,7 @@ use crate::vk::{
     self, Buffer, Context, Filter, Image, ImageDesc, ImageKind, Recorder, Sampler, Timings,
 };
 use crate::volume::Volume;
+pub use options::*;
 pub use sat::SummedAreaTable;
 
 pub use preintegration::{PreintegrationTable, TABLE_SIZE};
@@ -30,114 +32,6 @@ pub use sweep::{
     MAX_ETA_SCALE,
 };
 pub use tonemap::ToneMapPass;
-
-/// Rendering models `refrakt render --model` offers.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Model {
-    /// Emission–absorption ray marcher, the baseline.
-    Ea,
-    /// The refractive plane sweep (thesis ch. 4, Algorithm 1).
-    Refract,
-}
-
-impl Model {
-    pub fn name(self) -> &'static str {
-        match self {
-            Model::Ea => "ea",
-            Model::Refract => "refract",
-        }
-    }
-}
-
-/// Most samples (ray-marcher steps or sweep planes) one ray may take. Far more than any
-/// useful sample distance needs (a 1024³ volume at sample distance 0.1 takes ~18k); it
-/// stops a typo like 1e-9 from occupying the device for minutes or losing it.
-pub const MAX_STEPS: u64 = 1 << 16;
-
-/// Steps a ray through a box with this half extent takes at `sample_distance`.
-pub fn steps_for(half_extent: Vec3, ref_step: f32, sample_distance: f32) -> u64 {
-    let diag = 2.0 * half_extent.length() as f64;
-    (diag / (sample_distance as f64 * ref_step as f64)).ceil() as u64
-}
-
-#[derive(Clone, Debug)]
-pub struct RenderOptions {
-    pub width: u32,
-    pub height: u32,
-    /// Step between samples, in units of the smallest voxel side (thesis chapter 6).
-    pub sample_distance: f32,
-    /// Look segments up in the preintegration table instead of sampling the TF.
-    pub preintegrated: bool,
-    /// Linear RGBA behind the volume.
-    pub background: [f32; 4],
-    /// Stop marching once accumulated opacity reaches this (EA).
-    pub termination_alpha: f32,
-    /// Light, specular, clipping and diagnostics of the refractive model.
-    pub sweep: SweepOptions,
-}
-
-impl Default for RenderOptions {
-    fn default() -> Self {
-        Self {
-            width: 512,
-            height: 512,
-            sample_distance: 1.0,
-            preintegrated: true,
-            background: [0.08, 0.08, 0.1, 1.0],
-            termination_alpha: 0.99,
-            sweep: SweepOptions::default(),
-        }
-    }
-}
-
-impl RenderOptions {
-    pub fn validate(&self) -> Result<()> {
-        if !(self.sample_distance.is_finite() && self.sample_distance > 0.0) {
-            bail!(
-                "sample distance must be a positive number, got {}",
-                self.sample_distance
-            );
-        }
-        ensure!(
-            self.width > 0 && self.height > 0 && self.width <= 16384 && self.height <= 16384,
-            "image size {}x{} must be between 1 and 16384 per side",
-            self.width,
-            self.height
-        );
-        ensure!(
-            self.background.iter().all(|c| c.is_finite() && *c >= 0.0),
-            "background colour {:?} must be finite and non-negative",
-            self.background
-        );
-        ensure!(
-            (0.0..=1.0).contains(&self.termination_alpha),
-            "termination alpha {} must be in [0, 1]",
-            self.termination_alpha
-        );
-        self.sweep.validate()
-    }
-}
-
-/// A rendered image: linear RGBA f32, row-major, top row first.
-#[derive(Clone, Debug)]
-pub struct Frame {
-    pub width: u32,
-    pub height: u32,
-    pub pixels: Vec<[f32; 4]>,
-    pub timings: Timings,
-    /// Samples along the longest ray (EA) or planes (sweep), for reporting.
-    pub max_steps: u32,
-    /// State buffers the sweep was asked to copy out.
-    pub dumps: Vec<Dump>,
-    /// Plane count and traffic of the sweep.
-    pub sweep: Option<SweepStats>,
-}
-
-impl Frame {
-    pub fn pixel(&self, x: u32, y: u32) -> [f32; 4] {
-        self.pixels[(y * self.width + x) as usize]
-    }
-}
 
 /// GPU state for one volume and its transfer functions.
 pub struct Renderer {
@@ -614,112 +508,4 @@ pub struct RecordedFrame<'a> {
     pub max_steps: u32,
     /// Plane count and traffic of the sweep.
     pub sweep: Option<SweepStats>,
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn cam(azimuth: f32, elevation: f32, target: Vec3) -> Camera {
-        Camera {
-            azimuth,
-            elevation,
-            distance: 2.0,
-            fov_y: 35.0,
-            target,
-        }
-    }
-
-    /// Screen position of `p` in units of the half field of view (0, 0 = image centre).
-    fn project(c: &Camera, p: Vec3) -> (f32, f32) {
-        let (eye, forward, right, up) = c.frame();
-        let v = p - eye;
-        let z = v.dot(forward);
-        assert!(z > 0.0, "{p} is behind the camera");
-        let t = (c.fov_y.to_radians() * 0.5).tan();
-        (v.dot(right) / (z * t), v.dot(up) / (z * t))
-    }
-
-    fn assert_orthonormal_right_handed(c: &Camera) {
-        let (_, f, r, u) = c.frame();
-        for (n, v) in [("forward", f), ("right", r), ("up", u)] {
-            assert!((v.length() - 1.0).abs() < 1e-6, "{n} {v} of {c:?}");
-        }
-        assert!(f.dot(r).abs() < 1e-6 && f.dot(u).abs() < 1e-6 && r.dot(u).abs() < 1e-6);
-        assert!((r.cross(f) - u).length() < 1e-6, "{c:?}");
-    }
-
-    #[test]
-    fn the_camera_orbits_and_looks_at_its_target() {
-        let t = Vec3::new(0.3, -0.2, 0.1);
-        let c = cam(40.0, 25.0, t);
-        let (eye, forward, ..) = c.frame();
-        assert!(((eye - t).length() - 2.0).abs() < 1e-5);
-        assert!((forward - (t - eye).normalize()).length() < 1e-6);
-        // Same orientation as the camera around the origin, translated by the target.
-        let o = cam(40.0, 25.0, Vec3::ZERO);
-        assert_eq!(c.frame().1, o.frame().1);
-        assert!((eye - (o.eye() + t)).length() < 1e-6);
-        let (x, y) = project(&c, t);
-        assert!(x.abs() < 1e-6 && y.abs() < 1e-6);
-        assert!(c.validate().is_ok());
-        assert!(cam(0.0, 0.0, Vec3::new(f32::NAN, 0.0, 0.0))
-            .validate()
-            .is_err());
-        assert!(cam(0.0, 0.0, Vec3::new(0.0, f32::INFINITY, 0.0))
-            .validate()
-            .is_err());
-    }
-
-    #[test]
-    fn straight_down_and_up_views_have_a_continuous_frame() {
-        let t = Vec3::new(0.1, 0.2, -0.3);
-        for az in [0.0f32, 30.0, 135.0, -100.0] {
-            let down = cam(az, 90.0, t);
-            assert!(down.validate().is_ok());
-            assert_orthonormal_right_handed(&down);
-            let (eye, forward, _, up) = down.frame();
-            assert_eq!(forward, Vec3::new(0.0, -1.0, 0.0));
-            assert!((eye - (t + Vec3::new(0.0, 2.0, 0.0))).length() < 1e-6);
-            // Screen-up is the horizontal direction the camera faced at this azimuth.
-            let a = az.to_radians();
-            assert!((up + Vec3::new(a.sin(), 0.0, a.cos())).length() < 1e-6);
-            // A point below the target is in the middle of the image.
-            let (x, y) = project(&down, t - Vec3::new(0.0, 0.7, 0.0));
-            assert!(x.abs() < 1e-6 && y.abs() < 1e-6, "{x} {y}");
-            let up_cam = cam(az, -90.0, t);
-            assert_orthonormal_right_handed(&up_cam);
-            assert_eq!(up_cam.frame().1, Vec3::Y);
-            // Continuity at the poles: just below is nearly the same frame.
-            for (pole, near) in [(down, cam(az, 89.999, t)), (up_cam, cam(az, -89.999, t))] {
-                assert_orthonormal_right_handed(&near);
-                let (a, b) = (pole.frame(), near.frame());
-                for (p, q) in [(a.0, b.0), (a.1, b.1), (a.2, b.2), (a.3, b.3)] {
-                    assert!((p - q).length() < 1e-4, "{p} vs {q} at azimuth {az}");
-                }
-            }
-        }
-        assert!(cam(0.0, 90.01, Vec3::ZERO).validate().is_err());
-        assert!(cam(0.0, -90.01, Vec3::ZERO).validate().is_err());
-    }
-
-    #[test]
-    fn frames_below_the_poles_are_unchanged() {
-        // The formula every image so far was rendered with.
-        for (az, el) in [
-            (30.0f32, 20.0f32),
-            (-45.0, 0.0),
-            (200.0, -89.9),
-            (10.0, 89.99),
-        ] {
-            let c = cam(az, el, Vec3::ZERO);
-            let (a, e) = (az.to_radians(), el.to_radians());
-            let eye = 2.0 * Vec3::new(a.sin() * e.cos(), e.sin(), a.cos() * e.cos());
-            let forward = (-eye).normalize();
-            let right = forward.cross(Vec3::Y).normalize();
-            let up = right.cross(forward);
-            assert_eq!(c.frame(), (eye, forward, right, up));
-            assert_orthonormal_right_handed(&c);
-        }
-    }
 }
