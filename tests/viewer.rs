@@ -131,29 +131,54 @@ fn gpu_tone_mapping_matches_the_png_path() {
 #[test]
 fn recorded_frames_equal_rendered_frames() {
     // Renderer::record (the viewer's path) leaves in its image exactly what render reads
-    // back, also when several recordings share a submission.
+    // back, also when several recordings with different cameras and models share one
+    // submission: each frame's parameters travel in the command stream (a parameter
+    // buffer written on the host would hold the last frame's for all of them) and each
+    // copy sees its own frame (the barriers between frames).
     common::with_context(|ctx| {
         let volume = procedural::sphere(20, 0.35, 1.0).unwrap();
         let tf = TransferFunctions::load("glass").unwrap();
         let mut renderer = Renderer::new(ctx, &volume, &tf).unwrap();
-        let camera = Camera::default();
+        let first = Camera::default();
+        let second = Camera {
+            azimuth: first.azimuth + 15.0,
+            elevation: first.elevation + 10.0,
+            ..first
+        };
         let opts = RenderOptions {
             width: 24,
             height: 20,
             ..Default::default()
         };
-        let expected = renderer.render(Model::Refract, &camera, &opts).unwrap();
-        let readback = vk::Buffer::readback(ctx, 24 * 20 * 16, "readback").unwrap();
+        let expected_ea = renderer.render(Model::Ea, &second, &opts).unwrap();
+        let expected_first = renderer.render(Model::Refract, &first, &opts).unwrap();
+        let expected_second = renderer.render(Model::Refract, &second, &opts).unwrap();
+        assert_ne!(
+            expected_first.pixels, expected_second.pixels,
+            "the two cameras must see different images for this test to mean anything"
+        );
+        let bytes = 24 * 20 * 16;
+        let readbacks: Vec<vk::Buffer> = (0..3)
+            .map(|i| vk::Buffer::readback(ctx, bytes, &format!("readback {i}")).unwrap())
+            .collect();
         ctx.execute(|rec| {
-            renderer.record(rec, Model::Ea, &camera, &opts)?;
-            renderer.record(rec, Model::Refract, &camera, &opts)?;
-            let out = renderer.record(rec, Model::Refract, &camera, &opts)?;
-            rec.copy_image_to_buffer(out.image, 0, &readback);
+            let out = renderer.record(rec, Model::Ea, &second, &opts)?;
+            rec.copy_image_to_buffer(out.image, 0, &readbacks[0]);
+            let out = renderer.record(rec, Model::Refract, &first, &opts)?;
+            rec.copy_image_to_buffer(out.image, 0, &readbacks[1]);
+            let out = renderer.record(rec, Model::Refract, &second, &opts)?;
+            rec.copy_image_to_buffer(out.image, 0, &readbacks[2]);
             Ok(())
         })
         .unwrap();
-        let got: Vec<[f32; 4]> = readback.read_values(24 * 20).unwrap();
-        assert_eq!(got, expected.pixels);
+        for (buf, expected, what) in [
+            (&readbacks[0], &expected_ea, "EA frame"),
+            (&readbacks[1], &expected_first, "first sweep frame"),
+            (&readbacks[2], &expected_second, "second sweep frame"),
+        ] {
+            let got: Vec<[f32; 4]> = buf.read_values(24 * 20).unwrap();
+            assert_eq!(&got, &expected.pixels, "{what} differs from its render");
+        }
     });
 }
 
