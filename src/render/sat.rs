@@ -7,9 +7,7 @@ use bytemuck::{Pod, Zeroable};
 
 use crate::environment::{EnvironmentMap, SatReadback};
 use crate::shaders;
-use crate::vk::{
-    self, Access, Binding, ComputePipeline, Context, DescriptorSet, Image, ImageDesc, ImageKind,
-};
+use crate::vk::{self, Access, Binding, ComputePipeline, Context, DescriptorSet, Image};
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -36,17 +34,8 @@ impl SummedAreaTable {
         map: &EnvironmentMap,
         map_image: &Image,
     ) -> Result<(Self, vk::Timings)> {
-        let table = Image::new(
-            ctx,
-            ImageDesc {
-                kind: ImageKind::D2,
-                format: vk::Format::R32G32B32A32_SFLOAT,
-                extent: [map.width, map.height, 1],
-                layers: 1,
-                usage: vk::usage::SAMPLED | vk::usage::STORAGE | vk::usage::TRANSFER_SRC,
-            },
-            "environment SAT",
-        )?;
+        let usage = vk::usage::SAMPLED | vk::usage::STORAGE | vk::usage::TRANSFER_SRC;
+        let table = super::upload::map_sized_image(ctx, map, usage, "environment SAT")?;
         let set = DescriptorSet::new(
             ctx,
             &[

@@ -87,19 +87,30 @@ pub fn write_transfer_texture(ctx: &Context, tf: &TransferFunctions, image: &Ima
     Ok(())
 }
 
-/// The map as an RGBA32F 2D image (for sampling and for building the SAT).
-pub fn environment_texture(ctx: &Context, map: &EnvironmentMap) -> Result<Image> {
-    let image = Image::new(
+/// An RGBA32F 2D image the size of `map` (the map itself, its summed-area table).
+pub(super) fn map_sized_image(
+    ctx: &Context,
+    map: &EnvironmentMap,
+    usage: vk::ImageUsageFlags,
+    name: &str,
+) -> Result<Image> {
+    Image::new(
         ctx,
         ImageDesc {
             kind: ImageKind::D2,
             format: vk::Format::R32G32B32A32_SFLOAT,
             extent: [map.width, map.height, 1],
             layers: 1,
-            usage: vk::usage::SAMPLED | vk::usage::STORAGE | vk::usage::TRANSFER_DST,
+            usage,
         },
-        "environment map",
-    )?;
+        name,
+    )
+}
+
+/// The map as an RGBA32F 2D image (for sampling and for building the SAT).
+pub fn environment_texture(ctx: &Context, map: &EnvironmentMap) -> Result<Image> {
+    let usage = vk::usage::SAMPLED | vk::usage::STORAGE | vk::usage::TRANSFER_DST;
+    let image = map_sized_image(ctx, map, usage, "environment map")?;
     ctx.upload_image(&image, 0, bytemuck::cast_slice(&map.pixels))?;
     Ok(image)
 }

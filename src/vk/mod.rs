@@ -16,7 +16,7 @@ mod resources;
 pub mod spirv;
 mod swapchain;
 
-pub use ash::vk::Format;
+pub use ash::vk::{Format, ImageUsageFlags};
 pub use barriers::Access;
 pub use commands::{Recorder, Timings};
 pub use context::{
