@@ -40,3 +40,91 @@ pub fn default_light(camera: &Camera) -> Vec3 {
         (-forward + 0.6 * up - 0.4 * right).normalize()
     }
 }
+
+/// Largest angle between the light and the direction back to the camera that the viewer's
+/// controls allow: 4.3° inside the sweep's limit (acos MIN_FORWARD ≈ 84.3°), so a light
+/// turned to the edge still renders (a test keeps it inside).
+pub const MAX_LIGHT_ANGLE_DEG: f32 = 80.0;
+/// `towards` (a direction to the light), moved into the cone of [`MAX_LIGHT_ANGLE_DEG`]
+/// around the direction from the volume to the camera if it is outside, keeping its
+/// azimuth about that axis.
+pub fn clamp_light(towards: Vec3, camera: &Camera) -> Vec3 {
+    let (_, forward, _, up) = camera.frame();
+    let back = -forward;
+    let t = towards.normalize_or(back);
+    let max = MAX_LIGHT_ANGLE_DEG.to_radians();
+    if t.dot(back) >= max.cos() {
+        return t;
+    }
+    let side = (t - t.dot(back) * back).normalize_or(up);
+    (max.cos() * back + max.sin() * side).normalize()
+}
+
+/// The light turned by `yaw` (to the viewer's right) and `pitch` (up) degrees in the
+/// camera's frame, then clamped with [`clamp_light`].
+pub fn turn_light(towards: Vec3, camera: &Camera, yaw: f32, pitch: f32) -> Vec3 {
+    let (_, forward, right, up) = camera.frame();
+    let back = -forward;
+    let t = clamp_light(towards, camera);
+    let (x, y, z) = (t.dot(right), t.dot(up), t.dot(back));
+    let az = x.atan2(z) + yaw.to_radians();
+    let el = (y.clamp(-1.0, 1.0).asin() + pitch.to_radians()).clamp(
+        -MAX_LIGHT_ANGLE_DEG.to_radians(),
+        MAX_LIGHT_ANGLE_DEG.to_radians(),
+    );
+    let l = el.cos() * az.sin() * right + el.sin() * up + el.cos() * az.cos() * back;
+    clamp_light(l, camera)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn angle_to_camera(t: Vec3, c: &Camera) -> f32 {
+        let (_, forward, _, _) = c.frame();
+        t.normalize()
+            .dot(-forward)
+            .clamp(-1.0, 1.0)
+            .acos()
+            .to_degrees()
+    }
+
+    #[test]
+    fn the_viewers_cone_is_inside_the_sweeps_limit() {
+        let limit = crate::render::limits::MIN_FORWARD.acos().to_degrees();
+        assert!(
+            MAX_LIGHT_ANGLE_DEG < limit - 1.0,
+            "{MAX_LIGHT_ANGLE_DEG} vs {limit}"
+        );
+    }
+
+    #[test]
+    fn light_is_kept_in_the_viewers_cone() {
+        let c = Camera::default();
+        let (_, forward, right, _) = c.frame();
+        // From behind the volume: clamped to the cone's edge, on the same side.
+        let behind = (forward + 0.3 * right).normalize();
+        let l = clamp_light(behind, &c);
+        assert!((angle_to_camera(l, &c) - MAX_LIGHT_ANGLE_DEG).abs() < 0.01);
+        assert!(l.dot(right) > 0.0);
+        // Inside: unchanged.
+        let inside = (-forward + 0.2 * right).normalize();
+        assert!((clamp_light(inside, &c) - inside).length() < 1e-6);
+    }
+
+    #[test]
+    fn turning_the_light_moves_it_and_stays_in_the_cone() {
+        let c = Camera::default();
+        let (_, forward, right, up) = c.frame();
+        let l0 = -forward;
+        let l1 = turn_light(l0, &c, 20.0, 0.0);
+        assert!(l1.dot(right) > 0.3, "yaw right moves the light right");
+        let l2 = turn_light(l0, &c, 0.0, 20.0);
+        assert!(l2.dot(up) > 0.3, "pitch up moves the light up");
+        let mut l = l0;
+        for _ in 0..100 {
+            l = turn_light(l, &c, 7.0, 3.0);
+            assert!(angle_to_camera(l, &c) <= MAX_LIGHT_ANGLE_DEG + 0.01);
+        }
+    }
+}
