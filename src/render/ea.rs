@@ -7,7 +7,7 @@ use bytemuck::{Pod, Zeroable};
 use super::{Camera, FrameTarget, RenderOptions, VolumeInfo};
 use crate::shaders;
 use crate::vk::{
-    Access, Binding, Buffer, ComputePipeline, Context, DescriptorSet, Image, Recorder, Sampler,
+    Access, Binding, Buffer, ComputePipeline, Context, DescriptorSet, Image, Recorder, Sampler, Use,
 };
 
 /// std140 mirror of `Params` in glsl/ea.comp.
@@ -112,18 +112,16 @@ impl EaPass {
             size: [self.width, self.height, 0, 0],
         };
         rec.update_uniform(&self.params, bytemuck::bytes_of(&p))?;
-        rec.transition_all(volume, Access::Sampled);
-        rec.transition_all(tf, Access::Sampled);
-        rec.transition_all(preint, Access::Sampled);
-        rec.transition_all(&self.output.image, Access::ComputeStorage);
-        rec.begin_scope("ea raymarch");
-        rec.dispatch(
-            &self.pipeline,
-            &self.set,
-            &[],
-            [self.width.div_ceil(8), self.height.div_ceil(8), 1],
-        )?;
-        rec.end_scope();
+        let uses = [
+            Use::all(volume, Access::Sampled),
+            Use::all(tf, Access::Sampled),
+            Use::all(preint, Access::Sampled),
+            Use::all(&self.output.image, Access::ComputeStorage),
+        ];
+        let groups = [self.width.div_ceil(8), self.height.div_ceil(8), 1];
+        rec.pass("ea raymarch", &uses, |rec| {
+            rec.dispatch(&self.pipeline, &self.set, &[], groups)
+        })?;
         // Longest possible ray through the box, in steps: the box diagonal.
         Ok(super::steps_for(info.half_extent, info.ref_step, opts.sample_distance) as u32)
     }

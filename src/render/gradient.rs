@@ -22,7 +22,7 @@ use anyhow::Result;
 use crate::shaders;
 use crate::vk::{
     self, Access, Binding, ComputePipeline, Context, DescriptorSet, Image, ImageDesc, ImageKind,
-    Sampler, Timings,
+    Sampler, Timings, Use,
 };
 
 /// Standard deviation of the smoothing, in voxels.
@@ -107,23 +107,26 @@ impl GradientVolume {
         let [w, h, d] = volume.extent();
         let groups = [w.div_ceil(8), h.div_ceil(8), d];
         let timings = ctx.execute(|rec| {
-            rec.begin_scope("gradient volume");
-            rec.transition_all(volume, Access::Sampled);
-            for (axis, (set, (src, dst))) in sets.iter().zip(pairs).enumerate() {
-                rec.transition_many(&[
-                    (src, 0..1, Access::Sampled),
-                    (dst, 0..1, Access::ComputeStorage),
-                ]);
-                let push = Push {
-                    axis: axis as i32,
-                    sigma: SIGMA,
-                    radius: (3.0 * SIGMA).ceil() as i32,
-                };
-                rec.dispatch(&pipeline, set, bytemuck::bytes_of(&push), groups)?;
-            }
-            rec.transition_all(&image, Access::Sampled);
-            rec.end_scope();
-            Ok(())
+            rec.pass(
+                "gradient volume",
+                &[Use::all(volume, Access::Sampled)],
+                |rec| {
+                    for (axis, (set, (src, dst))) in sets.iter().zip(pairs).enumerate() {
+                        rec.transition_many(&[
+                            (src, 0..1, Access::Sampled),
+                            (dst, 0..1, Access::ComputeStorage),
+                        ]);
+                        let push = Push {
+                            axis: axis as i32,
+                            sigma: SIGMA,
+                            radius: (3.0 * SIGMA).ceil() as i32,
+                        };
+                        rec.dispatch(&pipeline, set, bytemuck::bytes_of(&push), groups)?;
+                    }
+                    rec.transition_all(&image, Access::Sampled);
+                    Ok(())
+                },
+            )
         })?;
         Ok((Self { image }, timings))
     }

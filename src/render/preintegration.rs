@@ -13,7 +13,7 @@ use crate::shaders;
 use crate::transfer::{TransferFunctions, MAX_POINTS_PER_FUNCTION};
 use crate::vk::{
     self, Access, Binding, Buffer, ComputePipeline, Context, DescriptorSet, Image, ImageDesc,
-    ImageKind, Memory, Recorder,
+    ImageKind, Memory, Recorder, Use,
 };
 
 /// Entries per axis; must match PREINT_SIZE in glsl/common.glsl.
@@ -76,12 +76,18 @@ impl PreintegrationTable {
     pub fn record_build(&mut self, rec: &mut Recorder, tf: &TransferFunctions) -> Result<()> {
         self.control_points
             .write(0, bytemuck::cast_slice(&tf.control_points()))?;
-        rec.begin_scope("preintegration");
-        rec.transition_all(&self.image, Access::ComputeStorage);
-        let groups = TABLE_SIZE.div_ceil(16);
-        rec.dispatch(&self.pipeline, &self.set, &[], [groups, groups, 1])?;
-        rec.transition_all(&self.image, Access::Sampled);
-        rec.end_scope();
+        let (pipeline, set, image) = (&self.pipeline, &self.set, &self.image);
+        rec.pass(
+            "preintegration",
+            &[Use::all(image, Access::ComputeStorage)],
+            |rec| {
+                let groups = TABLE_SIZE.div_ceil(16);
+                rec.dispatch(pipeline, set, &[], [groups, groups, 1])?;
+                // Left ready for sampling.
+                rec.transition_all(image, Access::Sampled);
+                Ok(())
+            },
+        )?;
         self.builds += 1;
         Ok(())
     }

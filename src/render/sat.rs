@@ -7,7 +7,7 @@ use bytemuck::{Pod, Zeroable};
 
 use crate::environment::{EnvironmentMap, SatReadback};
 use crate::shaders;
-use crate::vk::{self, Access, Binding, ComputePipeline, Context, DescriptorSet, Image};
+use crate::vk::{self, Access, Binding, ComputePipeline, Context, DescriptorSet, Image, Use};
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -53,29 +53,31 @@ impl SummedAreaTable {
         )?;
         let mean = map.mean();
         let timings = ctx.execute(|rec| {
-            rec.begin_scope("environment SAT");
-            rec.transition_all(map_image, Access::ComputeStorage);
-            rec.transition_all(&table, Access::ComputeStorage);
-            // Rows (one invocation per row), then columns reading what the rows wrote.
-            for (pass, lines) in [(0u32, map.height), (1, map.width)] {
-                if pass == 1 {
-                    rec.transition_all(&table, Access::ComputeStorage);
+            let uses = [
+                Use::all(map_image, Access::ComputeStorage),
+                Use::all(&table, Access::ComputeStorage),
+            ];
+            rec.pass("environment SAT", &uses, |rec| {
+                // Rows (one invocation per row), then columns reading what the rows wrote.
+                for (pass, lines) in [(0u32, map.height), (1, map.width)] {
+                    if pass == 1 {
+                        rec.transition_all(&table, Access::ComputeStorage);
+                    }
+                    let push = SatPush {
+                        mean,
+                        pass_index: pass,
+                        pad: [0; 3],
+                    };
+                    rec.dispatch(
+                        &pipeline,
+                        &set,
+                        bytemuck::bytes_of(&push),
+                        [lines.div_ceil(64), 1, 1],
+                    )?;
                 }
-                let push = SatPush {
-                    mean,
-                    pass_index: pass,
-                    pad: [0; 3],
-                };
-                rec.dispatch(
-                    &pipeline,
-                    &set,
-                    bytemuck::bytes_of(&push),
-                    [lines.div_ceil(64), 1, 1],
-                )?;
-            }
-            rec.transition_all(&table, Access::Sampled);
-            rec.end_scope();
-            Ok(())
+                rec.transition_all(&table, Access::Sampled);
+                Ok(())
+            })
         })?;
         Ok((
             Self {

@@ -10,7 +10,7 @@ use crate::shaders;
 use crate::tone::{ToneMap, ToneOperator};
 use crate::vk::{
     self, Access, Binding, Context, DescriptorSet, Filter, Framebuffer, GraphicsPipeline, Image,
-    Recorder, RenderPass, Sampler,
+    Recorder, RenderPass, Sampler, Use,
 };
 
 #[repr(C)]
@@ -113,14 +113,14 @@ impl ToneMapPass {
             encode_srgb: u32::from(self.encode_srgb),
             pad: 0,
         };
-        rec.begin_scope("tonemap");
-        rec.transition_all(source, Access::Sampled);
-        rec.begin_render_pass(&self.render_pass, framebuffer, &[(target, 0)])?;
-        rec.bind_graphics(&bound.pipeline, &bound.set, w, h);
-        rec.draw_fullscreen(&bound.pipeline, bytemuck::bytes_of(&push))?;
-        rec.end_render_pass();
-        rec.end_scope();
-        Ok(())
+        let render_pass = &self.render_pass;
+        rec.pass("tonemap", &[Use::all(source, Access::Sampled)], |rec| {
+            rec.begin_render_pass(render_pass, framebuffer, &[(target, 0)])?;
+            rec.bind_graphics(&bound.pipeline, &bound.set, w, h);
+            rec.draw_fullscreen(&bound.pipeline, bytemuck::bytes_of(&push))?;
+            rec.end_render_pass();
+            Ok(())
+        })
     }
 }
 

@@ -2,6 +2,7 @@
 //! composite, dumps and timestamps.
 
 use super::*;
+use crate::vk::Use;
 
 impl SweepPass {
     /// Record one frame into `rec`: setup, every plane, and the composite into
@@ -165,18 +166,28 @@ impl SweepPass {
         let groups = [self.width.div_ceil(8), self.height.div_ceil(8), 1];
         rec.update_uniform(&self.params, bytemuck::bytes_of(&p))?;
         rec.update_uniform(&self.env_params, bytemuck::bytes_of(&e))?;
-        for img in inputs.into_iter().chain([env.map, env.sat]) {
-            rec.transition_all(img, Access::Sampled);
-        }
-        rec.begin_scope("sweep setup");
-        rec.clear_storage(&self.counters);
-        rec.transition_many(&self.every_layer(Access::ComputeStorage));
-        // The setup covers the screen and the ray images (rays_per_pixel times taller).
-        let setup_groups = [ray_image[0].div_ceil(8), ray_image[1].div_ceil(8), 1];
-        rec.dispatch(&self.setup, &self.setup_set, &[], setup_groups)?;
-        // Both layers become sampled: every draw's set names both (see module docs).
-        rec.transition_many(&self.every_layer(Access::SampledGeneral));
-        rec.end_scope();
+        // The setup reads the volume's inputs and writes every state layer.
+        let mut uses: Vec<Use> = inputs
+            .into_iter()
+            .chain([env.map, env.sat])
+            .map(|img| Use::all(img, Access::Sampled))
+            .collect();
+        uses.extend(self.every_layer(Access::ComputeStorage).into_iter().map(
+            |(image, layers, access)| Use {
+                image,
+                layers,
+                access,
+            },
+        ));
+        rec.pass("sweep setup", &uses, |rec| {
+            rec.clear_storage(&self.counters);
+            // The setup covers the screen and the ray images (rays_per_pixel times taller).
+            let setup_groups = [ray_image[0].div_ceil(8), ray_image[1].div_ceil(8), 1];
+            rec.dispatch(&self.setup, &self.setup_set, &[], setup_groups)?;
+            // Both layers become sampled: every draw's set names both (see module docs).
+            rec.transition_many(&self.every_layer(Access::SampledGeneral));
+            Ok(())
+        })?;
 
         rec.begin_scope("sweep");
         // Bound once: between planes only push constants change, and the forward
@@ -314,17 +325,25 @@ impl SweepPass {
         }
         rec.end_scope();
 
-        rec.begin_scope("composite");
         let last = (planes.count - 1) % 2;
-        rec.transition_many(&self.state_layers(0..2, Access::SampledGeneral));
-        rec.transition_all(&self.output.image, Access::ComputeStorage);
-        rec.dispatch(
-            &self.composite,
-            &self.composite_set,
-            &last.to_le_bytes(),
-            groups,
-        )?;
-        rec.end_scope();
+        let mut uses: Vec<Use> = self
+            .state_layers(0..2, Access::SampledGeneral)
+            .into_iter()
+            .map(|(image, layers, access)| Use {
+                image,
+                layers,
+                access,
+            })
+            .collect();
+        uses.push(Use::all(&self.output.image, Access::ComputeStorage));
+        rec.pass("composite", &uses, |rec| {
+            rec.dispatch(
+                &self.composite,
+                &self.composite_set,
+                &last.to_le_bytes(),
+                groups,
+            )
+        })?;
         if let Some(buf) = &clamp_readback {
             rec.copy_storage_to_host(&self.counters, buf);
         }

@@ -22,6 +22,24 @@ pub(crate) use timings::create_query_pool;
 use timings::*;
 pub use timings::{PendingTimings, Timings};
 
+/// How a pass uses an image (see [`Recorder::pass`]).
+pub struct Use<'a> {
+    pub image: &'a Image,
+    pub layers: Range<u32>,
+    pub access: Access,
+}
+
+impl<'a> Use<'a> {
+    /// Every layer of `image`, used as `access`.
+    pub fn all(image: &'a Image, access: Access) -> Self {
+        Self {
+            image,
+            layers: 0..image.desc().layers,
+            access,
+        }
+    }
+}
+
 struct Scope {
     name: String,
     begin: u32,
@@ -103,6 +121,28 @@ impl Recorder<'_> {
     /// previous use left. Read-after-read in the same layout needs no barrier and gets none.
     pub fn transition(&mut self, image: &Image, layers: Range<u32>, to: Access) {
         self.transition_many(&[(image, layers, to)]);
+    }
+
+    /// One pass, declared: its timestamp scope and debug label `name`, the barriers its
+    /// declared image uses need (one batch, from each image's tracked state), then `body`,
+    /// which records the pass's work. Passes say what they read and write; synchronization
+    /// and timing follow from that here. (The sweep's per-plane barriers inside its
+    /// scope stay explicit: they change roles layer by layer.)
+    pub fn pass<R>(
+        &mut self,
+        name: &str,
+        uses: &[Use<'_>],
+        body: impl FnOnce(&mut Self) -> Result<R>,
+    ) -> Result<R> {
+        self.begin_scope(name);
+        let items: Vec<(&Image, Range<u32>, Access)> = uses
+            .iter()
+            .map(|u| (u.image, u.layers.clone(), u.access))
+            .collect();
+        self.transition_many(&items);
+        let result = body(self);
+        self.end_scope();
+        result
     }
 
     /// Several transitions in one vkCmdPipelineBarrier2 (in the sweep: one per role change
