@@ -28,7 +28,7 @@ fn main() -> ExitCode {
 }
 
 fn run(cli: Cli) -> Result<ExitCode> {
-    let desc = ContextDesc::from_env(cli.gpu.validate, cli.gpu.device.clone());
+    let desc = ContextDesc::from_env(cli.gpu.validate, cli.gpu.device.clone())?;
     match cli.command {
         Command::Info => cli::info::info(&desc),
         Command::Render(args) => cli::render::render(&desc, &args),

@@ -11,13 +11,20 @@
 
 use std::path::Path;
 
-use anyhow::{anyhow, bail, Context as _, Result};
+use anyhow::{anyhow, bail, ensure, Context as _, Result};
 use serde::Deserialize;
 
 /// Samples per transfer function on the GPU. Fine enough that linear interpolation between
 /// samples is within 1e-4 of the piecewise-linear function for slopes up to ~100 per unit s
 /// away from control points.
 pub const TF_SAMPLES: u32 = 4096;
+
+/// The range of refractive indices a transfer function may give (relative to the medium
+/// around the volume, 1): beyond it the sweep's Snell steps and the preintegration table
+/// leave the physics they were built for (a 1e9 rendered a white image with values up
+/// to 1.7e6).
+pub const MIN_ETA: f64 = 0.25;
+pub const MAX_ETA: f64 = 4.0;
 
 /// Control points allowed per function (the preintegration shader reads them from a
 /// fixed-size buffer).
@@ -141,6 +148,10 @@ impl TransferFunctions {
         let file: TfFile =
             toml::from_str(text).map_err(|e| anyhow!("{origin}: {}", e.to_string().trim_end()))?;
         let _ = file.description;
+        let has_function = file.colour.is_some()
+            || file.opacity.is_some()
+            || file.medium.is_some()
+            || file.eta.is_some();
         let mut tf = TransferFunctions {
             name: file.name.unwrap_or_else(|| origin.to_string()),
             ..Default::default()
@@ -167,8 +178,20 @@ impl TransferFunctions {
             )?;
         }
         if let Some(p) = file.eta {
-            tf.eta = parse_points::<1>(&p, origin, "eta", |v| v > 0.0, "must be > 0")?;
+            tf.eta = parse_points::<1>(
+                &p,
+                origin,
+                "eta",
+                |v| (MIN_ETA..=MAX_ETA).contains(&v),
+                "must be between 0.25 and 4 (a relative refractive index; water 1.33, glass \
+                 1.5, diamond 2.42)",
+            )?;
         }
+        ensure!(
+            has_function,
+            "{origin}: defines no transfer function (give at least one of colour, opacity, \
+             medium, eta)"
+        );
         Ok(tf)
     }
 

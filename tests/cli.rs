@@ -6,7 +6,7 @@ mod common;
 use std::path::Path;
 use std::process::Output;
 
-use common::refrakt;
+use common::{refrakt, refrakt_command};
 
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
@@ -472,4 +472,21 @@ fn bad_camera_and_sizes_are_clear_errors() {
         &["render", "--background", "1,2", "-o", "x.png"],
         "--background",
     );
+}
+
+/// A mistyped REFRAKT_VALIDATE is refused, not read as "off" (validation silently gone).
+#[test]
+fn a_bad_validation_switch_is_an_error() {
+    let o = refrakt_command(&["info"])
+        .env("REFRAKT_VALIDATE", "banana")
+        .output()
+        .unwrap();
+    let err = stderr(&o);
+    assert!(!o.status.success(), "accepted REFRAKT_VALIDATE=banana");
+    assert!(err.contains("REFRAKT_VALIDATE=\"banana\""), "{err}");
+    let o = refrakt_command(&["info"])
+        .env("REFRAKT_VALIDATE", "0")
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
 }

@@ -352,8 +352,19 @@ fn bad_transfer_function_files_name_the_file_and_entry() {
         ("opacity = [[1.5, 0.1]]", "opacity[0]", "outside [0, 1]"),
         ("colour = [[0.0, nan, 0.0, 0.0]]", "colour[0]", "finite"),
         ("opacity = [[0.0, -0.1]]", "opacity[0]", "must be in [0, 1]"),
-        ("eta = [[0.0, 1.0], [1.0, 0.0]]", "eta[1]", "must be > 0"),
-        ("eta = [[0.0, -2.0]]", "eta[0]", "must be > 0"),
+        (
+            "eta = [[0.0, 1.0], [1.0, 0.0]]",
+            "eta[1]",
+            "between 0.25 and 4",
+        ),
+        ("eta = [[0.0, -2.0]]", "eta[0]", "between 0.25 and 4"),
+        (
+            "eta = [[0.0, 1.0], [1.0, 1e9]]",
+            "eta[1]",
+            "between 0.25 and 4",
+        ),
+        ("", "", "defines no transfer function"),
+        ("name = \"only a name\"", "", "defines no transfer function"),
         ("medium = [[0.0, 1.0, 1.0]]", "medium[0]", "4 numbers"),
         ("opacty = [[0.0, 0.1]]", "opacty", "unknown field"),
     ];

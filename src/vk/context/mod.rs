@@ -53,16 +53,27 @@ impl std::fmt::Debug for ContextDesc {
 }
 
 impl ContextDesc {
-    /// Validation on when `validate` is set or `REFRAKT_VALIDATE` is `1`/`true`.
-    pub fn from_env(validate: bool, device: Option<String>) -> Self {
-        let env = std::env::var("REFRAKT_VALIDATE")
-            .map(|v| v == "1" || v.eq_ignore_ascii_case("true"))
-            .unwrap_or(false);
-        Self {
+    /// Validation on when `validate` is set or `REFRAKT_VALIDATE` is `1`/`true` (`0`/
+    /// `false`/empty: off). Anything else is an error: a typo must not silently turn
+    /// validation off.
+    pub fn from_env(validate: bool, device: Option<String>) -> Result<Self> {
+        let env = match std::env::var("REFRAKT_VALIDATE") {
+            Err(std::env::VarError::NotPresent) => false,
+            Err(std::env::VarError::NotUnicode(v)) => {
+                bail!("REFRAKT_VALIDATE={v:?}: use 1 or true (on), 0 or false (off)")
+            }
+            Ok(v) => parse_switch(&v).ok_or_else(|| {
+                anyhow!(
+                    "REFRAKT_VALIDATE={:?}: use 1 or true (on), 0 or false (off)",
+                    v.chars().take(40).collect::<String>()
+                )
+            })?,
+        };
+        Ok(Self {
             validate: validate || env,
             device,
             window: None,
-        }
+        })
     }
 }
 
@@ -370,5 +381,30 @@ impl Drop for Shared {
             }
             self.instance.destroy_instance(None);
         }
+    }
+}
+
+/// `1`/`true` → on, `0`/`false`/empty → off (case-insensitive, trimmed), else `None`.
+fn parse_switch(v: &str) -> Option<bool> {
+    match v.trim().to_ascii_lowercase().as_str() {
+        "1" | "true" => Some(true),
+        "0" | "false" | "" => Some(false),
+        _ => None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_switch;
+
+    #[test]
+    fn validation_switch_accepts_only_on_and_off() {
+        assert_eq!(parse_switch("1"), Some(true));
+        assert_eq!(parse_switch(" TRUE "), Some(true));
+        assert_eq!(parse_switch("0"), Some(false));
+        assert_eq!(parse_switch("false"), Some(false));
+        assert_eq!(parse_switch(""), Some(false));
+        assert_eq!(parse_switch("banana"), None);
+        assert_eq!(parse_switch("yes"), None);
     }
 }
