@@ -1,6 +1,7 @@
-//! The directional light: plain data (no GPU types). Scenes without a light direction get
-//! [`default_light`] for their camera; [`Light::default`] is the renderer's own default
-//! (tests and library users that set no scene).
+//! The directional light: plain data (no GPU types), with ONE default: white, softness
+//! [`Light::DEFAULT_SOFTNESS`], from [`default_light`] for the camera it lights
+//! ([`Light::for_camera`]). Scenes without a light direction and the renderer's own
+//! default options (for the default camera) both use it.
 
 use glam::Vec3;
 
@@ -19,12 +20,16 @@ pub struct Light {
     pub softness: f32,
 }
 
-impl Default for Light {
-    fn default() -> Self {
+impl Light {
+    pub const DEFAULT_COLOUR: [f32; 3] = [1.0; 3];
+    pub const DEFAULT_SOFTNESS: f32 = 0.5;
+
+    /// The default light for `camera`: white, default softness, from [`default_light`].
+    pub fn for_camera(camera: &Camera) -> Self {
         Self {
-            towards: Vec3::new(-0.3, 0.6, 1.0).normalize(),
-            colour: [1.0, 1.0, 1.0],
-            softness: 0.5,
+            towards: default_light(camera),
+            colour: Self::DEFAULT_COLOUR,
+            softness: Self::DEFAULT_SOFTNESS,
         }
     }
 }

@@ -7,8 +7,8 @@ mod common;
 use common::with_context;
 use refrakt::shaders;
 use refrakt::vk::{
-    usage, Access, Binding, DescriptorSet, Filter, Format, Framebuffer, GraphicsPipeline, Image,
-    ImageDesc, ImageKind, RenderPass, Sampler,
+    usage, Access, Binding, DescriptorSet, Filter, Format, Framebuffer, GraphicsDesc,
+    GraphicsPipeline, Image, ImageDesc, ImageKind, RenderPass, Sampler,
 };
 
 #[test]
@@ -45,23 +45,27 @@ fn render_pass_ping_pong_between_layers() {
             "read layer 0",
         )
         .unwrap();
-        let fill = GraphicsPipeline::fullscreen(
+        let fill = GraphicsPipeline::new(
             ctx,
-            shaders::FULLSCREEN_VERT,
-            shaders::SELFTEST_FILL_FRAG,
-            &pass,
-            &set,
-            16,
+            &GraphicsDesc::fullscreen(
+                shaders::FULLSCREEN_VERT,
+                shaders::SELFTEST_FILL_FRAG,
+                &pass,
+                &set,
+                16,
+            ),
             "fill",
         )
         .unwrap();
-        let scale = GraphicsPipeline::fullscreen(
+        let scale = GraphicsPipeline::new(
             ctx,
-            shaders::FULLSCREEN_VERT,
-            shaders::SELFTEST_SCALE_FRAG,
-            &pass,
-            &set,
-            16,
+            &GraphicsDesc::fullscreen(
+                shaders::FULLSCREEN_VERT,
+                shaders::SELFTEST_SCALE_FRAG,
+                &pass,
+                &set,
+                16,
+            ),
             "scale",
         )
         .unwrap();
@@ -169,23 +173,27 @@ fn ping_pong(planes: u32, drop_barrier_at: Option<u32>) -> (f32, Vec<String>) {
             "both layers",
         )
         .unwrap();
-        let fill = GraphicsPipeline::fullscreen(
+        let fill = GraphicsPipeline::new(
             &ctx,
-            shaders::FULLSCREEN_VERT,
-            shaders::SELFTEST_FILL_FRAG,
-            &pass,
-            &set,
-            16,
+            &GraphicsDesc::fullscreen(
+                shaders::FULLSCREEN_VERT,
+                shaders::SELFTEST_FILL_FRAG,
+                &pass,
+                &set,
+                16,
+            ),
             "fill",
         )
         .unwrap();
-        let count = GraphicsPipeline::fullscreen(
+        let count = GraphicsPipeline::new(
             &ctx,
-            shaders::FULLSCREEN_VERT,
-            shaders::SELFTEST_COUNT_FRAG,
-            &pass,
-            &set,
-            4,
+            &GraphicsDesc::fullscreen(
+                shaders::FULLSCREEN_VERT,
+                shaders::SELFTEST_COUNT_FRAG,
+                &pass,
+                &set,
+                4,
+            ),
             "count",
         )
         .unwrap();

@@ -87,7 +87,7 @@ use std::time::Instant;
 use anyhow::{bail, ensure, Result};
 use glam::{DVec3, Vec3};
 
-use crate::render::sweep::MIN_FORWARD;
+use crate::render::limits::MIN_FORWARD;
 use crate::render::{Camera, Planes, RenderOptions};
 use crate::transfer::{TransferFunctions, TF_SAMPLES};
 use crate::volume::{Volume, Voxels};

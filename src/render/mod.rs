@@ -2,19 +2,29 @@
 //! turn them into an image. Passes are built from `crate::vk` pieces; nothing here calls
 //! raw Vulkan.
 
+//!
+//! Layout: the renderer's shared inputs (uploads, preintegration table, gradient volume,
+//! environment SAT) are files here; each optical model is a folder (`ea/`, `refract/`)
+//! behind the interface in `model.rs`.
+
 mod ea;
 pub mod gradient;
 /// Limits shared with the shaders (build.rs defines each as a GLSL macro).
 pub mod limits;
+mod model;
 mod options;
 pub mod preintegration;
+pub mod refract;
 pub mod sat;
-pub mod sweep;
 mod tonemap;
 pub mod upload;
 
+use std::collections::HashMap;
+
 use anyhow::{bail, ensure, Result};
+
 use glam::Vec3;
+use model::{Inputs, ModelPass, Recorded};
 
 pub use crate::camera::Camera;
 use crate::environment::EnvironmentMap;
@@ -27,7 +37,7 @@ pub use options::*;
 pub use sat::SummedAreaTable;
 
 pub use preintegration::{PreintegrationTable, TABLE_SIZE};
-pub use sweep::{
+pub use refract::{
     Clamps, Dump, Light, LightTransport, Planes, StateBuffer, SweepOptions, SweepStats,
     MAX_ETA_SCALE,
 };
@@ -48,8 +58,8 @@ pub struct Renderer {
     tf_dirty: bool,
     linear: Sampler,
     preint: PreintegrationTable,
-    ea: Option<ea::EaPass>,
-    sweep: Option<sweep::SweepPass>,
+    /// Each model's pass, made on its first frame and again when the size changes.
+    passes: HashMap<Model, Box<dyn ModelPass>>,
     env: Environment,
 }
 
@@ -122,36 +132,6 @@ impl FrameTarget {
     }
 }
 
-/// Passes own images of the output size; keep one until the size changes.
-trait SizedPass {
-    fn size(&self) -> (u32, u32);
-}
-
-impl SizedPass for ea::EaPass {
-    fn size(&self) -> (u32, u32) {
-        ea::EaPass::size(self)
-    }
-}
-
-impl SizedPass for sweep::SweepPass {
-    fn size(&self) -> (u32, u32) {
-        sweep::SweepPass::size(self)
-    }
-}
-
-fn sized_pass<'a, P: SizedPass>(
-    slot: &'a mut Option<P>,
-    opts: &RenderOptions,
-    make: impl FnOnce(u32, u32) -> Result<P>,
-) -> Result<&'a mut P> {
-    let size = (opts.width, opts.height);
-    if slot.as_ref().map(|p| p.size()) != Some(size) {
-        *slot = None;
-        *slot = Some(make(size.0, size.1)?);
-    }
-    Ok(slot.as_mut().expect("just filled"))
-}
-
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct VolumeInfo {
     pub half_extent: Vec3,
@@ -184,8 +164,7 @@ impl Renderer {
             tf_dirty: true,
             linear,
             preint,
-            ea: None,
-            sweep: None,
+            passes: HashMap::new(),
             env,
         })
     }
@@ -201,8 +180,8 @@ impl Renderer {
         if unchanged {
             return Ok(Timings::default());
         }
-        // The composite's descriptor set names the old images.
-        self.sweep = None;
+        // Descriptor sets name the old images.
+        self.passes.clear();
         let (env, timings) = Environment::new(&self.ctx, map)?;
         self.env = env;
         Ok(timings)
@@ -280,18 +259,7 @@ impl Renderer {
                 opts.sample_distance
             );
         }
-        if model == Model::Refract {
-            // The sweep composites every segment from the preintegration table (thesis
-            // sect. 4.3); sampling the transfer functions per step is the EA model's option.
-            ensure!(
-                opts.preintegrated,
-                "sampling the transfer functions per step (no preintegration) is an option of \
-                 the EA model (--model ea); the refractive sweep always integrates its \
-                 segments with the preintegration table"
-            );
-            sweep::check(self.volume_info, camera, opts, &opts.sweep)?;
-        }
-        Ok(())
+        model::check(model, self.volume_info, camera, opts)
     }
 
     /// Render one frame with `model` and read it back.
@@ -357,18 +325,19 @@ impl Renderer {
     }
 
     fn target(&self, model: Model) -> Result<&FrameTarget> {
-        match model {
-            Model::Ea => self.ea.as_ref().map(|p| p.output()),
-            Model::Refract => self.sweep.as_ref().map(|p| p.output()),
-        }
-        .ok_or_else(|| anyhow::anyhow!("no {} frame has been recorded", model.name()))
+        self.passes
+            .get(&model)
+            .map(|p| p.output())
+            .ok_or_else(|| anyhow::anyhow!("no {} frame has been recorded", model.name()))
     }
 
     /// Build the gradient volume if `model` needs it and it is not there yet: its own
     /// submission, waited for (once per volume; a caller's open recording is unaffected,
     /// it is submitted later).
     fn ensure_gradient(&mut self, model: Model) -> Result<()> {
-        if model != Model::Refract || self.gradient_status != gradient::GradientStatus::Unbuilt {
+        if !model::needs_gradient(model)
+            || self.gradient_status != gradient::GradientStatus::Unbuilt
+        {
             return Ok(());
         }
         let (needed, device_budget) =
@@ -399,105 +368,41 @@ impl Renderer {
             self.tf_dirty = false;
         }
 
+        let inputs = Inputs {
+            camera,
+            opts,
+            read_back,
+            ctx: &self.ctx,
+            info: self.volume_info,
+            volume: &self.volume_tex,
+            gradient: self.gradient.as_ref().map(|g| g.image()),
+            tf: &self.tf_image,
+            preint: self.preint.image(),
+            linear: &self.linear,
+            env: refract::EnvInputs {
+                map: &self.env.image,
+                sat: &self.env.sat.table,
+                mean: self.env.sat.mean,
+                enabled: self.env.enabled,
+            },
+        };
+        let passes = &mut self.passes;
+        let mut record = |rec: &mut Recorder| -> Result<Recorded> {
+            if !passes.get(&model).is_some_and(|p| p.fits(opts)) {
+                // Free the old pass's images before making the new one.
+                passes.remove(&model);
+                passes.insert(model, model::make_pass(model, &inputs)?);
+            }
+            let pass = passes.get_mut(&model).expect("just made");
+            pass.record(rec, &inputs)
+        };
         // The benchmark's frame time: every pass and barrier of the frame, without a table
         // rebuild (only when the transfer functions change) and without the copy out.
         rec.begin_scope("render");
-        let recorded = self.record_passes(rec, model, camera, opts, read_back);
+        let recorded = record(rec);
         rec.end_scope();
         recorded
     }
-
-    fn record_passes(
-        &mut self,
-        rec: &mut Recorder,
-        model: Model,
-        camera: &Camera,
-        opts: &RenderOptions,
-        read_back: bool,
-    ) -> Result<Recorded> {
-        match model {
-            Model::Ea => {
-                let pass = sized_pass(&mut self.ea, opts, |w, h| {
-                    ea::EaPass::new(
-                        &self.ctx,
-                        &self.volume_tex,
-                        &self.tf_image,
-                        self.preint.image(),
-                        &self.linear,
-                        w,
-                        h,
-                    )
-                })?;
-                let max_steps = pass.record(
-                    rec,
-                    self.volume_info,
-                    camera,
-                    opts,
-                    &self.volume_tex,
-                    &self.tf_image,
-                    self.preint.image(),
-                )?;
-                Ok(Recorded {
-                    max_steps,
-                    sweep: None,
-                })
-            }
-            Model::Refract => {
-                let gradient = self.gradient.as_ref().map(|g| g.image());
-                let env = sweep::EnvInputs {
-                    map: &self.env.image,
-                    sat: &self.env.sat.table,
-                    mean: self.env.sat.mean,
-                    enabled: self.env.enabled,
-                };
-                // The ray images are sized by the rays per pixel too.
-                if self.sweep.as_ref().map(|p| p.rays_per_pixel()) != Some(opts.sweep.light_rays) {
-                    self.sweep = None;
-                }
-                let pass = sized_pass(&mut self.sweep, opts, |w, h| {
-                    sweep::SweepPass::new(
-                        &self.ctx,
-                        &self.volume_tex,
-                        gradient,
-                        &self.tf_image,
-                        self.preint.image(),
-                        &self.linear,
-                        &env,
-                        w,
-                        h,
-                        opts.sweep.light_rays,
-                    )
-                })?;
-                let recording = pass.record(
-                    rec,
-                    &self.ctx,
-                    self.volume_info,
-                    self.volume_info.dims,
-                    camera,
-                    opts,
-                    &opts.sweep,
-                    [
-                        &self.volume_tex,
-                        gradient.unwrap_or(&self.volume_tex),
-                        &self.tf_image,
-                        self.preint.image(),
-                    ],
-                    &env,
-                    read_back,
-                )?;
-                Ok(Recorded {
-                    max_steps: recording.stats.planes.count,
-                    sweep: Some(recording),
-                })
-            }
-        }
-    }
-}
-
-/// What [`Renderer::record_inner`] leaves for after the submission.
-struct Recorded {
-    max_steps: u32,
-    sweep: Option<sweep::SweepRecording>,
 }
 
 /// A frame recorded by [`Renderer::record`].

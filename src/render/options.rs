@@ -7,7 +7,7 @@ use glam::Vec3;
 use super::*;
 
 /// Rendering models `refrakt render --model` offers.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Model {
     /// Emission–absorption ray marcher, the baseline.
     Ea,

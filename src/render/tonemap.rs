@@ -9,8 +9,8 @@ use bytemuck::{Pod, Zeroable};
 use crate::shaders;
 use crate::tone::{ToneMap, ToneOperator};
 use crate::vk::{
-    self, Access, Binding, Context, DescriptorSet, Filter, Framebuffer, GraphicsPipeline, Image,
-    Recorder, RenderPass, Sampler, Use,
+    self, Access, Binding, Context, DescriptorSet, Filter, Framebuffer, GraphicsDesc,
+    GraphicsPipeline, Image, Recorder, RenderPass, Sampler, Use,
 };
 
 #[repr(C)]
@@ -87,13 +87,15 @@ impl ToneMapPass {
                 &[Binding::Texture(source, &self.sampler)],
                 "tonemap",
             )?;
-            let pipeline = GraphicsPipeline::fullscreen(
+            let pipeline = GraphicsPipeline::new(
                 &self.ctx,
-                shaders::FULLSCREEN_VERT,
-                shaders::TONEMAP_FRAG,
-                &self.render_pass,
-                &set,
-                std::mem::size_of::<Push>() as u32,
+                &GraphicsDesc::fullscreen(
+                    shaders::FULLSCREEN_VERT,
+                    shaders::TONEMAP_FRAG,
+                    &self.render_pass,
+                    &set,
+                    std::mem::size_of::<Push>() as u32,
+                ),
                 "tonemap",
             )?;
             self.bound = Some(Bound {

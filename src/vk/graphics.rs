@@ -181,73 +181,59 @@ pub struct GraphicsPipeline {
     pub(crate) core: PipelineCore,
 }
 
-impl GraphicsPipeline {
-    /// One full-screen triangle per draw, no blending.
+/// What a graphics pipeline is made from (everything but its name).
+#[derive(Clone, Copy)]
+pub struct GraphicsDesc<'a> {
+    /// SPIR-V of the vertex and fragment shaders.
+    pub vertex: &'a [u8],
+    pub fragment: &'a [u8],
+    pub pass: &'a RenderPass,
+    pub set: &'a DescriptorSet,
+    pub push_size: u32,
+    pub primitives: Primitives,
+    /// The fragment shader's specialization constants: `constants[i]` is the 32-bit value
+    /// of `constant_id = i` (a bool is 0 or 1). The driver compiles the pipeline with them
+    /// folded in, so a branch on one costs nothing (llvmpipe runs both sides of a branch
+    /// on a uniform otherwise).
+    pub constants: &'a [u32],
+}
+
+impl<'a> GraphicsDesc<'a> {
+    /// One full-screen triangle per draw, no blending, no specialization constants.
     pub fn fullscreen(
-        ctx: &Context,
-        vertex: &[u8],
-        fragment: &[u8],
-        pass: &RenderPass,
-        set: &DescriptorSet,
+        vertex: &'a [u8],
+        fragment: &'a [u8],
+        pass: &'a RenderPass,
+        set: &'a DescriptorSet,
         push_size: u32,
-        name: &str,
-    ) -> Result<Self> {
-        Self::new(
-            ctx,
+    ) -> Self {
+        Self {
             vertex,
             fragment,
             pass,
             set,
             push_size,
-            Primitives::Triangles,
-            name,
-        )
+            primitives: Primitives::Triangles,
+            constants: &[],
+        }
     }
+}
 
+impl GraphicsPipeline {
     /// Pipelines made from the same descriptor set and push size have compatible layouts:
     /// [`crate::vk::Recorder::bind_pipeline`] switches between them without rebinding the
     /// set (on lavapipe a set bind per plane costs ~4 ms and 3 MB; a pipeline switch with
     /// the set left bound costs almost nothing, measured).
-    #[allow(clippy::too_many_arguments)]
-    pub fn new(
-        ctx: &Context,
-        vertex: &[u8],
-        fragment: &[u8],
-        pass: &RenderPass,
-        set: &DescriptorSet,
-        push_size: u32,
-        primitives: Primitives,
-        name: &str,
-    ) -> Result<Self> {
-        Self::specialized(
-            ctx,
+    pub fn new(ctx: &Context, desc: &GraphicsDesc, name: &str) -> Result<Self> {
+        let GraphicsDesc {
             vertex,
             fragment,
             pass,
             set,
             push_size,
             primitives,
-            &[],
-            name,
-        )
-    }
-
-    /// [`GraphicsPipeline::new`] with the fragment shader's specialization constants:
-    /// `constants[i]` is the 32-bit value of `constant_id = i` (a bool is 0 or 1). The
-    /// driver compiles the pipeline with them folded in, so a branch on one costs nothing
-    /// (llvmpipe runs both sides of a branch on a uniform otherwise).
-    #[allow(clippy::too_many_arguments)]
-    pub fn specialized(
-        ctx: &Context,
-        vertex: &[u8],
-        fragment: &[u8],
-        pass: &RenderPass,
-        set: &DescriptorSet,
-        push_size: u32,
-        primitives: Primitives,
-        constants: &[u32],
-        name: &str,
-    ) -> Result<Self> {
+            constants,
+        } = *desc;
         let device = ctx.device();
         let entries: Vec<vk::SpecializationMapEntry> = (0..constants.len() as u32)
             .map(|i| vk::SpecializationMapEntry {

@@ -22,7 +22,7 @@ pub use commands::{Recorder, Timings, Use};
 pub use context::{
     device_type_name, version_string, Context, ContextDesc, DeviceInfo, ValidationLog, WindowSource,
 };
-pub use graphics::{Framebuffer, GraphicsPipeline, Primitives, RenderPass};
+pub use graphics::{Framebuffer, GraphicsDesc, GraphicsPipeline, Primitives, RenderPass};
 pub use pipeline::{Binding, ComputePipeline, DescriptorSet};
 pub use resources::{
     format_size, Buffer, Filter, Image, ImageDesc, ImageKind, LayerView, Memory, Sampler,

@@ -37,6 +37,28 @@ pub struct Buffer {
     size: u64,
 }
 
+/// Memory for one resource from the context's allocator (its own block when the
+/// allocator decides so). `linear`: buffers and linear images.
+fn allocate(
+    ctx: &Context,
+    name: &str,
+    requirements: vk::MemoryRequirements,
+    location: MemoryLocation,
+    linear: bool,
+) -> gpu_allocator::Result<Allocation> {
+    ctx.shared
+        .allocator
+        .lock()
+        .unwrap()
+        .allocate(&AllocationCreateDesc {
+            name,
+            requirements,
+            location,
+            linear,
+            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+        })
+}
+
 impl Buffer {
     pub fn new(
         ctx: &Context,
@@ -59,19 +81,7 @@ impl Buffer {
             Memory::Upload => MemoryLocation::CpuToGpu,
             Memory::Readback => MemoryLocation::GpuToCpu,
         };
-        let allocation = ctx
-            .shared
-            .allocator
-            .lock()
-            .unwrap()
-            .allocate(&AllocationCreateDesc {
-                name,
-                requirements,
-                location,
-                linear: true,
-                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-            });
-        let allocation = match allocation {
+        let allocation = match allocate(ctx, name, requirements, location, true) {
             Ok(a) => a,
             Err(e) => {
                 unsafe { device.destroy_buffer(raw, None) };
@@ -264,19 +274,7 @@ impl Image {
         let raw = unsafe { device.create_image(&info, None) }
             .with_context(|| format!("creating image '{name}' ({:?})", desc.format))?;
         let requirements = unsafe { device.get_image_memory_requirements(raw) };
-        let allocation = ctx
-            .shared
-            .allocator
-            .lock()
-            .unwrap()
-            .allocate(&AllocationCreateDesc {
-                name,
-                requirements,
-                location: MemoryLocation::GpuOnly,
-                linear: false,
-                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-            });
-        let allocation = match allocation {
+        let allocation = match allocate(ctx, name, requirements, MemoryLocation::GpuOnly, false) {
             Ok(a) => a,
             Err(e) => {
                 unsafe { device.destroy_image(raw, None) };

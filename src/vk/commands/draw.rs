@@ -57,19 +57,7 @@ impl Recorder<'_> {
         width: u32,
         height: u32,
     ) {
-        let d = self.device();
-        // SAFETY: recording; pipeline, layout and set are alive and compatible.
-        unsafe {
-            d.cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::GRAPHICS, pipeline.core.raw);
-            d.cmd_bind_descriptor_sets(
-                self.cmd,
-                vk::PipelineBindPoint::GRAPHICS,
-                pipeline.core.layout,
-                0,
-                &[set.raw],
-                &[],
-            );
-        }
+        self.bind_with_set(vk::PipelineBindPoint::GRAPHICS, &pipeline.core, set);
         self.set_viewport(width, height);
     }
 

@@ -11,6 +11,7 @@ use anyhow::{bail, Result};
 use ash::vk;
 
 use super::barriers::plan_transitions;
+use super::pipeline::PipelineCore;
 use super::resources::color_range;
 use super::{Access, Buffer, ComputePipeline, Context, DescriptorSet, Image};
 
@@ -273,6 +274,21 @@ impl Recorder<'_> {
         Ok(())
     }
 
+    /// Bind a pipeline and its descriptor set (set 0) at `point`.
+    fn bind_with_set(
+        &mut self,
+        point: vk::PipelineBindPoint,
+        pipeline: &PipelineCore,
+        set: &DescriptorSet,
+    ) {
+        let d = self.device();
+        // SAFETY: recording; pipeline, layout and set are alive and compatible.
+        unsafe {
+            d.cmd_bind_pipeline(self.cmd, point, pipeline.raw);
+            d.cmd_bind_descriptor_sets(self.cmd, point, pipeline.layout, 0, &[set.raw], &[]);
+        }
+    }
+
     /// Bind a compute pipeline with its set, push constants, and dispatch `groups`.
     pub fn dispatch(
         &mut self,
@@ -281,19 +297,7 @@ impl Recorder<'_> {
         push: &[u8],
         groups: [u32; 3],
     ) -> Result<()> {
-        let d = self.device();
-        // SAFETY: recording; pipeline, layout and set are alive and compatible.
-        unsafe {
-            d.cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::COMPUTE, pipeline.core.raw);
-            d.cmd_bind_descriptor_sets(
-                self.cmd,
-                vk::PipelineBindPoint::COMPUTE,
-                pipeline.core.layout,
-                0,
-                &[set.raw],
-                &[],
-            );
-        }
+        self.bind_with_set(vk::PipelineBindPoint::COMPUTE, &pipeline.core, set);
         self.push_constants(
             pipeline.core.layout,
             pipeline.core.push_size,

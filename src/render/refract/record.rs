@@ -8,20 +8,14 @@ impl SweepPass {
     /// Record one frame into `rec`: setup, every plane, and the composite into
     /// [`SweepPass::output`]. Parameters travel in the command stream, so earlier frames
     /// may still be in flight.
-    #[allow(clippy::too_many_arguments)]
-    pub(crate) fn record(
+    pub(crate) fn record_sweep(
         &mut self,
         rec: &mut Recorder,
-        ctx: &Context,
-        info: VolumeInfo,
-        volume_dims: [u32; 3],
-        camera: &Camera,
-        opts: &RenderOptions,
-        sweep: &SweepOptions,
-        inputs: [&Image; 4],
-        env: &EnvInputs,
-        read_back: bool,
+        inputs: &Inputs,
     ) -> Result<SweepRecording> {
+        let (camera, opts, read_back) = (inputs.camera, inputs.opts, inputs.read_back);
+        let (ctx, info, env, sweep) = (inputs.ctx, inputs.info, &inputs.env, &opts.sweep);
+        let volume_dims = info.dims;
         let (eye, forward, right, up) = camera.frame();
         let travel = -sweep.light.towards.normalize();
         let planes = check(info, camera, opts, sweep)?;
@@ -167,11 +161,17 @@ impl SweepPass {
         rec.update_uniform(&self.params, bytemuck::bytes_of(&p))?;
         rec.update_uniform(&self.env_params, bytemuck::bytes_of(&e))?;
         // The setup reads the volume's inputs and writes every state layer.
-        let mut uses: Vec<Use> = inputs
-            .into_iter()
-            .chain([env.map, env.sat])
-            .map(|img| Use::all(img, Access::Sampled))
-            .collect();
+        let mut uses: Vec<Use> = [
+            inputs.volume,
+            inputs.gradient.unwrap_or(inputs.volume),
+            inputs.tf,
+            inputs.preint,
+            env.map,
+            env.sat,
+        ]
+        .into_iter()
+        .map(|img| Use::all(img, Access::Sampled))
+        .collect();
         uses.extend(self.every_layer(Access::ComputeStorage).into_iter().map(
             |(image, layers, access)| Use {
                 image,

@@ -28,12 +28,13 @@ use anyhow::{bail, ensure, Result};
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
+use super::model::{Inputs, ModelPass, Recorded};
 use super::{Camera, FrameTarget, RenderOptions, VolumeInfo};
 use crate::shaders;
 use crate::vk::{
     self, Access, Binding, Buffer, ComputePipeline, Context, DescriptorSet, Framebuffer,
-    GraphicsPipeline, Image, ImageDesc, ImageKind, LayerView, Primitives, Recorder, RenderPass,
-    Sampler,
+    GraphicsDesc, GraphicsPipeline, Image, ImageDesc, ImageKind, LayerView, Primitives, Recorder,
+    RenderPass,
 };
 
 /// The six state buffers, in attachment order, and what else a plane can be dumped as.
@@ -213,7 +214,8 @@ pub struct SweepOptions {
 impl Default for SweepOptions {
     fn default() -> Self {
         Self {
-            light: Light::default(),
+            // The default camera's default light (thesis scenes set their own).
+            light: Light::for_camera(&Camera::default()),
             roughness: 0.3,
             specular: 1.0,
             max_gain: 4.0,
@@ -369,6 +371,40 @@ pub(super) fn check(
         );
     }
     Ok(planes)
+}
+
+/// What the refractive model refuses that every model accepts: transfer functions sampled
+/// per step instead of preintegrated, and what [`check`] refuses.
+pub(super) fn check_model(info: VolumeInfo, camera: &Camera, opts: &RenderOptions) -> Result<()> {
+    // The sweep composites every segment from the preintegration table (thesis sect.
+    // 4.3); sampling the transfer functions per step is the EA model's option.
+    ensure!(
+        opts.preintegrated,
+        "sampling the transfer functions per step (no preintegration) is an option of the EA \
+         model (--model ea); the refractive sweep always integrates its segments with the \
+         preintegration table"
+    );
+    check(info, camera, opts, &opts.sweep).map(|_| ())
+}
+
+impl ModelPass for SweepPass {
+    /// The state images are sized by the viewport, the ray images by the rays per pixel too.
+    fn fits(&self, opts: &RenderOptions) -> bool {
+        (self.width, self.height) == (opts.width, opts.height)
+            && self.rays_per_pixel == opts.sweep.light_rays
+    }
+
+    fn record(&mut self, rec: &mut Recorder, inputs: &Inputs) -> Result<Recorded> {
+        let recording = self.record_sweep(rec, inputs)?;
+        Ok(Recorded {
+            max_steps: recording.stats.planes.count,
+            sweep: Some(recording),
+        })
+    }
+
+    fn output(&self) -> &FrameTarget {
+        &self.output
+    }
 }
 
 /// What recording a sweep leaves for after the submission: the plane stats and the

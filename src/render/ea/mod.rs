@@ -1,14 +1,13 @@
 //! The baseline emission–absorption ray marcher (`glsl/ea.comp`), the reference every
 //! refractive image is compared against.
 
-use anyhow::Result;
+use anyhow::{ensure, Result};
 use bytemuck::{Pod, Zeroable};
 
-use super::{Camera, FrameTarget, RenderOptions, VolumeInfo};
+use super::model::{Inputs, ModelPass, Recorded};
+use super::{FrameTarget, RenderOptions};
 use crate::shaders;
-use crate::vk::{
-    Access, Binding, Buffer, ComputePipeline, Context, DescriptorSet, Image, Recorder, Sampler, Use,
-};
+use crate::vk::{Access, Binding, Buffer, ComputePipeline, DescriptorSet, Recorder, Use};
 
 /// std140 mirror of `Params` in glsl/ea.comp.
 #[repr(C)]
@@ -24,6 +23,16 @@ struct Params {
     size: [u32; 4],
 }
 
+/// What the EA model refuses that every model accepts.
+pub(super) fn check(opts: &RenderOptions) -> Result<()> {
+    ensure!(
+        opts.sweep.dumps.is_empty(),
+        "state-buffer dumps are the refractive sweep's (--model refract); the EA ray \
+         marcher has no state buffers"
+    );
+    Ok(())
+}
+
 pub(super) struct EaPass {
     params: Buffer,
     output: FrameTarget,
@@ -34,24 +43,18 @@ pub(super) struct EaPass {
 }
 
 impl EaPass {
-    pub fn new(
-        ctx: &Context,
-        volume: &Image,
-        tf: &Image,
-        preint: &Image,
-        sampler: &Sampler,
-        width: u32,
-        height: u32,
-    ) -> Result<Self> {
+    pub fn new(inputs: &Inputs, width: u32, height: u32) -> Result<Self> {
+        let ctx = inputs.ctx;
+        let sampler = inputs.linear;
         let params = Buffer::uniform::<Params>(ctx, "ea params")?;
         let output = FrameTarget::new(ctx, width, height, "ea frame")?;
         let set = DescriptorSet::new(
             ctx,
             &[
                 Binding::Uniform(&params),
-                Binding::Texture(volume, sampler),
-                Binding::Texture(tf, sampler),
-                Binding::Texture(preint, sampler),
+                Binding::Texture(inputs.volume, sampler),
+                Binding::Texture(inputs.tf, sampler),
+                Binding::Texture(inputs.preint, sampler),
                 Binding::StorageImage(&output.image),
             ],
             "ea",
@@ -66,28 +69,20 @@ impl EaPass {
             height,
         })
     }
+}
 
-    pub fn size(&self) -> (u32, u32) {
-        (self.width, self.height)
+impl ModelPass for EaPass {
+    fn fits(&self, opts: &RenderOptions) -> bool {
+        (self.width, self.height) == (opts.width, opts.height)
     }
 
-    /// The finished frame (linear RGBA32F) once a recording has run.
-    pub fn output(&self) -> &FrameTarget {
+    fn output(&self) -> &FrameTarget {
         &self.output
     }
 
-    /// Record the ray march into [`EaPass::output`]; returns the most steps a ray takes.
-    #[allow(clippy::too_many_arguments)]
-    pub fn record(
-        &mut self,
-        rec: &mut Recorder,
-        info: VolumeInfo,
-        camera: &Camera,
-        opts: &RenderOptions,
-        volume: &Image,
-        tf: &Image,
-        preint: &Image,
-    ) -> Result<u32> {
+    /// The ray march; the most steps a ray takes is the box diagonal's.
+    fn record(&mut self, rec: &mut Recorder, inputs: &Inputs) -> Result<Recorded> {
+        let (info, camera, opts) = (inputs.info, inputs.camera, inputs.opts);
         let (eye, forward, right, up) = camera.frame();
         let tan_half = (camera.fov_y.to_radians() * 0.5).tan();
         let aspect = self.width as f32 / self.height as f32;
@@ -113,17 +108,20 @@ impl EaPass {
         };
         rec.update_uniform(&self.params, bytemuck::bytes_of(&p))?;
         let uses = [
-            Use::all(volume, Access::Sampled),
-            Use::all(tf, Access::Sampled),
-            Use::all(preint, Access::Sampled),
+            Use::all(inputs.volume, Access::Sampled),
+            Use::all(inputs.tf, Access::Sampled),
+            Use::all(inputs.preint, Access::Sampled),
             Use::all(&self.output.image, Access::ComputeStorage),
         ];
         let groups = [self.width.div_ceil(8), self.height.div_ceil(8), 1];
         rec.pass("ea raymarch", &uses, |rec| {
             rec.dispatch(&self.pipeline, &self.set, &[], groups)
         })?;
-        // Longest possible ray through the box, in steps: the box diagonal.
-        Ok(super::steps_for(info.half_extent, info.ref_step, opts.sample_distance) as u32)
+        Ok(Recorded {
+            max_steps: super::steps_for(info.half_extent, info.ref_step, opts.sample_distance)
+                as u32,
+            sweep: None,
+        })
     }
 }
 

@@ -78,19 +78,18 @@ pub(crate) struct ForwardPipelines {
 }
 
 impl SweepPass {
-    #[allow(clippy::too_many_arguments)]
-    pub fn new(
-        ctx: &Context,
-        volume: &Image,
-        gradient: Option<&Image>,
-        tf: &Image,
-        preint: &Image,
-        sampler: &Sampler,
-        env: &EnvInputs,
-        width: u32,
-        height: u32,
-        rays_per_pixel: u32,
-    ) -> Result<Self> {
+    pub fn new(inputs: &Inputs, width: u32, height: u32, rays_per_pixel: u32) -> Result<Self> {
+        let Inputs {
+            ctx,
+            volume,
+            gradient,
+            tf,
+            preint,
+            linear: sampler,
+            env,
+            ..
+        } = inputs;
+        let (ctx, volume, tf, preint, sampler) = (*ctx, *volume, *tf, *preint, *sampler);
         let max_image = ctx.info().limits.max_image_dimension2_d;
         ensure!(
             (height as u64) * (rays_per_pixel as u64) <= max_image as u64,
@@ -261,39 +260,38 @@ impl SweepPass {
 
         let setup =
             ComputePipeline::new(ctx, shaders::SWEEP_SETUP_COMP, &setup_set, 0, "sweep setup")?;
-        let sweep = GraphicsPipeline::specialized(
+        // Every plane pipeline: the plane set's layout, the plane push constant and the
+        // specialization constants; they differ in shaders, pass and primitives.
+        let plane_desc = |vertex, fragment, pass| GraphicsDesc {
+            constants: &constants,
+            ..GraphicsDesc::fullscreen(
+                vertex,
+                fragment,
+                pass,
+                &sweep_set,
+                std::mem::size_of::<PlanePush>() as u32,
+            )
+        };
+        let sweep = GraphicsPipeline::new(
             ctx,
-            shaders::FULLSCREEN_VERT,
-            shaders::SWEEP_FRAG,
-            &render_pass,
-            &sweep_set,
-            std::mem::size_of::<PlanePush>() as u32,
-            Primitives::Triangles,
-            &constants,
+            &plane_desc(shaders::FULLSCREEN_VERT, shaders::SWEEP_FRAG, &render_pass),
             "sweep plane",
         )?;
-        let floor = GraphicsPipeline::fullscreen(
+        let floor = GraphicsPipeline::new(
             ctx,
-            shaders::FULLSCREEN_VERT,
-            shaders::SWEEP_FLOOR_FRAG,
-            &render_pass,
-            &sweep_set,
-            std::mem::size_of::<PlanePush>() as u32,
+            &GraphicsDesc {
+                constants: &[],
+                ..plane_desc(
+                    shaders::FULLSCREEN_VERT,
+                    shaders::SWEEP_FLOOR_FRAG,
+                    &render_pass,
+                )
+            },
             "sweep floor plane",
         )?;
         let forward = if ctx.info().large_points && ctx.info().fragment_atomics {
-            let plane = |fs: &[u8], pass: &RenderPass, name: &str| {
-                GraphicsPipeline::specialized(
-                    ctx,
-                    shaders::FULLSCREEN_VERT,
-                    fs,
-                    pass,
-                    &sweep_set,
-                    std::mem::size_of::<PlanePush>() as u32,
-                    Primitives::Triangles,
-                    &constants,
-                    name,
-                )
+            let plane = |fs, pass, name: &str| {
+                GraphicsPipeline::new(ctx, &plane_desc(shaders::FULLSCREEN_VERT, fs, pass), name)
             };
             let largest_point = ctx.info().limits.point_size_range[1];
             Some(ForwardPipelines {
@@ -314,12 +312,15 @@ impl SweepPass {
                 )?,
                 splat: GraphicsPipeline::new(
                     ctx,
-                    shaders::LIGHT_SPLAT_VERT,
-                    shaders::LIGHT_SPLAT_FRAG,
-                    &splat_pass,
-                    &sweep_set,
-                    std::mem::size_of::<PlanePush>() as u32,
-                    Primitives::AdditivePoints,
+                    &GraphicsDesc {
+                        primitives: Primitives::AdditivePoints,
+                        constants: &[],
+                        ..plane_desc(
+                            shaders::LIGHT_SPLAT_VERT,
+                            shaders::LIGHT_SPLAT_FRAG,
+                            &splat_pass,
+                        )
+                    },
                     "light splat",
                 )?,
                 max_half_width: MAX_SPLAT_HALF_WIDTH.min(((largest_point - 2.0) / 2.0).floor()),
@@ -364,15 +365,6 @@ impl SweepPass {
         })
     }
 
-    pub fn size(&self) -> (u32, u32) {
-        (self.width, self.height)
-    }
-
-    /// Light rays per screen pixel the ray images were made for.
-    pub fn rays_per_pixel(&self) -> u32 {
-        self.rays_per_pixel
-    }
-
     /// The same layers of all six state images, bound for the same use.
     pub(crate) fn state_layers(
         &self,
@@ -407,10 +399,5 @@ impl SweepPass {
         let taps = if soft { 3 } else { 1 };
         let reads = 6 + 1 + 2 * taps + 4 + 1 + u64::from(specular);
         pixels * (reads + 6) * STATE_BYTES_PER_PIXEL
-    }
-
-    /// The finished frame (linear RGBA32F) once a recording has run.
-    pub fn output(&self) -> &FrameTarget {
-        &self.output
     }
 }

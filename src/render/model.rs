@@ -1,0 +1,98 @@
+//! The interface between the renderer and its optical models. Each model lives in its own
+//! folder (`ea/`, `refract/`) and reaches the renderer through three things only:
+//!
+//! - [`Inputs`]: the GPU resources every model may read (volume, transfer functions,
+//!   preintegration table, gradient volume, environment), owned by the renderer and
+//!   rebuilt there when the data changes;
+//! - [`ModelPass`]: the model's own images and pipelines for one output size, which record
+//!   a frame into a [`FrameTarget`];
+//! - the three functions below ([`check`], [`needs_gradient`], [`make_pass`]): the only
+//!   place that matches on [`Model`] to pick a model's code.
+//!
+//! A new model (ambient occlusion, single scattering, ambient scattering, the eikonal
+//! tracer) adds a folder with a `check` and a `ModelPass`, a [`Model`] variant and one arm
+//! in each function here; the CLI, viewer and benchmark go on calling
+//! [`super::Renderer::render`] / [`super::Renderer::record`] with the variant.
+
+use anyhow::Result;
+
+use super::refract::{EnvInputs, SweepRecording};
+use super::{ea, refract, Camera, FrameTarget, Model, RenderOptions, VolumeInfo};
+use crate::vk::{Context, Image, Recorder, Sampler};
+
+/// The renderer's GPU resources, as every model sees them, and the frame asked for.
+pub(crate) struct Inputs<'a> {
+    pub camera: &'a Camera,
+    /// Already checked (see [`check`]).
+    pub opts: &'a RenderOptions,
+    /// The frame will be read back by the same submission (counters and dumps may be
+    /// copied out).
+    pub read_back: bool,
+    pub ctx: &'a Context,
+    pub info: VolumeInfo,
+    /// The scalar volume (R16/R32, linear filtering, texture coordinates over the box).
+    pub volume: &'a Image,
+    /// The smoothed gradient volume, if a model that needs it asked for it and it fits.
+    pub gradient: Option<&'a Image>,
+    /// The transfer functions as a 1D-per-row image.
+    pub tf: &'a Image,
+    pub preint: &'a Image,
+    pub linear: &'a Sampler,
+    pub env: EnvInputs<'a>,
+}
+
+/// What a recorded frame leaves for after its submission.
+pub(crate) struct Recorded {
+    /// Samples along the longest ray (ray marchers) or planes (the sweep).
+    pub max_steps: u32,
+    /// The sweep's statistics and the buffers its dumps and counters are read back from.
+    pub sweep: Option<SweepRecording>,
+}
+
+/// One model's images and pipelines, made for one output size.
+pub(crate) trait ModelPass: Send {
+    /// Whether this pass can record frames asked for with `opts` (size, ray budget), or
+    /// must be made anew.
+    fn fits(&self, opts: &RenderOptions) -> bool;
+
+    /// Record the frame `inputs` ask for into [`ModelPass::output`].
+    fn record(&mut self, rec: &mut Recorder, inputs: &Inputs) -> Result<Recorded>;
+
+    /// The finished frame (linear RGBA32F) once a recording has run.
+    fn output(&self) -> &FrameTarget;
+}
+
+/// What `model` refuses beyond the checks every model shares (camera, options, steps).
+pub(crate) fn check(
+    model: Model,
+    info: VolumeInfo,
+    camera: &Camera,
+    opts: &RenderOptions,
+) -> Result<()> {
+    match model {
+        Model::Ea => ea::check(opts),
+        Model::Refract => refract::check_model(info, camera, opts),
+    }
+}
+
+/// Whether `model` reads the gradient volume (built on its first frame).
+pub(crate) fn needs_gradient(model: Model) -> bool {
+    match model {
+        Model::Ea => false,
+        Model::Refract => true,
+    }
+}
+
+/// Make `model`'s pass for the frames `opts` asks for.
+pub(crate) fn make_pass(model: Model, inputs: &Inputs) -> Result<Box<dyn ModelPass>> {
+    let opts = inputs.opts;
+    Ok(match model {
+        Model::Ea => Box::new(ea::EaPass::new(inputs, opts.width, opts.height)?),
+        Model::Refract => Box::new(refract::SweepPass::new(
+            inputs,
+            opts.width,
+            opts.height,
+            opts.sweep.light_rays,
+        )?),
+    })
+}
