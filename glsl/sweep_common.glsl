@@ -5,7 +5,7 @@
 #define REFRAKT_SWEEP_COMMON_GLSL
 #include "common.glsl"
 
-// std140 mirror of render::sweep::SweepParams.
+// std140 mirror of render::refract::SweepParams.
 layout(set = 0, binding = 0) uniform SweepParams {
     mat4 view_to_tex;    // view space -> volume texture coordinates in [0,1]^3
     mat4 view_to_world;  // for the clipping plane

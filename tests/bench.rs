@@ -5,7 +5,7 @@
 
 mod common;
 
-use refrakt::bench::{Report, SCHEMA};
+use refrakt::bench::{Report, Variant, SCHEMA};
 
 fn refrakt(args: &[&str]) -> std::process::Output {
     common::refrakt_command(args)
@@ -70,12 +70,10 @@ fn tiny_thesis_bench_has_the_documented_structure() {
     assert_eq!((r.settings.frames, r.settings.warmup), (2, 1));
     let names: Vec<&str> = r.rows.iter().map(|r| r.dataset.as_str()).collect();
     assert_eq!(names, ["supernova", "kiwi"]);
-    for row in &r.rows {
-        // Scale 0.05 of the thesis' resolution and viewport.
-        let expect = row
-            .thesis
-            .resolution
-            .map(|d| ((d as f64 * 0.05).round() as u32).max(2));
+    // Scale 0.05 of the thesis' resolutions (Table 6.1: supernova 432³, kiwi 256×256×128)
+    // and of its 768² viewport.
+    let expected = [[22, 22, 22], [13, 13, 6]];
+    for (row, expect) in r.rows.iter().zip(expected) {
         assert_eq!(row.resolution, expect, "{}", row.dataset);
         assert_eq!(row.viewport, [38, 38]);
         assert!(row.planes >= 2);
@@ -88,13 +86,22 @@ fn tiny_thesis_bench_has_the_documented_structure() {
                 v.variant
             );
             assert!(v.frames_ms.iter().all(|t| t.is_finite() && *t > 0.0));
-            assert!(v.stats.min <= v.stats.median && v.stats.median <= v.stats.max);
+            // The statistics are those of the frames reported beside them.
+            let mean = v.frames_ms.iter().sum::<f64>() / v.frames_ms.len() as f64;
+            let lo = v.frames_ms.iter().cloned().fold(f64::INFINITY, f64::min);
+            let hi = v.frames_ms.iter().cloned().fold(0.0, f64::max);
+            assert!((v.stats.mean - mean).abs() <= 1e-9 * mean, "{}", v.variant);
+            assert_eq!((v.stats.min, v.stats.max), (lo, hi), "{}", v.variant);
+            assert!((v.stats.median - (lo + hi) / 2.0).abs() <= 1e-9 * hi);
         }
         assert!(
             row.refract.passes.sweep_ms > 0.0
                 && row.refract.passes.sweep_ms <= row.refract.stats.max
         );
-        assert!(row.sweep_over_ea.unwrap() > 0.0 && row.sweep_over_floor.unwrap() > 0.0);
+        // The ratios are those of the mean frame times.
+        let ratio = |v: &Option<Variant>| row.refract.stats.mean / v.as_ref().unwrap().stats.mean;
+        assert!((row.sweep_over_ea.unwrap() - ratio(&row.ea)).abs() < 1e-9);
+        assert!((row.sweep_over_floor.unwrap() - ratio(&row.floor)).abs() < 1e-9);
         assert!(row.bytes_per_plane_pixel > 0.0);
     }
 

@@ -327,7 +327,7 @@ fn real_scenes_load_their_scans() {
     let dir = refrakt::scene::data_dir();
     for (name, dims) in [("lung-ct", [512, 512, 48]), ("mri-head", [181, 217, 181])] {
         let s = Scene::resolve(name).unwrap();
-        match s.load_volume(&dir) {
+        match s.load_volume(&dir, None) {
             Ok(v) => {
                 assert_eq!(v.dims, dims, "{name}");
                 // The CT's 5 mm slices and 0.57 mm pixels survive into the spacing.
@@ -409,6 +409,97 @@ fn bad_volume_files_fail_cleanly_from_the_command_line() {
         &["render", nrrd.to_str().unwrap(), "-o", o],
         &out,
         &["bz.nrrd", "bzip2"],
+    );
+}
+
+/// Issue 15, items 1–4: hostile volume inputs are refused from their headers, cheaply.
+/// Sparse files stand in for big ones: reading one in full would take seconds and
+/// gigabytes, which the time bound catches (each refusal here takes ~0.2 s).
+#[test]
+fn huge_endless_and_special_inputs_are_refused_before_reading() {
+    use std::time::{Duration, Instant};
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let out = d.join("never.png");
+    let o = out.to_str().unwrap();
+    let quick = |args: &[&str], needles: &[&str]| {
+        let t = Instant::now();
+        fails_with(args, &out, needles);
+        assert!(
+            t.elapsed() < Duration::from_secs(20),
+            "{args:?} took {:?}",
+            t.elapsed()
+        );
+    };
+    let nhdr = |name: &str, sizes: &str, data: &str| {
+        let p = d.join(name);
+        std::fs::write(
+            &p,
+            format!(
+                "NRRD0004\ntype: uint8\ndimension: 3\nsizes: {sizes}\nencoding: raw\n\
+                 data file: {data}\n\n"
+            ),
+        )
+        .unwrap();
+        p.to_str().unwrap().to_owned()
+    };
+    // 1. Detached data from an endless device, 8 GB promised: the device cannot hold it
+    // (lavapipe: 2 GiB heap), so the header alone refuses it.
+    let zero = nhdr("zero.nhdr", "2000 2000 2000", "/dev/zero");
+    quick(
+        &["render", &zero, "-o", o],
+        &["zero.nhdr", "from the header"],
+    );
+    // ... and a small volume from it is refused as no regular file (it would never end).
+    let zero_small = nhdr("small.nhdr", "8 8 8", "/dev/zero");
+    quick(
+        &["render", &zero_small, "-o", o],
+        &["small.nhdr", "/dev/zero", "not a regular file"],
+    );
+    // 1. A detached file longer than the header promises is not read past the promise.
+    let long = d.join("long.raw");
+    std::fs::File::create(&long)
+        .unwrap()
+        .set_len(20_000_000_000)
+        .unwrap();
+    let long_hdr = nhdr("long.nhdr", "8 8 8", "long.raw");
+    quick(
+        &["render", &long_hdr, "-o", o],
+        &["long.nhdr", "long.raw", "more than 512 bytes"],
+    );
+    // 3. A FIFO would block forever.
+    let fifo = d.join("pipe.nrrd");
+    assert!(std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap()
+        .success());
+    quick(
+        &["render", fifo.to_str().unwrap(), "-o", o],
+        &["pipe.nrrd", "FIFO"],
+    );
+    // 4. 4096×4096×160 u8 (2.7 GB): refused from the name's dimensions.
+    let big = d.join("big_4096x4096x160_uint8.raw");
+    std::fs::File::create(&big)
+        .unwrap()
+        .set_len(4096 * 4096 * 160)
+        .unwrap();
+    quick(
+        &["render", big.to_str().unwrap(), "-o", o],
+        &["big_4096x4096x160_uint8.raw", "from the header"],
+    );
+    // 2. A folder of large files that are not DICOM: only their first bytes are read.
+    let folder = d.join("not-dicom");
+    std::fs::create_dir(&folder).unwrap();
+    for i in 0..20 {
+        std::fs::File::create(folder.join(format!("f{i}.bin")))
+            .unwrap()
+            .set_len(500_000_000)
+            .unwrap();
+    }
+    quick(
+        &["render", folder.to_str().unwrap(), "-o", o],
+        &["not-dicom", "no DICOM image files found"],
     );
 }
 

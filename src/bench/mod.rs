@@ -11,7 +11,7 @@ use anyhow::{bail, ensure, Context as _, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::{Deserialize, Serialize};
 
-use crate::render::{Camera, Frame, Model, RenderOptions, Renderer};
+use crate::render::{upload, Camera, Frame, Model, RenderOptions, Renderer};
 use crate::scene::{Scene, VolumeSource};
 use crate::vk::{self, Context};
 use crate::volume::standins::{self, Dataset, DATASETS};
@@ -306,7 +306,7 @@ pub fn thesis(ctx: &Context, s: &ThesisSettings) -> Result<Report> {
         scene.sample_distance = THESIS_SAMPLE_DISTANCE;
         pb.set_message(format!("{}: preparing the volume", d.name));
         let original = crate::scene::original_in(&s.data_dir, d.name);
-        let volume = scene.load_volume(&s.data_dir)?;
+        let volume = scene.load_volume(&s.data_dir, Some(upload::device_limits(ctx)))?;
         let tf = scene.transfer_functions()?;
         let mut renderer = Renderer::new(ctx, &volume, &tf)?;
         renderer.set_environment(scene.environment_map()?.as_ref())?;

@@ -73,7 +73,7 @@ pub fn scaling(
     progress: bool,
 ) -> Result<ScalingReport> {
     ensure!(frames >= 1, "--frames must be at least 1");
-    let volume = scene.load_volume(data_dir)?;
+    let volume = scene.load_volume(data_dir, Some(upload::device_limits(ctx)))?;
     let tf = scene.transfer_functions()?;
     let mut renderer = Renderer::new(ctx, &volume, &tf)?;
     renderer.set_environment(scene.environment_map()?.as_ref())?;

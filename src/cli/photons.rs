@@ -35,7 +35,7 @@ pub fn photons(args: &PhotonsArgs) -> Result<ExitCode> {
         camera,
         opts,
         ..
-    } = build_scene(&args.scene)?;
+    } = build_scene(&args.scene, None)?;
     let planes = photons::planes(&volume, &camera, &opts)?;
     let depth = match (args.plane, args.depth) {
         (Some(k), _) => photons::plane_depth(&volume, &camera, &opts, k)?,

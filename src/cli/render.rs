@@ -7,7 +7,7 @@ use std::process::ExitCode;
 use anyhow::{bail, Result};
 
 use refrakt::output;
-use refrakt::render::{Camera, Model, Renderer, StateBuffer};
+use refrakt::render::{upload, Camera, Model, Renderer, StateBuffer};
 use refrakt::scene::LoadedScene;
 use refrakt::vk::{self, Context, ContextDesc};
 
@@ -46,6 +46,9 @@ pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
             dump_dir.display()
         );
     }
+    // The device first: its limits let the loaders refuse a volume it cannot hold from
+    // the file's header, before reading gigabytes.
+    let ctx = Context::new(desc)?;
     let LoadedScene {
         name,
         volume,
@@ -56,10 +59,9 @@ pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
         mut opts,
         tone,
         ..
-    } = build_scene(&args.scene)?;
+    } = build_scene(&args.scene, Some(upload::device_limits(&ctx)))?;
     opts.sweep.dumps = dumps;
 
-    let ctx = Context::new(desc)?;
     println!(
         "device: {} ({})",
         ctx.info().name,

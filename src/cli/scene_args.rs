@@ -10,7 +10,7 @@ use anyhow::{bail, ensure, Context as _, Result};
 use refrakt::output;
 use refrakt::render::{Model, StateBuffer};
 use refrakt::scene::{self, EnvSource, LoadedScene, Scene, TransferSource, VolumeSource};
-use refrakt::volume::formats::RawLayout;
+use refrakt::volume::formats::{DeviceLimits, RawLayout};
 
 use super::args::*;
 
@@ -201,11 +201,12 @@ pub fn scene_from_args(args: &SceneArgs) -> Result<Scene> {
 }
 
 /// The scene the options describe, loaded: the one place `render` and `view` (and the
-/// viewer's reload) get a scene from.
-pub fn build_scene(args: &SceneArgs) -> Result<LoadedScene> {
+/// viewer's reload) get a scene from. `limits`: the device's, when it is known before
+/// loading (a volume beyond them is refused from its header).
+pub fn build_scene(args: &SceneArgs, limits: Option<DeviceLimits>) -> Result<LoadedScene> {
     let scene = scene_from_args(args)?;
     let data_dir = args.data_dir.clone().unwrap_or_else(scene::data_dir);
-    scene.load_all(&data_dir)
+    scene.load_all(&data_dir, limits)
 }
 
 pub fn list_scenes() -> Result<ExitCode> {

@@ -26,7 +26,7 @@ pub fn view(desc: &ContextDesc, args: ViewArgs) -> Result<ExitCode> {
         );
     }
     let scene_args = args.scene.clone();
-    let scene = build_scene(&scene_args)?;
+    let scene = build_scene(&scene_args, None)?;
     let options = ViewOptions {
         vsync: !args.no_vsync,
         frames: args.frames,
@@ -38,7 +38,7 @@ pub fn view(desc: &ContextDesc, args: ViewArgs) -> Result<ExitCode> {
     let report = viewer::run(
         desc.clone(),
         scene,
-        Box::new(move || build_scene(&scene_args)),
+        Box::new(move || build_scene(&scene_args, None)),
         options,
     )?;
     if report.validation_messages > 0 {

@@ -123,7 +123,7 @@ impl GradientVolume {
                         };
                         rec.dispatch(&pipeline, set, bytemuck::bytes_of(&push), groups)?;
                     }
-                    rec.transition_all(&image, Access::Sampled);
+                    // The sweep's declared sampled read transitions the result.
                     Ok(())
                 },
             )

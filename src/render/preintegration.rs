@@ -82,10 +82,8 @@ impl PreintegrationTable {
             &[Use::all(image, Access::ComputeStorage)],
             |rec| {
                 let groups = TABLE_SIZE.div_ceil(16);
-                rec.dispatch(pipeline, set, &[], [groups, groups, 1])?;
-                // Left ready for sampling.
-                rec.transition_all(image, Access::Sampled);
-                Ok(())
+                // Its consumers declare their sampled reads (vk::Use), which transition it.
+                rec.dispatch(pipeline, set, &[], [groups, groups, 1])
             },
         )?;
         self.builds += 1;

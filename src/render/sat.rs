@@ -75,7 +75,7 @@ impl SummedAreaTable {
                         [lines.div_ceil(64), 1, 1],
                     )?;
                 }
-                rec.transition_all(&table, Access::Sampled);
+                // The composite's declared sampled read transitions the table.
                 Ok(())
             })
         })?;

@@ -21,15 +21,24 @@ fn volume_format(volume: &Volume) -> vk::Format {
 /// side beyond maxImageDimension3D, or more texel bytes than its largest device-local
 /// memory heap (the texture also needs a staging copy of the same size).
 pub fn check_volume_fits(ctx: &Context, volume: &Volume) -> Result<()> {
+    let l = device_limits(ctx);
+    formats::check_volume_limits(volume, l.max_3d_extent, l.bytes_available)
+        .with_context(|| format!("device '{}'", ctx.info().name))
+}
+
+/// The limits a volume must fit on this device, for the loaders' header checks
+/// ([`formats::LoadOptions::limits`]).
+pub fn device_limits(ctx: &Context) -> formats::DeviceLimits {
     let info = ctx.info();
-    let heap = info
-        .memory_heaps
-        .iter()
-        .filter(|(_, local)| *local)
-        .map(|(size, _)| *size)
-        .max();
-    formats::check_volume_limits(volume, info.limits.max_image_dimension3_d, heap)
-        .with_context(|| format!("device '{}'", info.name))
+    formats::DeviceLimits {
+        max_3d_extent: info.limits.max_image_dimension3_d,
+        bytes_available: info
+            .memory_heaps
+            .iter()
+            .filter(|(_, local)| *local)
+            .map(|(size, _)| *size)
+            .max(),
+    }
 }
 
 /// The volume as a 3D texture ready for trilinear sampling.

@@ -16,6 +16,7 @@ use crate::environment::EnvironmentMap;
 use crate::output::{ToneMap, ToneOperator};
 use crate::render::{Camera, Light, LightTransport, Model, RenderOptions, SweepOptions};
 use crate::transfer::TransferFunctions;
+use crate::volume::formats::DeviceLimits;
 use crate::volume::{procedural, standins, Volume};
 
 mod catalogue;
@@ -380,21 +381,22 @@ impl Scene {
 
     /// The volume, generated, loaded from the cache, or read from its file. `data_dir`
     /// holds the fetched scans and, for stand-ins, the thesis originals if the user has
-    /// them (`<name>.<ext>` in any supported format).
-    pub fn load_volume(&self, data_dir: &Path) -> Result<Volume> {
+    /// them (`<name>.<ext>` in any supported format). With `limits`, a file the device
+    /// cannot hold is refused from its header, before its data is read.
+    pub fn load_volume(&self, data_dir: &Path, limits: Option<DeviceLimits>) -> Result<Volume> {
         let mut vol = match &self.volume {
             VolumeSource::Procedural { kind, size } => procedural_volume(kind, *size)?,
             VolumeSource::Standin { name, scale } => {
                 if let Some(orig) = original_in(data_dir, name) {
                     log::info!("{name}: using the original {}", orig.display());
-                    load_file(&orig, None, None)?
+                    load_file(&orig, None, None, limits)?
                 } else {
                     let d = standins::dataset(name)?;
                     let dims = standins::scaled_dims(d.dims, *scale)?;
                     standins::load_or_generate(name, dims, &standins::cache_dir())?.0
                 }
             }
-            VolumeSource::File { path, raw, window } => load_file(path, *raw, *window)?,
+            VolumeSource::File { path, raw, window } => load_file(path, *raw, *window, limits)?,
             VolumeSource::Fetched { file, window } => {
                 let path = data_dir.join(file);
                 ensure!(
@@ -402,7 +404,7 @@ impl Scene {
                     "{}: not found; run scripts/fetch-data (or set REFRAKT_DATA_DIR / --data-dir to where it put the data)",
                     path.display()
                 );
-                load_file(&path, None, *window)?
+                load_file(&path, None, *window, limits)?
             }
         };
         if let Some(s) = self.spacing {
@@ -466,12 +468,13 @@ impl Scene {
     }
 
     /// Loads everything: volume, transfer functions, environment map; checks the options.
-    pub fn load_all(&self, data_dir: &Path) -> Result<LoadedScene> {
+    /// `limits`: see [`Scene::load_volume`].
+    pub fn load_all(&self, data_dir: &Path, limits: Option<DeviceLimits>) -> Result<LoadedScene> {
         let opts = self.render_options()?;
         let tone = self.tone_map()?;
         let tf = self.transfer_functions()?;
         let env = self.environment_map()?;
-        let volume = self.load_volume(data_dir)?;
+        let volume = self.load_volume(data_dir, limits)?;
         let mut files: Vec<PathBuf> = self.file.iter().cloned().collect();
         if let TransferSource::Named(n) = &self.transfer {
             if Path::new(n).is_file() {
@@ -530,11 +533,13 @@ fn load_file(
     path: &Path,
     raw: Option<crate::volume::formats::RawLayout>,
     window: Option<(f32, f32)>,
+    limits: Option<DeviceLimits>,
 ) -> Result<Volume> {
     let opts = crate::volume::formats::LoadOptions {
         raw,
         window,
         spacing: None,
+        limits,
     };
     crate::volume::formats::load_volume(path, &opts)
 }

@@ -58,14 +58,11 @@ pub enum StateBuffer {
 }
 
 impl StateBuffer {
-    pub const ALL: [StateBuffer; 6] = [
-        StateBuffer::LightColour,
-        StateBuffer::LightDirection,
-        StateBuffer::ViewPosition,
-        StateBuffer::ViewDirection,
-        StateBuffer::ColourOpacity,
-        StateBuffer::Medium,
-    ];
+    /// The six state buffers (the first six of [`StateBuffer::DUMPABLE`]).
+    pub const ALL: [StateBuffer; 6] = {
+        let d = Self::DUMPABLE;
+        [d[0], d[1], d[2], d[3], d[4], d[5]]
+    };
 
     /// Everything `--dump` accepts.
     pub const DUMPABLE: [StateBuffer; 8] = [

@@ -298,12 +298,7 @@ impl Recorder<'_> {
         groups: [u32; 3],
     ) -> Result<()> {
         self.bind_with_set(vk::PipelineBindPoint::COMPUTE, &pipeline.core, set);
-        self.push_constants(
-            pipeline.core.layout,
-            pipeline.core.push_size,
-            &pipeline.core.name,
-            push,
-        )?;
+        self.push_constants(&pipeline.core, push)?;
         // SAFETY: recording with a compute pipeline bound.
         unsafe {
             self.device()

@@ -54,12 +54,37 @@ pub(super) fn looks_like_series_dir(dir: &Path) -> bool {
 }
 
 fn has_dicm_marker(p: &Path) -> bool {
+    matches!(file_head(p), Some(h) if h.len() == 132 && &h[128..132] == b"DICM")
+}
+
+/// The first 132 bytes of a regular file (fewer if it is shorter): enough to tell a
+/// DICOM file ([`dicom_start`]) without reading the rest.
+fn file_head(p: &Path) -> Option<Vec<u8>> {
     use std::io::Read;
-    let mut buf = [0u8; 132];
-    std::fs::File::open(p)
-        .and_then(|mut f| f.read_exact(&mut buf))
-        .is_ok()
-        && &buf[128..132] == b"DICM"
+    let f = std::fs::File::open(p).ok()?;
+    if !f.metadata().ok()?.is_file() {
+        return None;
+    }
+    let mut head = Vec::with_capacity(132);
+    f.take(132).read_to_end(&mut head).ok()?;
+    Some(head)
+}
+
+/// Where a DICOM file's meta group or dataset starts and whether it has a meta group, from
+/// its first 132 bytes; `None` when it is not DICOM.
+fn dicom_start(bytes: &[u8]) -> Option<(usize, bool)> {
+    if bytes.len() >= 132 && &bytes[128..132] == b"DICM" {
+        Some((132, true)) // Part 10 file: preamble + DICM + meta group
+    } else if bytes.len() >= 8
+        && bytes[0..2] == [2, 0]
+        && bytes[4..6].iter().all(u8::is_ascii_uppercase)
+    {
+        Some((0, true)) // meta group without preamble
+    } else if bytes.len() >= 8 && bytes[0..2] == [8, 0] {
+        Some((0, false)) // bare dataset, implicit VR little endian
+    } else {
+        None
+    }
 }
 
 /// One image file's attributes.
@@ -99,6 +124,10 @@ pub(super) fn load_series(dir: &Path, opts: &LoadOptions) -> Result<Volume> {
     let mut slices = Vec::new();
     for f in &files {
         let name = f.file_name().unwrap_or_default().to_string_lossy();
+        // Look at the head first: a folder of other files costs 132 bytes a file.
+        if !file_head(f).is_some_and(|h| dicom_start(&h).is_some()) {
+            continue;
+        }
         let bytes = std::fs::read(f).map_err(|e| anyhow!("cannot read '{name}': {e}"))?;
         if let Some(s) = parse_file(f, &bytes).with_context(|| format!("'{name}'"))? {
             slices.push(s);
@@ -545,17 +574,8 @@ fn number(v: &[u8], what: &str) -> Result<f64> {
 /// Parses one file; `None` for files that are not DICOM images (no marker and no plausible
 /// dataset, or no pixel data).
 fn parse_file(path: &Path, bytes: &[u8]) -> Result<Option<Slice>> {
-    // Part 10 file: preamble + DICM + meta group (explicit VR little endian).
-    let (meta_at, has_meta) = if bytes.len() >= 132 && &bytes[128..132] == b"DICM" {
-        (132, true)
-    } else if bytes.len() >= 8
-        && bytes[0..2] == [2, 0]
-        && bytes[4..6].iter().all(u8::is_ascii_uppercase)
-    {
-        (0, true) // meta group without preamble
-    } else if bytes.len() >= 8 && bytes[0..2] == [8, 0] {
-        (0, false) // bare dataset, implicit VR little endian
-    } else {
+    // The meta group is explicit VR little endian.
+    let Some((meta_at, has_meta)) = dicom_start(bytes) else {
         return Ok(None);
     };
     let mut ts = TS_IMPLICIT_LE.to_string();

@@ -15,8 +15,8 @@ use std::path::Path;
 use anyhow::{anyhow, bail, ensure, Context as _, Result};
 
 use super::{
-    build_volume, check_size, checked_dims, data_bytes, inflate_zlib_or_gzip, parse3, parse_ascii,
-    read_file, resolve_spacing, LoadOptions, Sample,
+    build_volume, check_size, checked_dims, header_bytes, inflate_zlib_or_gzip, parse3,
+    parse_ascii, read_file, read_promised, resolve_spacing, LoadOptions, Sample,
 };
 use crate::volume::Volume;
 
@@ -84,7 +84,7 @@ pub(super) fn load(path: &Path, opts: &LoadOptions) -> Result<Volume> {
              MET_USHORT, MET_INT, MET_UINT, MET_FLOAT, MET_DOUBLE)"
         ),
     };
-    let expected = data_bytes(dims, sample)?;
+    let expected = header_bytes(dims, sample, opts)?;
     let big_endian = truthy("binarydatabyteordermsb") || truthy("elementbyteordermsb");
     let compressed = truthy("compresseddata");
     let binary = get("binarydata").map_or(true, |v| v.eq_ignore_ascii_case("true"));
@@ -108,7 +108,13 @@ pub(super) fn load(path: &Path, opts: &LoadOptions) -> Result<Volume> {
             "ElementDataFile = '{edf}' is not supported (LOCAL or one file name)"
         );
         let dir = path.parent().unwrap_or(Path::new("."));
-        detached = read_file(&dir.join(edf))?;
+        // Uncompressed binary data at a known offset: read no more than promised.
+        detached = if binary && !compressed && header_size >= 0 {
+            let promised = (header_size as u64).saturating_add(expected as u64);
+            read_promised(&dir.join(edf), &format!("data file '{edf}'"), promised)?
+        } else {
+            read_file(&dir.join(edf))?
+        };
         (&detached, format!("data file '{edf}'"))
     };
 

@@ -67,6 +67,19 @@ pub struct LoadOptions {
     pub window: Option<(f32, f32)>,
     /// Voxel size along x, y, z; overrides the file's.
     pub spacing: Option<[f32; 3]>,
+    /// What the device can hold. Given, every loader refuses a volume beyond it from the
+    /// header, before reading or allocating its data.
+    pub limits: Option<DeviceLimits>,
+}
+
+/// The device limits a volume must fit (plain numbers, read from a Vulkan device by
+/// `render::upload::device_limits`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DeviceLimits {
+    /// `maxImageDimension3D`.
+    pub max_3d_extent: u32,
+    /// The largest device-local heap, in bytes.
+    pub bytes_available: Option<u64>,
 }
 
 /// Layout of a headerless raw file: little-endian samples, x fastest, then y, then z.
@@ -135,6 +148,14 @@ fn load_inner(path: &Path, opts: &LoadOptions) -> Result<Volume> {
             "spacing {s:?} must be finite and positive"
         );
     }
+    // A FIFO, socket or device would block or never end: only regular files (and
+    // directories, for DICOM series) are read.
+    let meta = std::fs::metadata(path).map_err(|e| anyhow!("cannot read: {e}"))?;
+    ensure!(
+        meta.is_file() || meta.is_dir(),
+        "is not a regular file or a directory ({})",
+        file_kind(&meta)
+    );
     let volume = if let Some(layout) = &opts.raw {
         ensure!(!path.is_dir(), "is a directory, not a raw file");
         raw::load(path, layout, opts)?
@@ -318,6 +339,42 @@ pub(crate) fn checked_dims(dims: [i64; 3]) -> Result<[u32; 3]> {
         out[i] = u32::try_from(d).map_err(|_| anyhow!("dimension {d} is too large"))?;
     }
     Ok(out)
+}
+
+/// Bytes of `dims` samples of `sample` as a header states them: overflow checked and,
+/// when the options carry device limits, refused if the device cannot hold the volume
+/// (each loader calls this before it reads or allocates the data).
+pub(crate) fn header_bytes(dims: [u32; 3], sample: Sample, opts: &LoadOptions) -> Result<usize> {
+    let bytes = data_bytes(dims, sample)?;
+    if let Some(l) = opts.limits {
+        // The texel the upload will use (see the module doc's value mapping): 8- and
+        // 16-bit unsigned data stay normalised integers unless windowed; the rest is f32.
+        let texel = match sample {
+            Sample::U8 if opts.window.is_none() => 1,
+            Sample::U16 if opts.window.is_none() => 2,
+            _ => 4,
+        };
+        check_limits_texel(dims, texel, l.max_3d_extent, l.bytes_available)
+            .map_err(|e| anyhow!("{e} (from the header; nothing was read)"))?;
+    }
+    Ok(bytes)
+}
+
+/// What a path that is not a regular file or directory is, for messages.
+pub(crate) fn file_kind(meta: &std::fs::Metadata) -> &'static str {
+    use std::os::unix::fs::FileTypeExt;
+    let t = meta.file_type();
+    if t.is_fifo() {
+        "a FIFO"
+    } else if t.is_socket() {
+        "a socket"
+    } else if t.is_char_device() {
+        "a character device"
+    } else if t.is_block_device() {
+        "a block device"
+    } else {
+        "not a regular file"
+    }
 }
 
 /// Bytes of `dims` samples of `sample`, with overflow checked.
@@ -548,9 +605,40 @@ pub(crate) fn parse_ascii(text: &str, sample: Sample, n: usize) -> Result<Vec<u8
     Ok(out)
 }
 
-/// Reads a whole file, naming it in the error.
+/// Reads a whole regular file, naming it in the error (a FIFO or device is refused: it
+/// could block or never end).
 pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>> {
-    std::fs::read(path).map_err(|e| anyhow!("cannot read '{}': {e}", path.display()))
+    read_file_at_most(path, None)
+}
+
+/// A detached data file that should hold exactly `promised` bytes (a header's skip plus
+/// its data): reads at most one byte more, so a lying header or an endless file costs
+/// only that, and refuses a longer file.
+pub(crate) fn read_promised(path: &Path, what: &str, promised: u64) -> Result<Vec<u8>> {
+    let bytes = read_file_at_most(path, Some(promised.saturating_add(1)))?;
+    ensure!(
+        bytes.len() as u64 <= promised,
+        "{what} is more than {promised} bytes, the header promises {promised} (skip + data; \
+         file too long)"
+    );
+    Ok(bytes)
+}
+
+/// [`read_file`], reading at most `limit` bytes when given (what a header promises).
+pub(crate) fn read_file_at_most(path: &Path, limit: Option<u64>) -> Result<Vec<u8>> {
+    let err = |e: std::io::Error| anyhow!("cannot read '{}': {e}", path.display());
+    let file = std::fs::File::open(path).map_err(err)?;
+    let meta = file.metadata().map_err(err)?;
+    ensure!(
+        meta.is_file(),
+        "'{}' is not a regular file ({})",
+        path.display(),
+        file_kind(&meta)
+    );
+    let len = limit.map_or(meta.len(), |l| l.min(meta.len()));
+    let mut bytes = Vec::with_capacity(len as usize);
+    file.take(len).read_to_end(&mut bytes).map_err(err)?;
+    Ok(bytes)
 }
 
 /// Parses a list of numbers separated by whitespace (and optionally commas).

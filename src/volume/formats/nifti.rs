@@ -12,8 +12,8 @@ use std::path::Path;
 use anyhow::{anyhow, bail, ensure, Result};
 
 use super::{
-    build_volume, check_size, checked_dims, data_bytes, read_file, resolve_spacing, LoadOptions,
-    Rescale, Sample,
+    build_volume, check_size, checked_dims, header_bytes, read_file_at_most, resolve_spacing,
+    LoadOptions, Rescale, Sample,
 };
 use crate::volume::Volume;
 
@@ -38,7 +38,7 @@ pub(super) fn load(path: &Path, opts: &LoadOptions) -> Result<Volume> {
             head.len()
         );
         let h = Header::parse(&head)?;
-        let total = h.data_end()?;
+        let total = h.data_end(opts)?;
         let mut file = head;
         // Read at most one byte more than the header says, so a lying header allocates
         // only what is really there.
@@ -48,20 +48,24 @@ pub(super) fn load(path: &Path, opts: &LoadOptions) -> Result<Volume> {
             .map_err(|e| anyhow!("gzip data is corrupt: {e}"))?;
         finish(&h, &file, "decompressed file", true, opts)
     } else {
-        let file = read_file(path)?;
+        // The header first: a volume the device cannot hold is refused before its data
+        // is read, and at most one byte more than the header promises is read.
+        let head = read_file_at_most(path, Some(HEADER as u64))?;
         ensure!(
-            file.len() >= HEADER,
+            head.len() >= HEADER,
             "truncated header: the file is {} bytes, a NIfTI-1 header is {HEADER}",
-            file.len()
+            head.len()
         );
-        let h = Header::parse(&file[..HEADER])?;
-        finish(&h, &file, "file", false, opts)
+        let h = Header::parse(&head)?;
+        let total = h.data_end(opts)?;
+        let file = read_file_at_most(path, Some(total as u64 + 1))?;
+        finish(&h, &file, "file", true, opts)
     }
 }
 
 /// `capped`: `file` was read with a limit of one byte more than the header says.
 fn finish(h: &Header, file: &[u8], what: &str, capped: bool, opts: &LoadOptions) -> Result<Volume> {
-    let total = h.data_end()?;
+    let total = h.data_end(opts)?;
     ensure!(
         !(capped && file.len() > total),
         "{what} is more than {total} bytes, header says {total} bytes (file too long)"
@@ -199,8 +203,8 @@ impl Header {
         })
     }
 
-    fn data_end(&self) -> Result<usize> {
-        data_bytes(self.dims, self.sample)?
+    fn data_end(&self, opts: &LoadOptions) -> Result<usize> {
+        header_bytes(self.dims, self.sample, opts)?
             .checked_add(self.vox_offset)
             .ok_or_else(|| anyhow!("vox_offset + data size overflows"))
     }

@@ -13,8 +13,8 @@ use std::path::Path;
 use anyhow::{anyhow, bail, ensure, Context as _, Result};
 
 use super::{
-    build_volume, check_size, checked_dims, data_bytes, parse_ascii, parse_numbers,
-    read_compressed, read_file, resolve_spacing, LoadOptions, Sample,
+    build_volume, check_size, checked_dims, header_bytes, parse_ascii, parse_numbers,
+    read_compressed, read_file, read_promised, resolve_spacing, LoadOptions, Sample,
 };
 use crate::volume::Volume;
 
@@ -78,7 +78,7 @@ pub(super) fn load(path: &Path, opts: &LoadOptions) -> Result<Volume> {
         sizes.len()
     );
     let dims = checked_dims([sizes[0], sizes[1], sizes[2]])?;
-    let expected = data_bytes(dims, sample)?;
+    let expected = header_bytes(dims, sample, opts)?;
 
     let encoding = match get("encoding")
         .ok_or_else(|| anyhow!("header has no 'encoding' field"))?
@@ -124,7 +124,13 @@ pub(super) fn load(path: &Path, opts: &LoadOptions) -> Result<Volume> {
             );
             let dir = path.parent().unwrap_or(Path::new("."));
             let data_path = dir.join(name);
-            detached = read_file(&data_path)?;
+            // Raw data at a known offset: read no more than the header promises.
+            detached = if encoding == Encoding::Raw && line_skip == 0 && byte_skip >= 0 {
+                let promised = (byte_skip as u64).saturating_add(expected as u64);
+                read_promised(&data_path, &format!("data file '{name}'"), promised)?
+            } else {
+                read_file(&data_path)?
+            };
             (&detached, format!("data file '{name}'"))
         }
         None => {

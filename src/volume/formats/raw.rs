@@ -6,7 +6,7 @@ use std::path::Path;
 use anyhow::{anyhow, bail, ensure, Result};
 
 use super::{
-    build_volume, check_size, checked_dims, data_bytes, read_file, resolve_spacing, LoadOptions,
+    build_volume, check_size, checked_dims, header_bytes, read_file, resolve_spacing, LoadOptions,
     RawLayout, ScalarKind,
 };
 use crate::volume::Volume;
@@ -15,7 +15,7 @@ use crate::volume::Volume;
 pub(super) fn load(path: &Path, layout: &RawLayout, opts: &LoadOptions) -> Result<Volume> {
     let dims = checked_dims(layout.dims.map(i64::from))?;
     let sample = layout.kind.sample();
-    let expected = data_bytes(dims, sample)?;
+    let expected = header_bytes(dims, sample, opts)?;
     let len = std::fs::metadata(path)
         .map_err(|e| anyhow!("cannot read '{}': {e}", path.display()))?
         .len();

@@ -21,7 +21,7 @@ use anyhow::{anyhow, bail, ensure, Context as _, Result};
 use base64::Engine as _;
 
 use super::{
-    build_volume, checked_dims, data_bytes, parse_ascii, parse_numbers, read_compressed, read_file,
+    build_volume, checked_dims, parse_ascii, parse_numbers, read_compressed, read_file,
     resolve_spacing, LoadOptions, Sample,
 };
 use crate::volume::Volume;
@@ -283,7 +283,7 @@ pub(super) fn load(path: &Path, opts: &LoadOptions) -> Result<Volume> {
             "DataArray '{name}' has {c} components (only scalar data is supported)"
         );
     }
-    let expected = data_bytes(dims, sample)?;
+    let expected = super::header_bytes(dims, sample, opts)?;
     let format = array.attrs.get("format").map(String::as_str).unwrap_or("");
     let what = format!("DataArray '{name}'");
     let text = &file[array.text.0..array.text.1];
