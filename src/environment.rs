@@ -149,7 +149,9 @@ impl EnvironmentMap {
     /// as sRGB. Errors name the file.
     pub fn load(path: &Path) -> Result<Self> {
         let origin = path.display().to_string();
-        ensure!(path.is_file(), "environment map {origin}: no such file");
+        if let Some(why) = crate::volume::formats::why_not_a_file(path) {
+            bail!("environment map {origin}: {why}");
+        }
         let ext = path
             .extension()
             .and_then(|e| e.to_str())

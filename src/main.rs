@@ -17,13 +17,86 @@ fn main() -> ExitCode {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn"))
         .format_timestamp(None)
         .init();
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        // --help and --version print in full; a usage error is one line like every other
+        // error (clap adds a usage excerpt and a pointer to --help below it).
+        Err(e) if e.use_stderr() => {
+            let text = e.render().to_string();
+            let first = text.lines().find(|l| !l.trim().is_empty()).unwrap_or("");
+            eprintln!("{} (see --help)", first.trim_end_matches('.'));
+            return ExitCode::from(2);
+        }
+        Err(e) => e.exit(),
+    };
     match run(cli) {
         Ok(code) => code,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", one_line(&format!("{e:#}"), MAX_ERROR_CHARS));
             ExitCode::FAILURE
         }
+    }
+}
+
+/// Longest error line printed: the start (file and reason) and the end (a parser's
+/// "expected ...") survive; what a parser quotes of a garbage file in between is cut.
+const MAX_ERROR_CHARS: usize = 400;
+
+/// `msg` as one terminal-safe line: line breaks (a TOML error's source excerpt spans four
+/// lines) become " | ", other control characters are escaped (a header of NUL bytes
+/// prints as `\0...`), and the middle of an over-long message is cut, saying how much.
+fn one_line(msg: &str, max: usize) -> String {
+    let mut flat = String::new();
+    for line in msg
+        .lines()
+        .map(str::trim_end)
+        .filter(|l| !l.trim().is_empty())
+    {
+        if !flat.is_empty() {
+            flat.push_str(" | ");
+        }
+        for c in line.chars() {
+            if c.is_control() {
+                flat.extend(c.escape_default());
+            } else {
+                flat.push(c);
+            }
+        }
+    }
+    let chars: Vec<char> = flat.chars().collect();
+    if chars.len() <= max {
+        return flat;
+    }
+    let (head, tail) = (max * 3 / 4, max / 4);
+    let cut = chars.len() - head - tail;
+    let mut out: String = chars[..head].iter().collect();
+    out.push_str(&format!(" [... {cut} characters cut ...] "));
+    out.extend(&chars[chars.len() - tail..]);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::one_line;
+
+    #[test]
+    fn errors_print_as_one_bounded_line() {
+        assert_eq!(
+            one_line("a.toml: bad\n  | x\n\n  ^ here", 400),
+            "a.toml: bad |   | x |   ^ here"
+        );
+        assert_eq!(
+            one_line("f: \0\0\u{1b}[2J", 400),
+            "f: \\u{0}\\u{0}\\u{1b}[2J"
+        );
+        let long = format!("f.toml: {} expected a table", "z".repeat(1_000_000));
+        let l = one_line(&long, 400);
+        assert!(l.len() < 450 && !l.contains('\n'), "{}", l.len());
+        assert!(
+            l.starts_with("f.toml: zz") && l.ends_with("expected a table"),
+            "{l}"
+        );
+        assert!(l.contains("characters cut"));
     }
 }
 

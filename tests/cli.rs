@@ -490,3 +490,94 @@ fn a_bad_validation_switch_is_an_error() {
         .unwrap();
     assert!(o.status.success(), "{}", stderr(&o));
 }
+
+/// Issue 15, item 10: a flag the EA ray marcher would ignore is an error naming it, and
+/// no image is written (the README's promise: a flag that does not apply is an error).
+#[test]
+fn ea_refuses_the_refractive_models_flags() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("never.png");
+    let o = out.to_str().unwrap();
+    for (flags, needle) in [
+        (&["--softness", "1"][..], "--softness"),
+        (&["--light", "0,1,1"][..], "--light"),
+        (&["--clip", "1,0,0,0"][..], "--clip"),
+        (&["--eta-scale", "2"][..], "--eta-scale"),
+        (&["--dump", "medium@1"][..], "dumps"),
+    ] {
+        let mut args = vec!["render", "--model", "ea", "--volume-size", "16", "-o", o];
+        args.extend(flags);
+        assert_clean_failure(&args, needle);
+        assert!(!out.exists(), "{flags:?} left an image");
+    }
+}
+
+/// Issue 15, item 9: each refusal gives its true reason, on one line.
+#[test]
+fn refusals_name_their_true_reason() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let out = d.join("never.png");
+    let o = out.to_str().unwrap();
+    let one_line = |args: &[&str], needle: &str, not: &str| {
+        assert_clean_failure(args, needle);
+        let err = stderr(&refrakt(args));
+        assert!(
+            !err.contains(not),
+            "{args:?}: wrong reason '{not}' in: {err}"
+        );
+        assert_eq!(err.trim().lines().count(), 1, "not one line: {err}");
+        assert!(!out.exists());
+    };
+    let small = ["--volume-size", "16", "--width", "16", "--height", "16"];
+    let with = |extra: &[&'static str]| -> Vec<String> {
+        ["render", "sphere"]
+            .iter()
+            .chain(&small)
+            .chain(extra)
+            .map(|s| s.to_string())
+            .collect()
+    };
+    fn strs(v: &[String]) -> Vec<&str> {
+        v.iter().map(String::as_str).collect()
+    }
+    for sd in ["300", "1e9"] {
+        let mut a = with(&["--sample-distance"]);
+        a.extend([sd.to_string(), "-o".into(), o.into()]);
+        one_line(
+            &strs(&a),
+            "smaller sample distance",
+            "increase the camera distance",
+        );
+    }
+    let mut a = with(&["--spacing", "1e30,1,1", "-o"]);
+    a.push(o.into());
+    one_line(&strs(&a), "differ by a factor", "18446744073709551615");
+    let scene = d.join("flat.toml");
+    std::fs::write(
+        &scene,
+        "[volume]\nbuiltin = \"sphere\"\nspacing = [0, 1, 1]\n",
+    )
+    .unwrap();
+    one_line(
+        &["render", scene.to_str().unwrap(), "-o", o],
+        "flat.toml",
+        "no such file",
+    );
+    let mut a = with(&["--env"]);
+    a.extend([d.to_str().unwrap().to_string(), "-o".into(), o.into()]);
+    one_line(&strs(&a), "is a directory", "no such file");
+    let (l1, l2) = (d.join("loop1.nrrd"), d.join("loop2.nrrd"));
+    std::os::unix::fs::symlink(&l2, &l1).unwrap();
+    std::os::unix::fs::symlink(&l1, &l2).unwrap();
+    one_line(
+        &["render", l1.to_str().unwrap(), "-o", o],
+        "symbolic links",
+        "no such file",
+    );
+    one_line(
+        &["render", "sphere", "--width", "-5", "-o", o],
+        "--width",
+        "unexpected argument",
+    );
+}

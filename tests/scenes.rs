@@ -503,6 +503,46 @@ fn huge_endless_and_special_inputs_are_refused_before_reading() {
     );
 }
 
+/// Issue 15, item 8: an error is one bounded line whatever the file quotes: a 1 MB
+/// garbage scene file, a TOML error (four lines from the parser), a header of NUL bytes.
+#[test]
+fn errors_quoting_garbage_stay_one_short_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let out = d.join("never.png");
+    let o = out.to_str().unwrap();
+    let short_line = |args: &[&str], needles: &[&str]| {
+        let r = refrakt(args);
+        let err = String::from_utf8_lossy(&r.stderr).to_string();
+        fails_with(args, &out, needles);
+        assert!(err.len() < 600, "{} bytes of error", err.len());
+        assert!(
+            !err.trim_end().contains(['\0', '\r']),
+            "control bytes in {err:?}"
+        );
+    };
+    let garbage = d.join("garbage.toml");
+    std::fs::write(&garbage, "x".repeat(1 << 20) + " = = [").unwrap();
+    short_line(
+        &["render", garbage.to_str().unwrap(), "-o", o],
+        &["garbage.toml", "characters cut"],
+    );
+    let bad = d.join("bad.toml");
+    std::fs::write(&bad, "[camera]\nfov = \"wide\"\n").unwrap();
+    short_line(
+        &["render", bad.to_str().unwrap(), "-o", o],
+        &["bad.toml", "fov"],
+    );
+    let nuls = d.join("nuls.nrrd");
+    let mut bytes = b"NRRD0004\n".to_vec();
+    bytes.extend([0u8; 512]);
+    std::fs::write(&nuls, bytes).unwrap();
+    short_line(
+        &["render", nuls.to_str().unwrap(), "-o", o],
+        &["nuls.nrrd", "\\u{0}"],
+    );
+}
+
 #[test]
 fn flip_axes_parse_or_fail_clearly() {
     let p = Path::new("f.toml");

@@ -75,7 +75,7 @@ pub struct GenerateArgs {
     #[arg(value_delimiter = ',')]
     pub names: Vec<String>,
     /// Fraction of the thesis resolution.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     pub scale: f64,
 }
 
@@ -83,13 +83,13 @@ pub struct GenerateArgs {
 pub struct ThesisArgs {
     /// Shrinks viewport and volume together (e.g. 0.25 on lavapipe, where a full-size
     /// frame takes tens of seconds). Printed in the table.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     pub scale: f64,
     /// Measured frames per row (the thesis: 100).
-    #[arg(long, default_value_t = 100)]
+    #[arg(long, default_value_t = 100, allow_negative_numbers = true)]
     pub frames: u32,
     /// Warm-up frames per row and variant, excluded from the statistics (reported).
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, allow_negative_numbers = true)]
     pub warmup: u32,
     /// Rows to run, comma-separated (supernova, piggy-bank, glass, hand, head, water, ship,
     /// kiwi). Default: all.
@@ -123,7 +123,7 @@ pub struct ScalingArgs {
     #[arg(long, default_value = "sphere-on-floor")]
     pub scene: String,
     /// Voxels per side for a procedural scene.
-    #[arg(long, default_value_t = 64)]
+    #[arg(long, default_value_t = 64, allow_negative_numbers = true)]
     pub volume_size: u32,
     /// Sample distances for the plane-count series.
     #[arg(long, value_delimiter = ',', default_value = "0.5,1,2,4")]
@@ -132,10 +132,10 @@ pub struct ScalingArgs {
     #[arg(long, value_delimiter = ',', default_value = "64,96,128,192")]
     pub sides: Vec<u32>,
     /// Viewport side for the plane-count series.
-    #[arg(long, default_value_t = 128)]
+    #[arg(long, default_value_t = 128, allow_negative_numbers = true)]
     pub side: u32,
     /// Measured frames per point (after one warm-up).
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, allow_negative_numbers = true)]
     pub frames: u32,
     /// Write the report as JSON.
     #[arg(long, value_name = "FILE.json")]
@@ -181,10 +181,10 @@ pub struct SceneArgs {
     #[arg(long, value_name = "DIR")]
     pub data_dir: Option<PathBuf>,
     /// Voxels per side of a procedural scene [scene default: 128].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub volume_size: Option<u32>,
     /// Fraction of a thesis stand-in's resolution (e.g. 0.25) [scene default: 1].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub scale: Option<f64>,
     /// Raw volume files: dimensions "X,Y,Z" (with --type). Files named
     /// <name>_<X>x<Y>x<Z>_<type>.raw need neither.
@@ -214,10 +214,10 @@ pub struct SceneArgs {
     #[arg(long)]
     pub no_preintegration: bool,
     /// Image width in pixels [default: 512; thesis stand-ins 768].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub width: Option<u32>,
     /// Image height in pixels [default: 512; thesis stand-ins 768].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub height: Option<u32>,
     /// Distance between samples in units of the smallest voxel side (1 = one sample per
     /// voxel, as in the thesis' chapter 6) [default: 1].
@@ -346,7 +346,7 @@ pub struct ViewArgs {
     #[arg(long)]
     pub no_vsync: bool,
     /// Render this many frames, then exit (for tests and scripts).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
     pub frames: Option<u64>,
     /// With --frames: write the last frame as shown (PNG, read back from the window's
     /// swapchain image) and as linear EXR, to FILE and FILE with the other extension.
@@ -377,22 +377,22 @@ pub struct PhotonsArgs {
     )]
     pub plane: Option<u32>,
     /// View depth of the plane instead of a plane number.
-    #[arg(long, value_name = "Z")]
+    #[arg(long, value_name = "Z", allow_negative_numbers = true)]
     pub depth: Option<f32>,
     /// Output image (.exr only: rgb = irradiance, a = 0, the layout of the dumps).
     #[arg(short, long, default_value = "photons.exr")]
     pub output: PathBuf,
     /// Photons per pixel of the plane (round(sqrt(N)) per axis).
-    #[arg(long, default_value_t = 64)]
+    #[arg(long, default_value_t = 64, allow_negative_numbers = true)]
     pub photons_per_pixel: u32,
     /// RK4 step in voxels.
-    #[arg(long, default_value_t = 0.1)]
+    #[arg(long, default_value_t = 0.1, allow_negative_numbers = true)]
     pub step: f32,
     /// Jitter photons within their launch cells (stratified) instead of a regular grid.
     #[arg(long)]
     pub jitter: bool,
     /// Seed of the jitter.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
     pub seed: u64,
     /// Worker threads [default: all cores].
     #[arg(long)]

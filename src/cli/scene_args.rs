@@ -197,7 +197,39 @@ pub fn scene_from_args(args: &SceneArgs) -> Result<Scene> {
         ToneArg::None => output::ToneOperator::None,
     });
     s.apply(o);
+    if s.model == Model::Ea {
+        let given = refract_only_flags(args);
+        ensure!(
+            given.is_empty(),
+            "{} {} the refractive model's (--model refract); the EA ray marcher has no \
+             light, refraction or environment",
+            given.join(", "),
+            if given.len() == 1 { "is" } else { "are" }
+        );
+    }
     Ok(s)
+}
+
+/// The flags given that only the refractive sweep uses (a flag that does not apply is an
+/// error, not silently ignored).
+fn refract_only_flags(args: &SceneArgs) -> Vec<&'static str> {
+    [
+        ("--light", args.light.is_some()),
+        ("--light-colour", args.light_colour.is_some()),
+        ("--softness", args.softness.is_some()),
+        ("--roughness", args.roughness.is_some()),
+        ("--specular", args.specular.is_some()),
+        ("--eta-scale", args.eta_scale.is_some()),
+        ("--light-transport", args.light_transport.is_some()),
+        ("--light-rays", args.light_rays.is_some()),
+        ("--reflections", args.reflections.is_some()),
+        ("--clip", args.clip.is_some()),
+        ("--env", args.env.is_some()),
+        ("--env-rotation", args.env_rotation.is_some()),
+    ]
+    .into_iter()
+    .filter_map(|(flag, given)| given.then_some(flag))
+    .collect()
 }
 
 /// The scene the options describe, loaded: the one place `render` and `view` (and the

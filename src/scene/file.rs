@@ -214,6 +214,12 @@ impl SceneFile {
                 _ => bail!("[volume] window applies to volume files only"),
             }
         }
+        if let Some(sp) = v.spacing {
+            ensure!(
+                sp.iter().all(|x| x.is_finite() && *x > 0.0),
+                "[volume] spacing {sp:?} must be three finite positive numbers"
+            );
+        }
         s.spacing = v.spacing;
         s.file = Some(path.to_path_buf());
         let mut o = Overrides::default();

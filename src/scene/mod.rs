@@ -249,9 +249,15 @@ impl Scene {
         if path.exists() {
             return Ok(Self::for_volume_file(path));
         }
+        let why =
+            crate::volume::formats::why_not_a_file(path).unwrap_or_else(|| "cannot be read".into());
+        if std::fs::symlink_metadata(path).is_ok() {
+            // Something is there (a symlink loop, a dangling link): its reason is the one.
+            bail!("scene '{arg}': {why}");
+        }
         let names: Vec<String> = builtin_names().into_iter().map(|(n, _)| n).collect();
         bail!(
-            "scene '{arg}': no such file, and not a built-in scene ({})",
+            "scene '{arg}': {why}, and not a built-in scene ({})",
             names.join(", ")
         )
     }
@@ -409,7 +415,13 @@ impl Scene {
         };
         if let Some(s) = self.spacing {
             vol.spacing = s;
-            vol.validate()?;
+            vol.validate().with_context(|| match &self.file {
+                Some(f) => format!(
+                    "the spacing {s:?} given by scene {} or --spacing",
+                    f.display()
+                ),
+                None => format!("--spacing {s:?}"),
+            })?;
         }
         vol.flip(self.flip);
         Ok(vol)

@@ -38,6 +38,10 @@ impl Voxels {
     }
 }
 
+/// Largest ratio of voxel sides [`Volume::validate`] accepts (real scans: up to ~10, e.g.
+/// 0.5 mm pixels with 5 mm slices).
+pub const MAX_ANISOTROPY: f32 = 1e4;
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct Volume {
     pub dims: [u32; 3],
@@ -61,6 +65,9 @@ impl Volume {
         Ok(v)
     }
 
+    /// Fails, saying why, for dimensions below 2, a voxel count that does not match, a
+    /// spacing that is not finite and positive or more anisotropic than
+    /// [`MAX_ANISOTROPY`], a non-finite value, or a bad value range.
     pub fn validate(&self) -> Result<()> {
         ensure!(
             self.dims.iter().all(|&d| d >= 2),
@@ -78,6 +85,22 @@ impl Volume {
             self.spacing.iter().all(|s| s.is_finite() && *s > 0.0),
             "voxel spacing {:?} must be finite and positive",
             self.spacing
+        );
+        // The smallest side is the sample-distance unit: a volume far thinner along one
+        // axis than another would need astronomically many samples (or none) per ray.
+        let (lo, hi) = self
+            .spacing
+            .iter()
+            .fold((f32::INFINITY, 0.0f32), |(lo, hi), &s| {
+                (lo.min(s), hi.max(s))
+            });
+        ensure!(
+            hi / lo <= MAX_ANISOTROPY,
+            "voxel spacing {:?} has sides that differ by a factor of {:.3e}; at most \
+             {MAX_ANISOTROPY} is supported (the smallest side is the unit of the sample \
+             distance): check the spacing",
+            self.spacing,
+            hi / lo
         );
         if let Voxels::F32(v) = &self.voxels {
             if let Some(i) = v.iter().position(|x| !x.is_finite()) {

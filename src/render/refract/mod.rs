@@ -314,10 +314,19 @@ impl Planes {
             near = near.min(d);
             far = far.max(d);
         }
-        if near <= spacing {
+        if near <= 0.0 {
             bail!(
                 "the plane sweep needs the camera outside the volume box (nearest box depth \
                  {near:.3}); increase the camera distance"
+            );
+        }
+        // The first plane lies one spacing in front of the box (the viewing rays start
+        // there), so the spacing must stay below the camera's distance to the box.
+        if near <= spacing {
+            bail!(
+                "the planes would be {spacing:.3} apart (sample distance × smallest voxel \
+                 side), more than the camera's distance to the volume box ({near:.3}); use \
+                 a smaller sample distance or a larger camera distance"
             );
         }
         let count = ((far - near) / spacing).floor() as u32 + 2;

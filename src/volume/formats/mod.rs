@@ -360,6 +360,26 @@ pub(crate) fn header_bytes(dims: [u32; 3], sample: Sample, opts: &LoadOptions) -
     Ok(bytes)
 }
 
+/// Why `path` cannot be read as a file, in a few words, or `None` when it is a regular
+/// file: "no such file", "is a directory", "a FIFO", or the system's reason (e.g. "Too
+/// many levels of symbolic links" for a symlink loop, "Permission denied").
+pub fn why_not_a_file(path: &Path) -> Option<String> {
+    match std::fs::metadata(path) {
+        Ok(m) if m.is_file() => None,
+        Ok(m) if m.is_dir() => Some("is a directory, not a file".into()),
+        Ok(m) => Some(format!("is not a regular file ({})", file_kind(&m))),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            // A dangling symlink reads as "not found" too; say so.
+            if std::fs::symlink_metadata(path).is_ok() {
+                Some("is a symbolic link to nothing".into())
+            } else {
+                Some("no such file".into())
+            }
+        }
+        Err(e) => Some(e.to_string()),
+    }
+}
+
 /// What a path that is not a regular file or directory is, for messages.
 pub(crate) fn file_kind(meta: &std::fs::Metadata) -> &'static str {
     use std::os::unix::fs::FileTypeExt;
