@@ -75,6 +75,19 @@ fn one_line(msg: &str, max: usize) -> String {
     out
 }
 
+fn run(cli: Cli) -> Result<ExitCode> {
+    let desc = ContextDesc::from_env(cli.gpu.validate, cli.gpu.device.clone())?;
+    match cli.command {
+        Command::Info => cli::info::info(&desc),
+        Command::Render(args) => cli::render::render(&desc, &args),
+        Command::View(args) => cli::view::view(&desc, *args),
+        Command::Photons(args) => cli::photons::photons(&args),
+        Command::Generate(args) => cli::bench::generate(&args),
+        Command::Bench(BenchCommand::Thesis(args)) => cli::bench::bench_thesis(&desc, &args),
+        Command::Bench(BenchCommand::Scaling(args)) => cli::bench::bench_scaling(&desc, &args),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::one_line;
@@ -97,18 +110,5 @@ mod tests {
             "{l}"
         );
         assert!(l.contains("characters cut"));
-    }
-}
-
-fn run(cli: Cli) -> Result<ExitCode> {
-    let desc = ContextDesc::from_env(cli.gpu.validate, cli.gpu.device.clone())?;
-    match cli.command {
-        Command::Info => cli::info::info(&desc),
-        Command::Render(args) => cli::render::render(&desc, &args),
-        Command::View(args) => cli::view::view(&desc, *args),
-        Command::Photons(args) => cli::photons::photons(&args),
-        Command::Generate(args) => cli::bench::generate(&args),
-        Command::Bench(BenchCommand::Thesis(args)) => cli::bench::bench_thesis(&desc, &args),
-        Command::Bench(BenchCommand::Scaling(args)) => cli::bench::bench_scaling(&desc, &args),
     }
 }
