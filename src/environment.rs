@@ -20,8 +20,22 @@ pub struct EnvironmentMap {
 }
 
 impl EnvironmentMap {
-    /// A map checked for shape (2:1) and finite values; see below for negative ones.
+    /// A map checked for shape (2:1) and finite values. Negative values within 1 % of the
+    /// map's mean are set to 0 (one warning); anything more negative is refused. Lossy EXR
+    /// files get a different rule, see [`EnvironmentMap::load`].
     pub fn new(width: u32, height: u32, pixels: Vec<[f32; 4]>, origin: &str) -> Result<Self> {
+        Self::checked(width, height, pixels, origin, None)
+    }
+
+    /// [`EnvironmentMap::new`], or with `lossy` (the name of the lossy compression the
+    /// values went through) every negative value set to 0 and counted in one warning.
+    fn checked(
+        width: u32,
+        height: u32,
+        pixels: Vec<[f32; 4]>,
+        origin: &str,
+        lossy: Option<&str>,
+    ) -> Result<Self> {
         ensure!(
             width >= 2 && height >= 1 && width == 2 * height,
             "{origin}: an equirectangular map must be twice as wide as high, this one is \
@@ -40,17 +54,23 @@ impl EnvironmentMap {
                 pixels[i]
             );
         }
-        // Lossy EXR codecs (DWAA/DWAB, as in Blender's CC0 studio lights) ring slightly
-        // below zero next to dark pixels. Values within 1 % of the map's mean are that
-        // ringing: set to 0 and reported. Anything more negative is not a radiance map.
+        // Lossy EXR codecs (DWAA/DWAB, B44, PXR24) ring below zero near bright pixels: by
+        // -3394 in one CC0 DWAB map (issue 15), and OpenEXR decodes the same values.
+        // Radiance is never negative, so in a lossy map every negative value is that ringing
+        // and set to 0. In other maps only values within 1 % of the map's mean are taken
+        // for rounding noise (of an editor's filter, say); anything more negative is not a
+        // radiance map.
         let mean = pixels
             .iter()
             .map(|p| (p[0] + p[1] + p[2]) as f64)
             .sum::<f64>()
             / (3 * pixels.len()) as f64;
-        let tolerance = -(0.01 * mean) as f32;
+        let tolerance = match lossy {
+            Some(_) => f32::NEG_INFINITY,
+            None => -(0.01 * mean) as f32,
+        };
         let mut pixels = pixels;
-        let (mut fixed, mut lowest) = (0usize, 0f32);
+        let (mut fixed, mut lowest, mut at) = (0usize, 0f32, 0usize);
         for (i, p) in pixels.iter_mut().enumerate() {
             for c in &mut p[..3] {
                 if *c < 0.0 {
@@ -61,17 +81,26 @@ impl EnvironmentMap {
                         i as u32 % width,
                         i as u32 / width
                     );
-                    lowest = lowest.min(*c);
+                    if *c < lowest {
+                        (lowest, at) = (*c, i);
+                    }
                     *c = 0.0;
                     fixed += 1;
                 }
             }
         }
         if fixed > 0 {
-            log::warn!(
-                "{origin}: {fixed} slightly negative channel values (lowest {lowest:e}, \
-                 compression ringing) set to 0"
-            );
+            let (x, y) = (at as u32 % width, at as u32 / width);
+            match lossy {
+                Some(compression) => log::warn!(
+                    "{origin}: {fixed} negative channel values (most negative {lowest} at pixel \
+                     ({x}, {y})) set to 0: ringing of the lossy {compression} compression"
+                ),
+                None => log::warn!(
+                    "{origin}: {fixed} slightly negative channel values (most negative \
+                     {lowest:e} at pixel ({x}, {y}), within 1 % of the map's mean) set to 0"
+                ),
+            }
         }
         Ok(Self {
             width,
@@ -146,7 +175,10 @@ impl EnvironmentMap {
     }
 
     /// Load an equirectangular map: OpenEXR (.exr) and Radiance (.hdr) as linear, PNG/JPEG
-    /// as sRGB. Errors name the file.
+    /// as sRGB. Errors name the file. NaN and infinity are refused. In an EXR whose R, G or
+    /// B channel is lossy-compressed (DWAA, DWAB; B44, B44A for half floats; PXR24 for
+    /// 32-bit floats) every negative value is set to 0 with one warning; elsewhere the rule
+    /// of [`EnvironmentMap::new`] holds.
     pub fn load(path: &Path) -> Result<Self> {
         let origin = path.display().to_string();
         if let Some(why) = crate::volume::formats::why_not_a_file(path) {
@@ -171,9 +203,22 @@ impl EnvironmentMap {
                 .map_err(|e| {
                     anyhow::anyhow!("environment map {origin}: not a readable EXR: {e}")
                 })?;
-                let size = img.layer_data.size;
-                let (_, pixels) = img.layer_data.channel_data.pixels;
-                Self::new(size.width() as u32, size.height() as u32, pixels, &origin)
+                let layer = img.layer_data;
+                let compression = layer.encoding.compression;
+                let (r, g, b, _) = &layer.channel_data.channels;
+                let lossy = [r, g, b]
+                    .iter()
+                    .any(|c| !compression.is_lossless_for(c.sample_type));
+                // "dwab compression" -> "DWAB"
+                let name = compression.to_string().replace(" compression", "");
+                let (_, pixels) = layer.channel_data.pixels;
+                Self::checked(
+                    layer.size.width() as u32,
+                    layer.size.height() as u32,
+                    pixels,
+                    &origin,
+                    lossy.then(|| name.to_uppercase()).as_deref(),
+                )
             }
             "hdr" | "png" | "jpg" | "jpeg" => {
                 let img = image::open(path)

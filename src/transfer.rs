@@ -124,6 +124,101 @@ pub const PRESETS: &[(&str, &str)] = &[
     ("mri-head", include_str!("../assets/tf/mri-head.toml")),
 ];
 
+/// Refractive index the derived transfer functions give a volume's material (between
+/// water's 1.33 and soft glass's 1.5: clearly refractive, still bright through).
+pub const DERIVED_ETA: f32 = 1.2;
+
+/// Where [`TransferFunctions::for_histogram`] put its boundaries (normalised values).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DerivedThresholds {
+    /// Background below, material above (Otsu over the whole histogram).
+    pub material: f32,
+    /// Transmissive medium below, opaque dense structure above (Otsu over the material).
+    pub dense: f32,
+}
+
+impl TransferFunctions {
+    /// Transfer functions for data nobody has chosen any for, derived from its histogram
+    /// so that the renderer's point shows: the background (below Otsu's threshold) is
+    /// empty; the material above it is a faintly absorbing, amber-tinted medium of
+    /// refractive index [`DERIVED_ETA`] (reached over a wide ramp, so noise in the data
+    /// does not become per-ray noise in the image); the densest class (Otsu's threshold
+    /// within the material) is opaque and casts shadows and caustics.
+    pub fn for_histogram(h: &crate::volume::histogram::Histogram) -> (Self, DerivedThresholds) {
+        use crate::volume::histogram::BINS;
+        let bin = |b: usize| b as f32 / BINS as f32;
+        let t_bin = h.otsu(0..BINS);
+        let t = bin(t_bin);
+        let d = if t_bin + 2 < BINS {
+            bin(h.otsu(t_bin..BINS)).max(t + 0.02)
+        } else {
+            (t + 0.02).min(1.0)
+        };
+        // Ramps: a fifth of the gap between the thresholds, at least 1/64 of the range.
+        let w = ((d - t) / 5.0).max(1.0 / 64.0);
+        let s = |x: f32| x.clamp(0.0, 1.0);
+        let tf = Self {
+            name: "derived from the data's histogram".into(),
+            colour: Piecewise::new(vec![
+                (0.0, [1.0, 0.8, 0.7]),
+                (s(t), [1.0, 0.8, 0.7]),
+                (s(d), [0.98, 0.95, 0.88]),
+                (1.0, [0.98, 0.95, 0.88]),
+            ]),
+            opacity: Piecewise::new(vec![
+                (0.0, [0.0]),
+                (s(t - w), [0.0]),
+                (s(t), [0.004]),
+                (s(d - w), [0.004]),
+                (s(d), [0.6]),
+                (1.0, [0.85]),
+            ]),
+            medium: Piecewise::new(vec![
+                (0.0, [1.0; 3]),
+                (s(t - w), [1.0; 3]),
+                (s(t), [0.997, 0.99, 0.97]),
+                (1.0, [0.997, 0.99, 0.97]),
+            ]),
+            eta: Piecewise::new(vec![
+                (0.0, [1.0]),
+                (s(t - 2.0 * w), [1.0]),
+                (s(t + 2.0 * w), [DERIVED_ETA]),
+                (1.0, [DERIVED_ETA]),
+            ]),
+        };
+        (
+            tf,
+            DerivedThresholds {
+                material: t,
+                dense: d,
+            },
+        )
+    }
+
+    /// The largest opacity over the normalised values `lo..=hi` (the piecewise-linear
+    /// function's maximum: at the ends or at a control point between them).
+    pub fn max_opacity(&self, lo: f32, hi: f32) -> f32 {
+        let ends = [self.opacity.eval(lo)[0], self.opacity.eval(hi)[0]];
+        self.opacity
+            .points
+            .iter()
+            .filter(|(x, _)| (lo..=hi).contains(x))
+            .map(|(_, v)| v[0])
+            .chain(ends)
+            .fold(0.0, f32::max)
+    }
+
+    /// Where the opacity is above 0: the first and last normalised value (sampled at
+    /// 1/1024), `None` if nowhere.
+    pub fn opaque_range(&self) -> Option<(f32, f32)> {
+        let xs: Vec<f32> = (0..=1024)
+            .map(|i| i as f32 / 1024.0)
+            .filter(|&x| self.opacity.eval(x)[0] > 0.0)
+            .collect();
+        Some((*xs.first()?, *xs.last()?))
+    }
+}
+
 impl TransferFunctions {
     /// A preset name (see [`PRESETS`]) or a path to a TOML file.
     pub fn load(name_or_path: &str) -> Result<Self> {
@@ -332,6 +427,36 @@ fn parse_points<const N: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Three classes (air 10, tissue 100, bone 220 of 255): the derived functions leave
+    /// air empty with η 1, make tissue a faint medium of η [`DERIVED_ETA`] and bone opaque.
+    #[test]
+    fn derived_transfer_functions_follow_the_histograms_classes() {
+        use crate::volume::{histogram::Histogram, Volume, Voxels};
+        let mut v = vec![10u8; 6000];
+        v.extend(vec![100u8; 3000]);
+        v.extend(vec![220u8; 1000]);
+        let vol = Volume::new([2500, 2, 2], [1.0; 3], Voxels::U8(v)).unwrap();
+        let (tf, t) = TransferFunctions::for_histogram(&Histogram::of(&vol));
+        let at = |x: u8| x as f32 / 255.0;
+        assert!(at(10) < t.material && t.material <= at(100), "{t:?}");
+        assert!(at(100) < t.dense && t.dense <= at(220), "{t:?}");
+        assert_eq!(
+            (tf.opacity.eval(at(10))[0], tf.eta.eval(at(10))[0]),
+            (0.0, 1.0)
+        );
+        let tissue = tf.opacity.eval(at(100))[0];
+        assert!(tissue > 0.0 && tissue < 0.01, "tissue opacity {tissue}");
+        assert_eq!(tf.eta.eval(at(100))[0], DERIVED_ETA);
+        assert!(tf.opacity.eval(at(220))[0] >= 0.6);
+        assert!(
+            tf.medium.eval(at(100)).iter().all(|&m| m < 1.0),
+            "tinted medium"
+        );
+        // The empty-image check sees it: opacity over the data's range.
+        assert!(tf.max_opacity(at(10), at(220)) >= 0.6);
+        assert_eq!(tf.max_opacity(0.0, at(10)), 0.0);
+    }
 
     #[test]
     fn eval_interpolates_and_steps() {

@@ -581,3 +581,59 @@ fn refusals_name_their_true_reason() {
         "unexpected argument",
     );
 }
+
+/// Issue 15, item 7 and "user data shows refraction by default": a label volume whose
+/// values (0..29 of 255) lie where the chosen transfer functions are transparent warns,
+/// naming the data range and suggesting --window; the same volume given bare gets
+/// transfer functions derived from its histogram, reported on stdout, that make it seen.
+#[test]
+fn empty_looking_data_warns_and_bare_volumes_get_derived_transfer_functions() {
+    let dir = tempfile::tempdir().unwrap();
+    let labels = dir.path().join("labels_16x16x16_uint8.raw");
+    // A ball of label 29 in a background of label 0.
+    let bytes: Vec<u8> = (0..16 * 16 * 16)
+        .map(|i| {
+            let (x, y, z) = (i % 16, (i / 16) % 16, i / 256);
+            let r2 = [x, y, z]
+                .iter()
+                .map(|&c| (c as f32 - 7.5).powi(2))
+                .sum::<f32>();
+            if r2 < 36.0 {
+                29
+            } else {
+                0
+            }
+        })
+        .collect();
+    std::fs::write(&labels, bytes).unwrap();
+    let out = dir.path().join("o.exr");
+    let args = |extra: &[&str]| {
+        let mut a = vec![
+            "render",
+            labels.to_str().unwrap(),
+            "--width",
+            "24",
+            "--height",
+            "24",
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        a.extend(extra);
+        a.iter().map(|s| s.to_string()).collect::<Vec<_>>()
+    };
+    let run = |a: &[String]| refrakt(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    let o = run(&args(&["--tf", "ct-bone"]));
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("will be empty") && err.contains("0 .. 29") && err.contains("--window 0,29"),
+        "no empty-image warning with the data range in: {err}"
+    );
+    // Bare: derived transfer functions, no warning, the volume visible.
+    let o = run(&args(&[]));
+    assert!(o.status.success(), "{}", stderr(&o));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("derived from the histogram"), "{stdout}");
+    assert!(stdout.contains("values 0 .. 29"), "{stdout}");
+    assert!(!stderr(&o).contains("will be empty"), "{}", stderr(&o));
+}

@@ -351,3 +351,308 @@ fn shipped_maps_load_and_negative_ringing_is_handled() {
         .to_string();
     assert!(e.contains("negative") && e.contains("(3, 0)"), "{e}");
 }
+
+/// Issue 15 item 12: EXR maps through lossy and lossless compression, written with the exr
+/// crate and read back with it before they go through refrakt.
+mod exr_compression {
+    use std::path::Path;
+    use std::sync::{Mutex, Once};
+
+    use exr::prelude::*;
+    use refrakt::environment::EnvironmentMap;
+
+    const W: usize = 64;
+    const H: usize = 32;
+    /// Where the test maps hold their special value (green channel): x = 10, y = 5.
+    const SPOT: usize = 5 * W + 10;
+
+    /// A smooth 64 x 32 sky (mean ~0.6) with `value` in the green channel of pixel (10, 5).
+    fn sky_with(value: f32) -> Vec<[f32; 3]> {
+        let mut px: Vec<[f32; 3]> = (0..W * H)
+            .map(|i| {
+                let (x, y) = ((i % W) as f32, (i / W) as f32);
+                let t = 0.2 + 0.7 * y / H as f32 + 0.013 * x;
+                [t, 0.9 * t, 0.7 * t]
+            })
+            .collect();
+        px[SPOT][1] = value;
+        px
+    }
+
+    /// A scan-line RGB EXR, half or single floats.
+    fn write_exr(path: &Path, px: &[[f32; 3]], compression: Compression, half: bool) {
+        let encoding = Encoding {
+            compression,
+            blocks: Blocks::ScanLines,
+            line_order: LineOrder::Increasing,
+        };
+        let at = |p: Vec2<usize>| px[p.y() * W + p.x()];
+        if half {
+            let f = |c: [f32; 3]| c.map(f16::from_f32);
+            let channels = SpecificChannels::rgb(|p: Vec2<usize>| {
+                let c = f(at(p));
+                (c[0], c[1], c[2])
+            });
+            Image::from_encoded_channels((W, H), encoding, channels)
+                .write()
+                .to_file(path)
+                .unwrap();
+        } else {
+            let channels = SpecificChannels::rgb(|p: Vec2<usize>| {
+                let c = at(p);
+                (c[0], c[1], c[2])
+            });
+            Image::from_encoded_channels((W, H), encoding, channels)
+                .write()
+                .to_file(path)
+                .unwrap();
+        }
+    }
+
+    /// The file's compression and what the exr crate itself decodes from it.
+    fn read_exr(path: &Path) -> (Compression, Vec<[f32; 3]>) {
+        let img = read_first_rgba_layer_from_file(
+            path,
+            |r, _| (r.width(), vec![[0f32; 3]; r.width() * r.height()]),
+            |(w, px): &mut (usize, Vec<[f32; 3]>), p, (r, g, b, _a): (f32, f32, f32, f32)| {
+                px[p.y() * *w + p.x()] = [r, g, b];
+            },
+        )
+        .unwrap();
+        (
+            img.layer_data.encoding.compression,
+            img.layer_data.channel_data.pixels.1,
+        )
+    }
+
+    /// Warnings logged by the library, kept so a test can pick those naming its own file.
+    static WARNINGS: Mutex<Vec<String>> = Mutex::new(Vec::new());
+    struct Capture;
+    impl log::Log for Capture {
+        fn enabled(&self, m: &log::Metadata) -> bool {
+            m.level() <= log::Level::Warn
+        }
+        fn log(&self, r: &log::Record) {
+            if self.enabled(r.metadata()) {
+                WARNINGS.lock().unwrap().push(r.args().to_string());
+            }
+        }
+        fn flush(&self) {}
+    }
+
+    fn warnings_naming(path: &Path) -> Vec<String> {
+        let name = path.display().to_string();
+        WARNINGS
+            .lock()
+            .unwrap()
+            .iter()
+            .filter(|w| w.contains(&name))
+            .cloned()
+            .collect()
+    }
+
+    fn capture_warnings() {
+        static ONCE: Once = Once::new();
+        ONCE.call_once(|| {
+            log::set_logger(&Capture).unwrap();
+            log::set_max_level(log::LevelFilter::Warn);
+        });
+    }
+
+    fn load_error(path: &Path) -> String {
+        format!("{:#}", EnvironmentMap::load(path).unwrap_err())
+    }
+
+    /// Lossy EXRs (as the CC0 DWAB maps of the issue, one ringing down to -3394): every
+    /// negative value becomes 0, one warning counts them and names the file, the most
+    /// negative value and the compression; everything else is what the exr crate decodes.
+    #[test]
+    fn lossy_exr_negative_values_are_set_to_zero_with_one_warning() {
+        capture_warnings();
+        let dir = tempfile::tempdir().unwrap();
+        let original = sky_with(-3394.0);
+        for (compression, half, name) in [
+            (Compression::PXR24, false, "PXR24"),
+            (Compression::B44, true, "B44"),
+            (Compression::B44A, true, "B44A"),
+            (Compression::DWAA(None), true, "DWAA"),
+            (Compression::DWAB(None), true, "DWAB"),
+            (Compression::DWAB(None), false, "DWAB"),
+        ] {
+            let path = dir.path().join(format!("{name}-{half}.exr"));
+            write_exr(&path, &original, compression, half);
+            let (written, decoded) = read_exr(&path);
+            assert_eq!(written, compression);
+            // The negative really is in the file (B44 decodes it as -2484).
+            assert!(decoded[SPOT][1] < -1000.0, "{name}: {:?}", decoded[SPOT]);
+            let negatives = decoded.iter().flatten().filter(|c| **c < 0.0).count();
+            let lowest = decoded.iter().flatten().fold(0f32, |a, c| a.min(*c));
+
+            let m = EnvironmentMap::load(&path)
+                .unwrap_or_else(|e| panic!("{name} (half {half}): {e:#}"));
+            assert_eq!((m.width, m.height), (W as u32, H as u32));
+            for (l, d) in m.pixels.iter().zip(&decoded) {
+                assert_eq!(&l[..3], &d.map(|c| c.max(0.0)), "{name}");
+                assert_eq!(l[3], 1.0);
+            }
+            assert_eq!(m.pixels[SPOT][1], 0.0);
+            let warnings = warnings_naming(&path);
+            assert_eq!(warnings.len(), 1, "{name}: {warnings:?}");
+            let w = &warnings[0];
+            assert!(
+                w.contains(&format!("{negatives} negative channel values"))
+                    && w.contains(&format!("most negative {lowest} at pixel (10, 5)"))
+                    && w.contains(&format!("lossy {name} compression")),
+                "{w}"
+            );
+            if compression == Compression::PXR24 {
+                // 24-bit floats: the rest is within 2^-15 of what was written, but not
+                // all of it exactly (the data did go through the lossy codec).
+                let mut changed = 0;
+                for (i, (l, o)) in m.pixels.iter().zip(&original).enumerate() {
+                    if i != SPOT {
+                        for k in 0..3 {
+                            assert!((l[k] - o[k]).abs() <= o[k] / 32768.0, "{l:?} vs {o:?}");
+                            changed += usize::from(l[k] != o[k]);
+                        }
+                    }
+                }
+                assert!(changed > 0);
+            }
+        }
+    }
+
+    /// Lossless EXRs keep the rule of `EnvironmentMap::new`: values within 1 % of the
+    /// map's mean below zero are set to 0 with a warning, anything more negative is
+    /// refused. PXR24 is lossless for half floats, B44 leaves single floats uncompressed.
+    #[test]
+    fn lossless_exr_negative_values_keep_the_one_percent_rule() {
+        capture_warnings();
+        let dir = tempfile::tempdir().unwrap();
+        for (compression, half) in [
+            (Compression::Uncompressed, false),
+            (Compression::ZIP16, false),
+            (Compression::PIZ, true),
+            (Compression::PXR24, true),
+            (Compression::B44, false),
+        ] {
+            let path = dir.path().join(format!("{compression:?}-{half}-clear.exr"));
+            write_exr(&path, &sky_with(-3394.0), compression, half);
+            let (written, decoded) = read_exr(&path);
+            assert_eq!(written, compression);
+            assert_eq!(decoded[SPOT][1], -3394.0, "{compression:?}");
+            let e = load_error(&path);
+            assert!(
+                e.contains(&path.display().to_string())
+                    && e.contains("(10, 5)")
+                    && e.contains("-3394")
+                    && e.contains("not a radiance map"),
+                "{e}"
+            );
+            assert!(warnings_naming(&path).is_empty());
+
+            let path = dir
+                .path()
+                .join(format!("{compression:?}-{half}-slight.exr"));
+            write_exr(&path, &sky_with(-1e-3), compression, half);
+            assert!(read_exr(&path).1[SPOT][1] < 0.0);
+            let m = EnvironmentMap::load(&path).unwrap();
+            assert_eq!(m.pixels[SPOT][1], 0.0);
+            let warnings = warnings_naming(&path);
+            assert_eq!(warnings.len(), 1, "{warnings:?}");
+            assert!(
+                warnings[0].contains("1 slightly negative channel values")
+                    && warnings[0].contains("(10, 5)")
+                    && warnings[0].contains("within 1 %")
+                    && !warnings[0].contains("lossy"),
+                "{}",
+                warnings[0]
+            );
+        }
+    }
+
+    /// NaN and ±infinity are refused whatever the compression; the error names the file and
+    /// the pixel. (B44 and DWA cannot store them: they decode as finite values.)
+    #[test]
+    fn non_finite_exr_values_are_refused() {
+        capture_warnings();
+        let dir = tempfile::tempdir().unwrap();
+        for (compression, half) in [
+            (Compression::PXR24, false), // lossy
+            (Compression::ZIP16, false),
+            (Compression::PIZ, true),
+            (Compression::Uncompressed, true),
+        ] {
+            for (label, value) in [
+                ("nan", f32::NAN),
+                ("inf", f32::INFINITY),
+                ("-inf", f32::NEG_INFINITY),
+            ] {
+                let path = dir
+                    .path()
+                    .join(format!("{compression:?}-{half}-{label}.exr"));
+                write_exr(&path, &sky_with(value), compression, half);
+                let decoded = read_exr(&path).1[SPOT][1];
+                assert!(
+                    !decoded.is_finite() && decoded.is_nan() == value.is_nan(),
+                    "{compression:?} {label}: decoded {decoded}"
+                );
+                let e = load_error(&path);
+                assert!(
+                    e.contains(&path.display().to_string())
+                        && e.contains("pixel (10, 5)")
+                        && e.contains("not a finite colour"),
+                    "{e}"
+                );
+                assert!(warnings_naming(&path).is_empty());
+            }
+        }
+    }
+
+    /// On the command line: a DWAB map ringing far below zero renders, with the warning on
+    /// stderr; the same map stored losslessly is refused, naming the file.
+    #[test]
+    fn render_with_lossy_map_warns_and_succeeds() {
+        let dir = tempfile::tempdir().unwrap();
+        let lossy = dir.path().join("dwab.exr");
+        write_exr(&lossy, &sky_with(-3394.0), Compression::DWAB(None), true);
+        assert!(read_exr(&lossy).1[SPOT][1] < -1000.0);
+        let out = dir.path().join("out.png");
+        let args = |env: &Path| {
+            super::common::refrakt(&[
+                "render",
+                "sphere",
+                "--env",
+                env.to_str().unwrap(),
+                "--width",
+                "16",
+                "--height",
+                "16",
+                "--volume-size",
+                "16",
+                "-o",
+                out.to_str().unwrap(),
+            ])
+        };
+        let o = args(&lossy);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{stderr}");
+        assert!(out.exists());
+        assert!(
+            stderr.contains(&lossy.display().to_string())
+                && stderr.contains("negative channel values")
+                && stderr.contains("most negative -3394")
+                && stderr.contains("DWAB"),
+            "{stderr}"
+        );
+        let lossless = dir.path().join("zip.exr");
+        write_exr(&lossless, &sky_with(-3394.0), Compression::ZIP16, true);
+        let o = args(&lossless);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success());
+        assert!(
+            stderr.contains(&lossless.display().to_string()) && stderr.contains("(10, 5)"),
+            "{stderr}"
+        );
+    }
+}

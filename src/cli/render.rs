@@ -49,6 +49,11 @@ pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
     // The device first: its limits let the loaders refuse a volume it cannot hold from
     // the file's header, before reading gigabytes.
     let ctx = Context::new(desc)?;
+    println!(
+        "device: {} ({})",
+        ctx.info().name,
+        vk::device_type_name(ctx.info().device_type)
+    );
     let LoadedScene {
         name,
         volume,
@@ -58,15 +63,14 @@ pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
         camera,
         mut opts,
         tone,
+        notes,
         ..
     } = build_scene(&args.scene, Some(upload::device_limits(&ctx)))?;
+    for n in &notes {
+        println!("{n}");
+    }
     opts.sweep.dumps = dumps;
 
-    println!(
-        "device: {} ({})",
-        ctx.info().name,
-        vk::device_type_name(ctx.info().device_type)
-    );
     let mut renderer = Renderer::new(&ctx, &volume, &tf)?;
     let env_timings = if model == Model::Refract {
         renderer.set_environment(env.as_ref())?

@@ -27,6 +27,9 @@ pub fn view(desc: &ContextDesc, args: ViewArgs) -> Result<ExitCode> {
     }
     let scene_args = args.scene.clone();
     let scene = build_scene(&scene_args, None)?;
+    for n in &scene.notes {
+        println!("{n}");
+    }
     let options = ViewOptions {
         vsync: !args.no_vsync,
         frames: args.frames,

@@ -191,12 +191,18 @@ pub struct LoadedScene {
     /// Files the scene was read from (scene file, volume, transfer functions, environment
     /// map): the viewer reloads the scene when one of them changes.
     pub files: Vec<PathBuf>,
+    /// What loading decided that the user should see (a volume file's spacing, value
+    /// range and window, transfer functions derived from its histogram).
+    pub notes: Vec<String>,
 }
 
 #[derive(Clone, Debug)]
 pub enum TransferSource {
     Named(String),
     Inline(Box<TransferFunctions>),
+    /// Derived from the volume's histogram when it is loaded
+    /// ([`TransferFunctions::for_histogram`]): what a bare volume file gets.
+    FromData,
 }
 
 impl Default for Scene {
@@ -262,7 +268,8 @@ impl Scene {
         )
     }
 
-    /// A bare volume file: rendered with a CT-like preset and the default camera.
+    /// A bare volume file: transfer functions derived from its histogram (refractive
+    /// material, opaque dense structure), the default camera and light.
     pub fn for_volume_file(path: &Path) -> Scene {
         Scene {
             name: path
@@ -274,7 +281,7 @@ impl Scene {
                 raw: None,
                 window: None,
             },
-            transfer: TransferSource::Named("ct-bone".into()),
+            transfer: TransferSource::FromData,
             ..Default::default()
         }
     }
@@ -431,6 +438,9 @@ impl Scene {
         match &self.transfer {
             TransferSource::Named(n) => TransferFunctions::load(n),
             TransferSource::Inline(tf) => Ok((**tf).clone()),
+            TransferSource::FromData => {
+                bail!("the transfer functions are derived from the volume: use load_all")
+            }
         }
     }
 
@@ -484,9 +494,15 @@ impl Scene {
     pub fn load_all(&self, data_dir: &Path, limits: Option<DeviceLimits>) -> Result<LoadedScene> {
         let opts = self.render_options()?;
         let tone = self.tone_map()?;
-        let tf = self.transfer_functions()?;
         let env = self.environment_map()?;
+        let derived = matches!(self.transfer, TransferSource::FromData);
+        let tf = if derived {
+            None
+        } else {
+            Some(self.transfer_functions()?)
+        };
         let volume = self.load_volume(data_dir, limits)?;
+        let (tf, notes) = self.check_data(&volume, tf);
         let mut files: Vec<PathBuf> = self.file.iter().cloned().collect();
         if let TransferSource::Named(n) = &self.transfer {
             if Path::new(n).is_file() {
@@ -511,7 +527,84 @@ impl Scene {
             opts,
             tone,
             files,
+            notes,
         })
+    }
+
+    /// For volumes read from files: the transfer functions derived from the histogram
+    /// when the scene asks for that, notes on what was used, and a warning when the data
+    /// falls where the opacity is 0 (the image would be empty).
+    fn check_data(
+        &self,
+        volume: &Volume,
+        tf: Option<TransferFunctions>,
+    ) -> (TransferFunctions, Vec<String>) {
+        let from_file = matches!(
+            self.volume,
+            VolumeSource::File { .. } | VolumeSource::Fetched { .. }
+        );
+        let mut notes = Vec::new();
+        let h = crate::volume::histogram::Histogram::of(volume);
+        let (lo, hi) = volume.value_range();
+        if from_file {
+            let window = match &self.volume {
+                VolumeSource::File {
+                    window: Some(w), ..
+                }
+                | VolumeSource::Fetched {
+                    window: Some(w), ..
+                } => format!("window {} .. {} → 0 .. 1", w.0, w.1),
+                _ => format!("{} .. {} → 0 .. 1 (no --window)", short(lo), short(hi)),
+            };
+            notes.push(format!(
+                "volume {}x{}x{} {}, spacing {:?}, values {} .. {} ({window})",
+                volume.dims[0],
+                volume.dims[1],
+                volume.dims[2],
+                volume.voxels.type_name(),
+                volume.spacing,
+                short(volume.raw_value(h.min)),
+                short(volume.raw_value(h.max)),
+            ));
+        }
+        let tf = match tf {
+            Some(tf) => tf,
+            None => {
+                let (tf, t) = TransferFunctions::for_histogram(&h);
+                notes.push(format!(
+                    "transfer functions derived from the histogram: background below {} \
+                     (normalised {:.3}), refractive medium (eta {}) above it, opaque above \
+                     {} ({:.3}); choose others with --tf",
+                    short(volume.raw_value(t.material)),
+                    t.material,
+                    crate::transfer::DERIVED_ETA,
+                    short(volume.raw_value(t.dense)),
+                    t.dense
+                ));
+                tf
+            }
+        };
+        if from_file && tf.max_opacity(h.min, h.max) <= 0.0 {
+            let opaque = match tf.opaque_range() {
+                Some((a, b)) => format!("only for normalised values {a:.3} .. {b:.3}"),
+                None => "nowhere".into(),
+            };
+            log::warn!(
+                "{}: the data's values ({} .. {}, normalised {:.3} .. {:.3}) all fall where \
+                 the transfer functions '{}' have opacity 0 (opacity > 0 {opaque}): the image \
+                 will be empty; map the data onto them with --window LO,HI (e.g. --window \
+                 {},{}) or choose other transfer functions with --tf",
+                self.name,
+                short(volume.raw_value(h.min)),
+                short(volume.raw_value(h.max)),
+                h.min,
+                h.max,
+                tf.name,
+                short(volume.raw_value(h.min)),
+                short(volume.raw_value(h.max)),
+            );
+        }
+        (tf, notes)
     }
 
     pub fn tone_map(&self) -> Result<ToneMap> {
@@ -524,6 +617,15 @@ impl Scene {
             exposure: self.exposure,
             operator: self.tonemap,
         })
+    }
+}
+
+/// A data value for messages: integers as such, others to a sensible precision.
+fn short(x: f32) -> String {
+    if x.fract() == 0.0 || x.abs() >= 100.0 {
+        format!("{x:.0}")
+    } else {
+        format!("{x:.3}")
     }
 }
 

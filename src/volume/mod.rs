@@ -5,6 +5,7 @@
 //! volume's value range onto [0,1] on the CPU first.
 
 pub mod formats;
+pub mod histogram;
 pub mod procedural;
 pub mod standins;
 
@@ -172,16 +173,32 @@ impl Volume {
     }
 
     /// Texel bytes as uploaded (f32 values mapped to [0,1] through `range`).
+    /// The raw values mapped to 0 and 1 on upload: the type's range for u8 and u16, the
+    /// window ([`Volume::range`]) or the data's minimum and maximum for f32.
+    pub fn value_range(&self) -> (f32, f32) {
+        match &self.voxels {
+            Voxels::U8(_) => (0.0, 255.0),
+            Voxels::U16(_) => (0.0, 65535.0),
+            Voxels::F32(v) => self.range.unwrap_or_else(|| {
+                let lo = v.iter().copied().fold(f32::INFINITY, f32::min);
+                let hi = v.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+                (lo, hi)
+            }),
+        }
+    }
+
+    /// The raw value a normalised (uploaded) value `s` stands for.
+    pub fn raw_value(&self, s: f32) -> f32 {
+        let (lo, hi) = self.value_range();
+        lo + s * (hi - lo)
+    }
+
     pub fn texel_bytes(&self) -> Vec<u8> {
         match &self.voxels {
             Voxels::U8(v) => v.clone(),
             Voxels::U16(v) => bytemuck::cast_slice(v).to_vec(),
             Voxels::F32(v) => {
-                let (lo, hi) = self.range.unwrap_or_else(|| {
-                    let lo = v.iter().copied().fold(f32::INFINITY, f32::min);
-                    let hi = v.iter().copied().fold(f32::NEG_INFINITY, f32::max);
-                    (lo, hi)
-                });
+                let (lo, hi) = self.value_range();
                 let scale = if hi > lo { 1.0 / (hi - lo) } else { 0.0 };
                 let mapped: Vec<f32> = v.iter().map(|&x| (x - lo) * scale).collect();
                 bytemuck::cast_slice(&mapped).to_vec()
