@@ -219,6 +219,21 @@ impl TransferFunctions {
     }
 }
 
+/// The presets with their one-line descriptions (the files' `description`), for
+/// `--list-presets`.
+pub fn preset_descriptions() -> Vec<(&'static str, String)> {
+    PRESETS
+        .iter()
+        .map(|(name, text)| {
+            let d = toml::from_str::<TfFile>(text)
+                .ok()
+                .and_then(|f| f.description)
+                .unwrap_or_default();
+            (*name, d)
+        })
+        .collect()
+}
+
 impl TransferFunctions {
     /// A preset name (see [`PRESETS`]) or a path to a TOML file.
     pub fn load(name_or_path: &str) -> Result<Self> {
@@ -400,7 +415,11 @@ fn parse_points<const N: usize>(
                 row.len()
             );
         }
-        if let Some(bad) = row.iter().find(|x| !x.is_finite()) {
+        // Finite as f32 too: 3.5e38 would become infinity on the GPU.
+        if let Some(bad) = row.iter().find(|x| !(**x as f32).is_finite()) {
+            if bad.is_finite() {
+                bail!("{at}: {bad} is beyond the range of 32-bit floats (±3.4e38)");
+            }
             bail!("{at}: {bad} is not a finite number");
         }
         let s = row[0];

@@ -637,3 +637,30 @@ fn empty_looking_data_warns_and_bare_volumes_get_derived_transfer_functions() {
     assert!(stdout.contains("values 0 .. 29"), "{stdout}");
     assert!(!stderr(&o).contains("will be empty"), "{}", stderr(&o));
 }
+
+/// `--list-presets` (render and view) names every preset file shipped in assets/tf/.
+#[test]
+fn list_presets_names_every_shipped_preset() {
+    let files: Vec<String> = std::fs::read_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/assets/tf"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .map(|p| p.file_stem().unwrap().to_string_lossy().into_owned())
+        .collect();
+    assert!(files.len() >= 15, "{files:?}");
+    for cmd in ["render", "view"] {
+        let o = refrakt(&[cmd, "--list-presets"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let out = String::from_utf8_lossy(&o.stdout);
+        for f in &files {
+            let line = out
+                .lines()
+                .find(|l| l.split_whitespace().next() == Some(f))
+                .unwrap_or_else(|| panic!("{cmd}: no {f} in:\n{out}"));
+            assert!(
+                line.split_whitespace().count() > 2,
+                "no description: {line}"
+            );
+        }
+    }
+}

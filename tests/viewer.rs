@@ -392,7 +392,7 @@ fn view_options_and_a_missing_display_are_clear_errors() {
         ),
         (
             &["view", "sphere", "--volume-size", "8"][..],
-            "needs a display",
+            "no display (DISPLAY and WAYLAND_DISPLAY unset)",
         ),
     ] {
         let o = run(args);
@@ -400,5 +400,8 @@ fn view_options_and_a_missing_display_are_clear_errors() {
         assert!(!o.status.success(), "{args:?} succeeded");
         assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
         assert!(err.contains(needle), "{args:?}: no '{needle}' in: {err}");
+        // One line, and no source path of a dependency (issue 15).
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        assert!(!err.contains(".cargo") && !err.contains(".rs:"), "{err}");
     }
 }

@@ -172,6 +172,12 @@ pub struct SceneArgs {
     /// Flags below override the scene's fields.
     #[arg(value_name = "SCENE")]
     pub scene: Option<String>,
+    /// List the built-in scenes and exit.
+    #[arg(long)]
+    pub list_scenes: bool,
+    /// List the transfer-function presets (--tf NAME) and exit.
+    #[arg(long)]
+    pub list_presets: bool,
     /// Same as the SCENE argument (kept for scripts).
     #[arg(long = "scene", value_name = "SCENE", conflicts_with = "scene")]
     pub scene_flag: Option<String>,
@@ -310,9 +316,6 @@ pub struct SceneArgs {
 
 #[derive(Args)]
 pub struct RenderArgs {
-    /// List the built-in scenes and exit.
-    #[arg(long)]
-    pub list_scenes: bool,
     /// Output image; the extension picks the format: .png (8-bit sRGB) or .exr (linear).
     #[arg(short, long, default_value = "refrakt.png")]
     pub output: PathBuf,

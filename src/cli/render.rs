@@ -21,9 +21,12 @@ pub fn main_pass_ms(frame: &refrakt::render::Frame) -> f64 {
     frame.timings.get("render").unwrap_or(0.0)
 }
 
+/// Timestamp scopes of builds that are not part of a frame (see `Renderer`).
+const ONE_OFF_BUILDS: [&str; 3] = ["gradient volume", "environment SAT", "preintegration"];
+
 pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
-    if args.list_scenes {
-        return list_scenes();
+    if let Some(code) = list_and_exit(&args.scene)? {
+        return Ok(code);
     }
     // Everything that can be checked without the GPU is checked first, so bad input fails
     // at once with a clear message.
@@ -113,13 +116,21 @@ pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
     if frame.timings.scopes.is_empty() {
         println!("GPU timings: this device has no timestamp queries");
     } else {
-        println!("GPU time per pass:");
-        for (name, ms) in frame.timings.scopes.iter().filter(|(n, _)| n != "render") {
+        // One-off builds are outside the frame: they run again only when their inputs
+        // change (volume, transfer functions, environment map), not per frame.
+        let one_off = |n: &str| ONE_OFF_BUILDS.contains(&n);
+        let scopes = &frame.timings.scopes;
+        println!("GPU time of the one-off builds (again only when their inputs change):");
+        for (name, ms) in scopes.iter().filter(|(n, _)| one_off(n)) {
+            println!("  {name:<16} {ms:9.3} ms");
+        }
+        println!("GPU time of the frame, per pass:");
+        for (name, ms) in scopes.iter().filter(|(n, _)| n != "render" && !one_off(n)) {
             println!("  {name:<16} {ms:9.3} ms");
         }
         if let Some(ms) = frame.timings.get("render") {
             println!(
-                "  {:<16} {ms:9.3} ms (the whole frame: passes and barriers)",
+                "  {:<16} {ms:9.3} ms (the frame's passes above and their barriers)",
                 "frame"
             );
         }

@@ -241,6 +241,23 @@ pub fn build_scene(args: &SceneArgs, limits: Option<DeviceLimits>) -> Result<Loa
     scene.load_all(&data_dir, limits)
 }
 
+/// `--list-scenes` / `--list-presets`: print the list and say to exit.
+pub fn list_and_exit(args: &SceneArgs) -> Result<Option<ExitCode>> {
+    if args.list_scenes {
+        return list_scenes().map(Some);
+    }
+    if args.list_presets {
+        println!("Transfer-function presets (--tf NAME; or --tf FILE.toml, see README):");
+        let presets = refrakt::transfer::preset_descriptions();
+        let width = presets.iter().map(|(n, _)| n.len()).max().unwrap_or(0);
+        for (name, description) in presets {
+            println!("  {name:width$}  {description}");
+        }
+        return Ok(Some(ExitCode::SUCCESS));
+    }
+    Ok(None)
+}
+
 pub fn list_scenes() -> Result<ExitCode> {
     println!("Built-in scenes (refrakt render NAME):");
     for (n, d) in scene::builtin_names() {

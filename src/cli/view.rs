@@ -12,6 +12,9 @@ use super::args::*;
 use super::scene_args::*;
 
 pub fn view(desc: &ContextDesc, args: ViewArgs) -> Result<ExitCode> {
+    if let Some(code) = list_and_exit(&args.scene)? {
+        return Ok(code);
+    }
     if let Some(path) = &args.screenshot {
         output::format_for(path)?;
     }

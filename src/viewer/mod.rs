@@ -26,7 +26,7 @@ use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant, SystemTime};
 
-use anyhow::{anyhow, Context as _, Result};
+use anyhow::{anyhow, bail, Context as _, Result};
 use glam::Vec3;
 use winit::application::ApplicationHandler;
 use winit::dpi::PhysicalSize;
@@ -139,14 +139,25 @@ pub fn run(
     loader: SceneLoader,
     options: ViewOptions,
 ) -> Result<ViewReport> {
+    let unset = |v: &str| std::env::var_os(v).is_none_or(|x| x.is_empty());
+    let hint = "for a headless machine use Xvfb (Debian package xvfb, installed by \
+                scripts/setup.sh), e.g. `xvfb-run refrakt view`";
+    if unset("DISPLAY") && unset("WAYLAND_DISPLAY") && unset("WAYLAND_SOCKET") {
+        bail!(
+            "no display (DISPLAY and WAYLAND_DISPLAY unset): `refrakt view` opens a window; {hint}"
+        );
+    }
     let event_loop = EventLoop::<FromRender>::with_user_event()
         .build()
         .map_err(|e| {
-            anyhow!(
-                "cannot open a window: {e}. `refrakt view` needs a display (X11 or Wayland; \
-                 DISPLAY or WAYLAND_DISPLAY); for a headless machine use Xvfb (Debian package \
-                 xvfb, installed by scripts/setup.sh), e.g. `xvfb-run refrakt view`"
-            )
+            // winit's message starts with its source path; keep only its reason.
+            let reason = e.to_string();
+            let reason = reason
+                .rsplit(": ")
+                .next()
+                .unwrap_or(&reason)
+                .trim_end_matches('.');
+            anyhow!("cannot open a window ({reason}); {hint}")
         })?;
     let proxy = event_loop.create_proxy();
     let mut app = App::new(desc, scene, loader, options, proxy);

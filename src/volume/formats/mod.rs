@@ -631,21 +631,20 @@ pub(crate) fn read_file(path: &Path) -> Result<Vec<u8>> {
     read_file_at_most(path, None)
 }
 
-/// A detached data file that should hold exactly `promised` bytes (a header's skip plus
-/// its data): reads at most one byte more, so a lying header or an endless file costs
-/// only that, and refuses a longer file.
+/// A file that should hold at most `promised` bytes (a header's skip plus its data):
+/// refused from its size if longer, so a lying header or a huge file costs nothing; read
+/// whole otherwise (shorter files are the caller's to report as truncated).
 pub(crate) fn read_promised(path: &Path, what: &str, promised: u64) -> Result<Vec<u8>> {
-    let bytes = read_file_at_most(path, Some(promised.saturating_add(1)))?;
+    let len = regular_file(path)?.metadata().map_or(0, |m| m.len());
     ensure!(
-        bytes.len() as u64 <= promised,
-        "{what} is more than {promised} bytes, the header promises {promised} (skip + data; \
-         file too long)"
+        len <= promised,
+        "{what} is {len} bytes, the header promises {promised} bytes (file too long)"
     );
-    Ok(bytes)
+    read_file_at_most(path, Some(promised))
 }
 
-/// [`read_file`], reading at most `limit` bytes when given (what a header promises).
-pub(crate) fn read_file_at_most(path: &Path, limit: Option<u64>) -> Result<Vec<u8>> {
+/// `path` opened, if it is a regular file (a FIFO or device could block or never end).
+fn regular_file(path: &Path) -> Result<std::fs::File> {
     let err = |e: std::io::Error| anyhow!("cannot read '{}': {e}", path.display());
     let file = std::fs::File::open(path).map_err(err)?;
     let meta = file.metadata().map_err(err)?;
@@ -655,7 +654,15 @@ pub(crate) fn read_file_at_most(path: &Path, limit: Option<u64>) -> Result<Vec<u
         path.display(),
         file_kind(&meta)
     );
-    let len = limit.map_or(meta.len(), |l| l.min(meta.len()));
+    Ok(file)
+}
+
+/// [`read_file`], reading at most `limit` bytes when given (what a header promises).
+pub(crate) fn read_file_at_most(path: &Path, limit: Option<u64>) -> Result<Vec<u8>> {
+    let err = |e: std::io::Error| anyhow!("cannot read '{}': {e}", path.display());
+    let file = regular_file(path)?;
+    let size = file.metadata().map_err(err)?.len();
+    let len = limit.map_or(size, |l| l.min(size));
     let mut bytes = Vec::with_capacity(len as usize);
     file.take(len).read_to_end(&mut bytes).map_err(err)?;
     Ok(bytes)

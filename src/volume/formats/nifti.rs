@@ -12,8 +12,8 @@ use std::path::Path;
 use anyhow::{anyhow, bail, ensure, Result};
 
 use super::{
-    build_volume, check_size, checked_dims, header_bytes, read_file_at_most, resolve_spacing,
-    LoadOptions, Rescale, Sample,
+    build_volume, check_size, checked_dims, header_bytes, read_file_at_most, read_promised,
+    resolve_spacing, LoadOptions, Rescale, Sample,
 };
 use crate::volume::Volume;
 
@@ -58,8 +58,8 @@ pub(super) fn load(path: &Path, opts: &LoadOptions) -> Result<Volume> {
         );
         let h = Header::parse(&head)?;
         let total = h.data_end(opts)?;
-        let file = read_file_at_most(path, Some(total as u64 + 1))?;
-        finish(&h, &file, "file", true, opts)
+        let file = read_promised(path, "file", total as u64)?;
+        finish(&h, &file, "file", false, opts)
     }
 }
 
