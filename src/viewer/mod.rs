@@ -139,7 +139,7 @@ pub fn run(
     loader: SceneLoader,
     options: ViewOptions,
 ) -> Result<ViewReport> {
-    let unset = |v: &str| std::env::var_os(v).is_none_or(|x| x.is_empty());
+    let unset = |v: &str| std::env::var_os(v).map_or(true, |x| x.is_empty());
     let hint = "for a headless machine use Xvfb (Debian package xvfb, installed by \
                 scripts/setup.sh), e.g. `xvfb-run refrakt view`";
     if unset("DISPLAY") && unset("WAYLAND_DISPLAY") && unset("WAYLAND_SOCKET") {
