@@ -21,6 +21,17 @@ pub fn main_pass_ms(frame: &refrakt::render::Frame) -> f64 {
     frame.timings.get("render").unwrap_or(0.0)
 }
 
+/// A spinner with `message` and the elapsed time on stderr, drawn only on a terminal.
+fn spinner(message: &str) -> indicatif::ProgressBar {
+    let pb = indicatif::ProgressBar::new_spinner();
+    if let Ok(style) = indicatif::ProgressStyle::with_template("{spinner} {msg} ({elapsed})") {
+        pb.set_style(style);
+    }
+    pb.set_message(message.to_owned());
+    pb.enable_steady_tick(std::time::Duration::from_millis(200));
+    pb
+}
+
 /// Timestamp scopes of builds that are not part of a frame (see `Renderer`).
 const ONE_OFF_BUILDS: [&str; 3] = ["gradient volume", "environment SAT", "preintegration"];
 
@@ -57,6 +68,9 @@ pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
         ctx.info().name,
         vk::device_type_name(ctx.info().device_type)
     );
+    // Loading, generating a stand-in and a big frame can take minutes: say which phase
+    // is running (on a terminal only; indicatif draws nothing otherwise).
+    let progress = spinner("loading the scene");
     let LoadedScene {
         name,
         volume,
@@ -69,18 +83,27 @@ pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
         notes,
         ..
     } = build_scene(&args.scene, Some(upload::device_limits(&ctx)))?;
-    for n in &notes {
-        println!("{n}");
-    }
+    progress.suspend(|| notes.iter().for_each(|n| println!("{n}")));
     opts.sweep.dumps = dumps;
 
+    progress.set_message(format!(
+        "uploading the {}x{}x{} volume",
+        volume.dims[0], volume.dims[1], volume.dims[2]
+    ));
     let mut renderer = Renderer::new(&ctx, &volume, &tf)?;
     let env_timings = if model == Model::Refract {
         renderer.set_environment(env.as_ref())?
     } else {
         Default::default()
     };
+    progress.set_message(format!(
+        "rendering {}x{} with {} (one GPU submission; on lavapipe this can take minutes)",
+        opts.width,
+        opts.height,
+        model.name()
+    ));
     let mut frame = renderer.render(model, &camera, &opts)?;
+    progress.finish_and_clear();
     // One-off builds first (the gradient volume once per volume, the environment's SAT
     // once per map), then the frame's own passes.
     let mut all = renderer.gradient_timings().clone();
