@@ -1558,6 +1558,22 @@ fn assert_same_as_lung1(name: &str, spacing: bool) {
             );
         }
     }
+    // The patient orientation, where the format states it: the NRRD's LPS space
+    // directions, read back through NIfTI's RAS sform/qform or DICOM's
+    // ImageOrientationPatient (written by other tools), must agree.
+    let stated = name.contains(".nii") || name.contains("dicom");
+    match (v.axes, reference.axes) {
+        (Some(a), Some(b)) => {
+            let close = a
+                .iter()
+                .flatten()
+                .zip(b.iter().flatten())
+                .all(|(x, y)| (x - y).abs() < 1e-3);
+            assert!(close, "{name}: voxel axes {a:?}, the NRRD's {b:?}");
+        }
+        (None, Some(_)) => assert!(!stated, "{name}: no orientation read"),
+        (_, None) => panic!("the NRRD states its space directions; none read"),
+    }
     let (Voxels::F32(got), Voxels::F32(want)) = (&v.voxels, &reference.voxels) else {
         panic!(
             "{name}: expected f32 voxels from int16 CT, got {}",

@@ -206,6 +206,11 @@ pub struct SceneArgs {
     /// turn, keeping handedness), or "none" to undo a scene's flip.
     #[arg(long, value_name = "AXES")]
     pub flip: Option<String>,
+    /// "on" (the default for volume files): turn the patient upright, head up and facing
+    /// the camera, when the file states its orientation (NIfTI sform/qform, NRRD space
+    /// directions, DICOM ImageOrientationPatient); "off": keep the file's voxel axes.
+    #[arg(long, value_name = "on|off")]
+    pub upright: Option<String>,
     /// Value window "LO,HI" mapped to [0,1] for signed or float data (e.g. CT Hounsfield
     /// units -1000,2000); default: the data's minimum and maximum. See docs/FORMATS.md.
     #[arg(long, value_name = "LO,HI", allow_hyphen_values = true)]

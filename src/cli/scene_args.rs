@@ -129,6 +129,9 @@ pub fn scene_from_args(args: &SceneArgs) -> Result<Scene> {
     if let Some(f) = &args.flip {
         o.flip = Some(scene::parse_flip(f).context("--flip")?);
     }
+    if let Some(u) = &args.upright {
+        o.upright = Some(scene::parse_on_off(u).context("--upright")?);
+    }
     o.transfer = args.tf.clone().map(TransferSource::Named);
     o.model = args.model.map(|m| match m {
         ModelArg::Ea => Model::Ea,

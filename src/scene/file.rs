@@ -37,6 +37,8 @@ struct VolumeTable {
     window: Option<[f32; 2]>,
     /// Axes to mirror, e.g. "xy" (a 180° turn about z).
     flip: Option<String>,
+    /// Turn the patient upright from the file's stated orientation (default true).
+    upright: Option<bool>,
 }
 
 #[derive(Deserialize)]
@@ -226,6 +228,7 @@ impl SceneFile {
         if let Some(f) = &v.flip {
             o.flip = Some(parse_flip(f).context("[volume] flip")?);
         }
+        o.upright = v.upright;
         if let Some(n) = self.name {
             s.name = n;
         } else if let Some(stem) = path.file_stem() {

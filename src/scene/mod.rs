@@ -62,7 +62,12 @@ pub struct Scene {
     pub volume: VolumeSource,
     /// Voxel spacing override (x, y, z); `None` keeps the volume's own.
     pub spacing: Option<[f32; 3]>,
-    /// Axes (x, y, z) to mirror the data along after loading (two = a 180° rotation).
+    /// Turn the volume upright when its file states the patient's orientation
+    /// ([`Volume::turn_upright`]): on for volume files, off for the built-in scenes (each
+    /// composed with its own view).
+    pub upright: bool,
+    /// Axes (x, y, z) to mirror the data along after loading and turning upright (two = a
+    /// 180° rotation).
     pub flip: [bool; 3],
     /// A preset name or a TF file path (resolved), or inline functions.
     pub transfer: TransferSource,
@@ -129,6 +134,7 @@ pub struct Overrides {
     pub environment: Option<EnvSource>,
     pub env_rotation: Option<f32>,
     pub flip: Option<[bool; 3]>,
+    pub upright: Option<bool>,
 }
 
 impl Scene {
@@ -168,6 +174,7 @@ impl Scene {
         set(&mut self.environment, o.environment);
         set(&mut self.env_rotation, o.env_rotation);
         set(&mut self.flip, o.flip);
+        set(&mut self.upright, o.upright);
     }
 }
 
@@ -215,6 +222,7 @@ impl Default for Scene {
             },
             spacing: None,
             flip: [false; 3],
+            upright: false,
             transfer: TransferSource::Named("glass-floor".into()),
             camera: Camera::default(),
             light_towards: None,
@@ -282,6 +290,7 @@ impl Scene {
                 window: None,
             },
             transfer: TransferSource::FromData,
+            upright: true,
             ..Default::default()
         }
     }
@@ -397,6 +406,16 @@ impl Scene {
     /// them (`<name>.<ext>` in any supported format). With `limits`, a file the device
     /// cannot hold is refused from its header, before its data is read.
     pub fn load_volume(&self, data_dir: &Path, limits: Option<DeviceLimits>) -> Result<Volume> {
+        self.load_volume_noted(data_dir, limits).map(|(v, _)| v)
+    }
+
+    /// [`Scene::load_volume`], and what it did that the user should know (turned upright).
+    fn load_volume_noted(
+        &self,
+        data_dir: &Path,
+        limits: Option<DeviceLimits>,
+    ) -> Result<(Volume, Vec<String>)> {
+        let mut notes = Vec::new();
         let mut vol = match &self.volume {
             VolumeSource::Procedural { kind, size } => procedural_volume(kind, *size)?,
             VolumeSource::Standin { name, scale } => {
@@ -430,8 +449,11 @@ impl Scene {
                 None => format!("--spacing {s:?}"),
             })?;
         }
+        if self.upright {
+            notes.extend(vol.turn_upright());
+        }
         vol.flip(self.flip);
-        Ok(vol)
+        Ok((vol, notes))
     }
 
     pub fn transfer_functions(&self) -> Result<TransferFunctions> {
@@ -501,8 +523,9 @@ impl Scene {
         } else {
             Some(self.transfer_functions()?)
         };
-        let volume = self.load_volume(data_dir, limits)?;
-        let (tf, notes) = self.check_data(&volume, tf);
+        let (volume, upright) = self.load_volume_noted(data_dir, limits)?;
+        let (tf, mut notes) = self.check_data(&volume, tf);
+        notes.extend(upright);
         let mut files: Vec<PathBuf> = self.file.iter().cloned().collect();
         if let TransferSource::Named(n) = &self.transfer {
             if Path::new(n).is_file() {

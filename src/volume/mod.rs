@@ -52,6 +52,10 @@ pub struct Volume {
     /// For f32 voxels: the values mapped to 0 and 1 on upload. `None` uses the data's
     /// minimum and maximum.
     pub range: Option<(f32, f32)>,
+    /// The direction of each voxel axis (x, y, z) in the patient's LPS frame (DICOM's:
+    /// +x left, +y posterior, +z superior), unit length, when the file states it (NIfTI
+    /// sform/qform, NRRD space directions, DICOM ImageOrientationPatient).
+    pub axes: Option<[[f32; 3]; 3]>,
 }
 
 impl Volume {
@@ -61,6 +65,7 @@ impl Volume {
             spacing,
             voxels,
             range: None,
+            axes: None,
         };
         v.validate()?;
         Ok(v)
@@ -120,28 +125,93 @@ impl Volume {
     /// Mirrors the voxels along the given axes (0 = x, 1 = y, 2 = z). Flipping two axes is
     /// a 180° rotation and keeps the data's handedness; one axis mirrors it.
     pub fn flip(&mut self, axes: [bool; 3]) {
-        fn flip_vec<T: Copy>(v: &mut [T], dims: [u32; 3], axes: [bool; 3]) {
-            let [nx, ny, nz] = dims.map(|d| d as usize);
-            let src = v.to_vec();
-            for z in 0..nz {
-                let sz = if axes[2] { nz - 1 - z } else { z };
-                for y in 0..ny {
-                    let sy = if axes[1] { ny - 1 - y } else { y };
-                    for x in 0..nx {
-                        let sx = if axes[0] { nx - 1 - x } else { x };
-                        v[(z * ny + y) * nx + x] = src[(sz * ny + sy) * nx + sx];
-                    }
+        self.reorder([0, 1, 2], axes);
+    }
+
+    /// Rearranges the voxels so that new axis `k` is old axis `perm[k]`, reversed where
+    /// `reverse[k]`: dims, spacing and [`Volume::axes`] follow.
+    pub fn reorder(&mut self, perm: [usize; 3], reverse: [bool; 3]) {
+        fn remap<T: Copy>(v: &mut Vec<T>, old: [usize; 3], perm: [usize; 3], rev: [bool; 3]) {
+            let old_stride = [1, old[0], old[0] * old[1]];
+            let n = perm.map(|a| old[a]);
+            let stride = perm.map(|a| old_stride[a]);
+            // Old index of new voxel (0,0,0) and the step per new axis, signed.
+            let mut base = 0isize;
+            let mut step = [0isize; 3];
+            for k in 0..3 {
+                if rev[k] {
+                    base += ((n[k] - 1) * stride[k]) as isize;
+                    step[k] = -(stride[k] as isize);
+                } else {
+                    step[k] = stride[k] as isize;
                 }
             }
+            let src = std::mem::take(v);
+            let mut out = Vec::with_capacity(src.len());
+            for z in 0..n[2] as isize {
+                for y in 0..n[1] as isize {
+                    let row = base + z * step[2] + y * step[1];
+                    out.extend((0..n[0] as isize).map(|x| src[(row + x * step[0]) as usize]));
+                }
+            }
+            *v = out;
         }
-        if !axes.iter().any(|&a| a) {
+        if perm == [0, 1, 2] && !reverse.iter().any(|&r| r) {
             return;
         }
+        let old = self.dims.map(|d| d as usize);
         match &mut self.voxels {
-            Voxels::U8(v) => flip_vec(v, self.dims, axes),
-            Voxels::U16(v) => flip_vec(v, self.dims, axes),
-            Voxels::F32(v) => flip_vec(v, self.dims, axes),
+            Voxels::U8(v) => remap(v, old, perm, reverse),
+            Voxels::U16(v) => remap(v, old, perm, reverse),
+            Voxels::F32(v) => remap(v, old, perm, reverse),
         }
+        self.dims = perm.map(|a| self.dims[a]);
+        self.spacing = perm.map(|a| self.spacing[a]);
+        if let Some(axes) = self.axes {
+            self.axes = Some(std::array::from_fn(|k| {
+                let d = axes[perm[k]];
+                if reverse[k] {
+                    d.map(|c| -c)
+                } else {
+                    d
+                }
+            }));
+        }
+    }
+
+    /// Turns a volume whose file states its orientation ([`Volume::axes`]) so the patient
+    /// stands upright facing the default camera: x towards the patient's left, y
+    /// superior (up), z anterior. Each voxel axis goes to the world axis its direction is
+    /// closest to (oblique scans are not resampled). Returns what was done, for the user,
+    /// or `None` when the file states no orientation or the volume is upright already.
+    pub fn turn_upright(&mut self) -> Option<String> {
+        let axes = self.axes?;
+        // LPS component (0 = L, 1 = P, 2 = S) each voxel axis is closest to, and its sign.
+        let dominant = axes.map(|d| {
+            let j = (0..3)
+                .max_by(|&a, &b| d[a].abs().total_cmp(&d[b].abs()))
+                .unwrap_or(0);
+            (j, d[j] >= 0.0)
+        });
+        // World x = L (+LPS x), y = S (+LPS z), z = A (−LPS y).
+        let want = [(0, true), (2, true), (1, false)];
+        let mut perm = [usize::MAX; 3];
+        let mut reverse = [false; 3];
+        for (k, &(lps, positive)) in want.iter().enumerate() {
+            let src = dominant.iter().position(|&(j, _)| j == lps)?;
+            perm[k] = src;
+            reverse[k] = dominant[src].1 != positive;
+        }
+        if perm == [0, 1, 2] && reverse == [false; 3] {
+            return None;
+        }
+        let name = |(j, pos): (usize, bool)| ["RL", "AP", "IS"][j].chars().nth(pos as usize);
+        let from: String = dominant.iter().filter_map(|&d| name(d)).collect();
+        self.reorder(perm, reverse);
+        Some(format!(
+            "turned upright from the file's orientation (voxel axes x, y, z pointed {from}; \
+             now L, S, A: head up, facing the camera); --flip applies after this"
+        ))
     }
 
     pub fn voxel_count(&self) -> u64 {
@@ -223,5 +293,58 @@ mod tests {
         let Voxels::U8(f) = &vol.voxels else { panic!() };
         // x flipped twice (identity), y and z once: voxel (0,0,0) comes from (0,1,1).
         assert_eq!(f[0], 9);
+    }
+
+    /// A marker on the patient's left, superior, anterior corner ends at the world's
+    /// +x, +y, +z corner, whatever the file's axes (anatomy, not arithmetic: the
+    /// expected corner follows from the patient directions alone).
+    #[test]
+    fn turning_upright_puts_left_superior_anterior_at_plus_x_y_z() {
+        let dims = [3u32, 4, 5];
+        let n = 60;
+        // (axes in LPS, the marker's voxel for the left-superior-anterior corner, the
+        // spacing along world x, y, z after turning: that of the voxel axis moved there)
+        type Case = ([[f32; 3]; 3], [usize; 3], [f32; 3]);
+        let cases: [Case; 3] = [
+            // NIfTI RAS+ (x right, y anterior, z superior): left = x 0.
+            (
+                [[-1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0]],
+                [0, 3, 4],
+                [1.0, 3.0, 2.0],
+            ),
+            // DICOM axial LPS (x left, y posterior, z superior): anterior = y 0.
+            (
+                [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+                [2, 0, 4],
+                [1.0, 3.0, 2.0],
+            ),
+            // Sagittal, slightly oblique: x anterior, y inferior, z left.
+            (
+                [[0.05, -0.99, 0.0], [0.0, 0.0, -1.0], [1.0, 0.0, 0.05]],
+                [2, 0, 4],
+                [3.0, 2.0, 1.0],
+            ),
+        ];
+        for (axes, [mx, my, mz], spacing) in cases {
+            let mut v = vec![0u8; n];
+            v[(mz * 4 + my) * 3 + mx] = 255;
+            let mut vol = Volume::new(dims, [1.0, 2.0, 3.0], Voxels::U8(v)).unwrap();
+            vol.axes = Some(axes);
+            let said = vol.turn_upright().expect("turned");
+            assert!(said.contains("L, S, A"), "{said}");
+            let Voxels::U8(f) = &vol.voxels else { panic!() };
+            let [nx, ny, nz] = vol.dims.map(|d| d as usize);
+            let at = f.iter().position(|&x| x == 255).unwrap();
+            assert_eq!(
+                (at % nx, (at / nx) % ny, at / (nx * ny)),
+                (nx - 1, ny - 1, nz - 1),
+                "{axes:?}"
+            );
+            // Spacing moved with its axis; the new axes point L, S, A.
+            assert_eq!(vol.spacing, spacing, "{axes:?}");
+            let new_axes = vol.axes.unwrap();
+            assert!(new_axes[0][0] > 0.9 && new_axes[1][2] > 0.9 && new_axes[2][1] < -0.9);
+            assert_eq!(vol.turn_upright(), None, "upright already");
+        }
     }
 }

@@ -197,6 +197,9 @@ pub(super) fn load_series(dir: &Path, opts: &LoadOptions) -> Result<Volume> {
         .iter()
         .all(|s| s.position.is_some() && s.orientation.is_some());
     let dz;
+    // The voxel axes in the patient's LPS frame: rows (x), columns (y), and the slice
+    // normal (z, the order the slices are sorted in below).
+    let mut axes = None;
     if all_positioned {
         let first = &slices[0];
         let o = first.orientation.unwrap();
@@ -216,6 +219,15 @@ pub(super) fn load_series(dir: &Path, opts: &LoadOptions) -> Result<Volume> {
             len > 0.5,
             "ImageOrientationPatient {o:?} does not give a slice normal"
         );
+        let unit = |v: [f64; 3]| {
+            let l = dot(v, v).sqrt().max(1e-12);
+            v.map(|c| (c / l) as f32)
+        };
+        axes = Some([
+            unit([o[0], o[1], o[2]]),
+            unit([o[3], o[4], o[5]]),
+            unit(normal),
+        ]);
         let d = |s: &Slice| dot(s.position.unwrap(), normal) / len;
         slices.sort_by(|a, b| d(a).total_cmp(&d(b)));
         let pos: Vec<f64> = slices.iter().map(d).collect();
@@ -278,6 +290,17 @@ pub(super) fn load_series(dir: &Path, opts: &LoadOptions) -> Result<Volume> {
 
     let rescaled = slices.iter().any(|s| s.slope != 1.0 || s.intercept != 0.0);
     let keep_unorm = !rescaled && opts.window.is_none() && !first.signed;
+    if let Some(l) = opts.limits {
+        // What the device cannot hold is refused before the volume is assembled, with the
+        // texel size the upload will use (as the other loaders do from their headers).
+        let texel = match first.bits_alloc {
+            8 if keep_unorm => 1,
+            16 if keep_unorm => 2,
+            _ => 4,
+        };
+        super::check_limits_texel(dims, texel, l.max_3d_extent, l.bytes_available)
+            .map_err(|e| anyhow!("{e} (from the headers; no volume was assembled)"))?;
+    }
     let voxels = match first.bits_alloc {
         8 if keep_unorm => {
             let mut v = Vec::with_capacity(per_slice * n);
@@ -313,6 +336,7 @@ pub(super) fn load_series(dir: &Path, opts: &LoadOptions) -> Result<Volume> {
         spacing,
         voxels,
         range: opts.window,
+        axes,
     })
 }
 

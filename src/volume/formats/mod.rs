@@ -30,8 +30,9 @@
 //!
 //! Spacing comes from [`LoadOptions::spacing`] if given, else [`RawLayout::spacing`] (raw
 //! files), else the file's header, else 1 along every axis. Orientation (NRRD `space
-//! directions`, NIfTI qform/sform, DICOM `ImageOrientationPatient`) is used only for voxel
-//! sizes and slice order: the voxels stay in file order, x fastest.
+//! directions`, NIfTI qform/sform, DICOM `ImageOrientationPatient`) gives voxel sizes,
+//! slice order and [`Volume::axes`] (the patient directions of the voxel axes): the voxels
+//! stay in file order, x fastest; [`Volume::turn_upright`] turns them when asked.
 //!
 //! # Errors
 //!
@@ -482,6 +483,7 @@ pub(crate) fn build_volume(
         spacing,
         voxels,
         range: opts.window,
+        axes: None,
     })
 }
 

@@ -79,7 +79,7 @@ fn finish(h: &Header, file: &[u8], what: &str, capped: bool, opts: &LoadOptions)
     check_size(what, file.len(), total)?;
     let spacing = resolve_spacing(opts, Some(h.pixdim))?;
     let data = &file[h.vox_offset..total];
-    build_volume(
+    let mut volume = build_volume(
         h.dims,
         spacing,
         h.sample,
@@ -87,7 +87,9 @@ fn finish(h: &Header, file: &[u8], what: &str, capped: bool, opts: &LoadOptions)
         data,
         h.rescale,
         opts,
-    )
+    )?;
+    volume.axes = h.axes;
+    Ok(volume)
 }
 
 #[derive(Debug)]
@@ -98,6 +100,8 @@ struct Header {
     pixdim: [f64; 3],
     vox_offset: usize,
     rescale: Option<Rescale>,
+    /// Voxel axes in LPS (from the sform, else the qform; `None` if neither is set).
+    axes: Option<[[f32; 3]; 3]>,
 }
 
 impl Header {
@@ -193,7 +197,9 @@ impl Header {
             ensure!(inter.is_finite(), "scl_inter {inter} is not finite");
             Rescale::non_identity(slope, inter)
         };
+        let axes = orientation(i16_at(252), i16_at(254), &f32_at);
         Ok(Header {
+            axes,
             big_endian,
             dims,
             sample,
@@ -208,4 +214,47 @@ impl Header {
             .checked_add(self.vox_offset)
             .ok_or_else(|| anyhow!("vox_offset + data size overflows"))
     }
+}
+
+/// The voxel axes' directions in the patient's LPS frame from a NIfTI-1 header: the sform
+/// when `sform_code` > 0, else the qform (quaternion, qfac = pixdim[0]) when
+/// `qform_code` > 0, else `None`. NIfTI's world is RAS, so x and y are negated.
+fn orientation(
+    qform_code: i16,
+    sform_code: i16,
+    f32_at: &dyn Fn(usize) -> f32,
+) -> Option<[[f32; 3]; 3]> {
+    // m[row][col]: column c is voxel axis c in RAS (scaled by the voxel size).
+    let m: [[f64; 3]; 3] = if sform_code > 0 {
+        std::array::from_fn(|r| std::array::from_fn(|c| f32_at(280 + 16 * r + 4 * c) as f64))
+    } else if qform_code > 0 {
+        let (b, c, d) = (f32_at(256) as f64, f32_at(260) as f64, f32_at(264) as f64);
+        let a = (1.0 - (b * b + c * c + d * d)).max(0.0).sqrt();
+        let qfac = if f32_at(76) < 0.0 { -1.0 } else { 1.0 };
+        [
+            [
+                a * a + b * b - c * c - d * d,
+                2.0 * (b * c - a * d),
+                2.0 * (b * d + a * c) * qfac,
+            ],
+            [
+                2.0 * (b * c + a * d),
+                a * a + c * c - b * b - d * d,
+                2.0 * (c * d - a * b) * qfac,
+            ],
+            [
+                2.0 * (b * d - a * c),
+                2.0 * (c * d + a * b),
+                (a * a + d * d - c * c - b * b) * qfac,
+            ],
+        ]
+    } else {
+        return None;
+    };
+    let axis = |c: usize| {
+        let v = [-m[0][c], -m[1][c], m[2][c]]; // RAS -> LPS
+        let l = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        (l.is_finite() && l > 0.0).then(|| v.map(|x| (x / l) as f32))
+    };
+    Some([axis(0)?, axis(1)?, axis(2)?])
 }

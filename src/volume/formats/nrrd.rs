@@ -189,7 +189,9 @@ pub(super) fn load(path: &Path, opts: &LoadOptions) -> Result<Volume> {
     };
     let big_endian = big_endian && encoding != Encoding::Ascii;
     let spacing = resolve_spacing(opts, spacing)?;
-    build_volume(dims, spacing, sample, big_endian, payload, None, opts)
+    let mut volume = build_volume(dims, spacing, sample, big_endian, payload, None, opts)?;
+    volume.axes = header_axes(&fields);
+    Ok(volume)
 }
 
 /// (end of header, start of data) for the first empty line.
@@ -236,6 +238,34 @@ fn parse_type(t: &str) -> Result<Sample> {
         "double" => Sample::F64,
         _ => bail!("unsupported type '{t}' (supported: (u)char, (u)short, (u)int, float, double)"),
     })
+}
+
+/// The voxel axes in the patient's LPS frame from `space` (a patient space: LPS, RAS or
+/// LAS, long or short names) and `space directions`; `None` when either is missing or the
+/// space is not anatomical (scanner-xyz, 3D-right-handed...). Malformed fields are left
+/// to [`header_spacing`] to report.
+fn header_axes(fields: &HashMap<String, String>) -> Option<[[f32; 3]; 3]> {
+    let sign: [f64; 3] = match fields.get("space")?.to_ascii_lowercase().as_str() {
+        "left-posterior-superior" | "lps" => [1.0, 1.0, 1.0],
+        "right-anterior-superior" | "ras" => [-1.0, -1.0, 1.0],
+        "left-anterior-superior" | "las" => [1.0, -1.0, 1.0],
+        _ => return None,
+    };
+    let mut axes = Vec::new();
+    for part in fields.get("space directions")?.split(')') {
+        if part.trim().is_empty() {
+            continue;
+        }
+        let inner = part.trim().strip_prefix('(')?;
+        let v = parse_numbers::<f64>(inner, "space directions").ok()?;
+        let v: [f64; 3] = v.try_into().ok()?;
+        let l = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if !(l.is_finite() && l > 0.0) {
+            return None;
+        }
+        axes.push(std::array::from_fn(|i| (sign[i] * v[i] / l) as f32));
+    }
+    axes.try_into().ok()
 }
 
 /// Spacing from `space directions` (vector lengths) or `spacings`.
