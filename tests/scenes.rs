@@ -465,7 +465,12 @@ fn huge_endless_and_special_inputs_are_refused_before_reading() {
     let long_hdr = nhdr("long.nhdr", "8 8 8", "long.raw");
     quick(
         &["render", &long_hdr, "-o", o],
-        &["long.nhdr", "long.raw", "20000000000 bytes", "promises 512 bytes"],
+        &[
+            "long.nhdr",
+            "long.raw",
+            "20000000000 bytes",
+            "promises 512 bytes",
+        ],
     );
     // 3. A FIFO would block forever.
     let fifo = d.join("pipe.nrrd");
