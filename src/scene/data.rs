@@ -1,0 +1,94 @@
+//! What loading a volume file decides that the user should see: its spacing, value range
+//! and window, transfer functions derived from its histogram when none were chosen, and a
+//! warning when its values fall where the transfer functions are transparent.
+
+use super::{Scene, VolumeSource};
+use crate::transfer::TransferFunctions;
+use crate::volume::Volume;
+
+impl Scene {
+    /// For volumes read from files: the transfer functions derived from the histogram
+    /// when the scene asks for that, notes on what was used, and a warning when the data
+    /// falls where the opacity is 0 (the image would be empty).
+    pub(super) fn check_data(
+        &self,
+        volume: &Volume,
+        tf: Option<TransferFunctions>,
+    ) -> (TransferFunctions, Vec<String>) {
+        let from_file = matches!(
+            self.volume,
+            VolumeSource::File { .. } | VolumeSource::Fetched { .. }
+        );
+        let mut notes = Vec::new();
+        let h = crate::volume::histogram::Histogram::of(volume);
+        let (lo, hi) = volume.value_range();
+        if from_file {
+            let window = match &self.volume {
+                VolumeSource::File {
+                    window: Some(w), ..
+                }
+                | VolumeSource::Fetched {
+                    window: Some(w), ..
+                } => format!("window {} .. {} → 0 .. 1", w.0, w.1),
+                _ => format!("{} .. {} → 0 .. 1 (no --window)", short(lo), short(hi)),
+            };
+            notes.push(format!(
+                "volume {}x{}x{} {}, spacing {:?}, values {} .. {} ({window})",
+                volume.dims[0],
+                volume.dims[1],
+                volume.dims[2],
+                volume.voxels.type_name(),
+                volume.spacing,
+                short(volume.raw_value(h.min)),
+                short(volume.raw_value(h.max)),
+            ));
+        }
+        let tf = match tf {
+            Some(tf) => tf,
+            None => {
+                let (tf, t) = TransferFunctions::for_histogram(&h);
+                notes.push(format!(
+                    "transfer functions derived from the histogram: background below {} \
+                     (normalised {:.3}), refractive medium (eta {}) above it, opaque above \
+                     {} ({:.3}); choose others with --tf",
+                    short(volume.raw_value(t.material)),
+                    t.material,
+                    crate::transfer::DERIVED_ETA,
+                    short(volume.raw_value(t.dense)),
+                    t.dense
+                ));
+                tf
+            }
+        };
+        if from_file && tf.max_opacity(h.min, h.max) <= 0.0 {
+            let opaque = match tf.opaque_range() {
+                Some((a, b)) => format!("only for normalised values {a:.3} .. {b:.3}"),
+                None => "nowhere".into(),
+            };
+            log::warn!(
+                "{}: the data's values ({} .. {}, normalised {:.3} .. {:.3}) all fall where \
+                 the transfer functions '{}' have opacity 0 (opacity > 0 {opaque}): the image \
+                 will be empty; map the data onto them with --window LO,HI (e.g. --window \
+                 {},{}) or choose other transfer functions with --tf",
+                self.name,
+                short(volume.raw_value(h.min)),
+                short(volume.raw_value(h.max)),
+                h.min,
+                h.max,
+                tf.name,
+                short(volume.raw_value(h.min)),
+                short(volume.raw_value(h.max)),
+            );
+        }
+        (tf, notes)
+    }
+}
+
+/// A data value for messages: integers as such, others to a sensible precision.
+fn short(x: f32) -> String {
+    if x.fract() == 0.0 || x.abs() >= 100.0 {
+        format!("{x:.0}")
+    } else {
+        format!("{x:.3}")
+    }
+}
