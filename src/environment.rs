@@ -178,7 +178,8 @@ impl EnvironmentMap {
     /// as sRGB. Errors name the file. NaN and infinity are refused. In an EXR whose R, G or
     /// B channel is lossy-compressed (DWAA, DWAB; B44, B44A for half floats; PXR24 for
     /// 32-bit floats) every negative value is set to 0 with one warning; elsewhere the rule
-    /// of [`EnvironmentMap::new`] holds.
+    /// of [`EnvironmentMap::new`] holds. A header that claims more pixels than the file can
+    /// hold (see `decode_budget`) is refused before anything of that size is allocated.
     pub fn load(path: &Path) -> Result<Self> {
         let origin = path.display().to_string();
         if let Some(why) = crate::volume::formats::why_not_a_file(path) {
@@ -191,18 +192,38 @@ impl EnvironmentMap {
             .unwrap_or_default();
         match ext.as_str() {
             "exr" => {
-                let img = exr::prelude::read_first_rgba_layer_from_file(
-                    path,
-                    |res, _| (res.width(), vec![[0f32; 4]; res.width() * res.height()]),
-                    |(w, px): &mut (usize, Vec<[f32; 4]>),
-                     pos,
-                     (r, g, b, _a): (f32, f32, f32, f32)| {
-                        px[pos.y() * *w + pos.x()] = [r, g, b, 1.0];
-                    },
-                )
-                .map_err(|e| {
-                    anyhow::anyhow!("environment map {origin}: not a readable EXR: {e}")
-                })?;
+                check_exr_size(path, &origin)?;
+                // On this thread (exr's decoding threads abort the process when a decoder
+                // panics, as exr 1.74's B44 decoder does on corrupt data in debug builds),
+                // with a panic turned into an error.
+                let decode = || {
+                    use exr::prelude::{ReadChannels as _, ReadLayers as _};
+                    exr::prelude::read()
+                        .no_deep_data()
+                        .largest_resolution_level()
+                        .rgba_channels(
+                            |res, _| (res.width(), vec![[0f32; 4]; res.width() * res.height()]),
+                            |(w, px): &mut (usize, Vec<[f32; 4]>),
+                             pos,
+                             (r, g, b, _a): (f32, f32, f32, f32)| {
+                                px[pos.y() * *w + pos.x()] = [r, g, b, 1.0];
+                            },
+                        )
+                        .first_valid_layer()
+                        .all_attributes()
+                        .non_parallel()
+                        .from_file(path)
+                };
+                let img = std::panic::catch_unwind(std::panic::AssertUnwindSafe(decode))
+                    .map_err(|_| {
+                        anyhow::anyhow!(
+                            "environment map {origin}: not a readable EXR: the decoder failed \
+                             (corrupt data)"
+                        )
+                    })?
+                    .map_err(|e| {
+                        anyhow::anyhow!("environment map {origin}: not a readable EXR: {e}")
+                    })?;
                 let layer = img.layer_data;
                 let compression = layer.encoding.compression;
                 let (r, g, b, _) = &layer.channel_data.channels;
@@ -221,7 +242,7 @@ impl EnvironmentMap {
                 )
             }
             "hdr" | "png" | "jpg" | "jpeg" => {
-                let img = image::open(path)
+                let img = open_image(path)
                     .with_context(|| format!("environment map {origin}: not a readable image"))?;
                 let linear = ext == "hdr";
                 let rgb = img.to_rgb32f();
@@ -252,6 +273,60 @@ impl EnvironmentMap {
         }
         acc.map(|a| (a / self.pixels.len() as f64) as f32)
     }
+}
+
+/// The most bytes decoding a map file of `file_len` bytes may allocate for its pixels:
+/// 64 MiB plus 4096 per byte of file (more than deflate's 1032:1 expands to once half
+/// floats are widened to f32 RGBA). A header that claims more is refused before a buffer
+/// of its size is allocated: a few hundred bytes could otherwise ask for gigabytes.
+fn decode_budget(file_len: u64) -> u64 {
+    (64u64 << 20).saturating_add(file_len.saturating_mul(4096))
+}
+
+/// Refuses an EXR whose header claims more pixels than [`decode_budget`] allows, or an RGB
+/// layer that is not twice as wide as high (the reader allocates the whole image, and
+/// buffers of whole lines, as soon as it has read the header).
+fn check_exr_size(path: &Path, origin: &str) -> Result<()> {
+    let meta = exr::meta::MetaData::read_from_file(path, false)
+        .map_err(|e| anyhow::anyhow!("environment map {origin}: not a readable EXR: {e}"))?;
+    let len = std::fs::metadata(path)
+        .with_context(|| format!("environment map {origin}"))?
+        .len();
+    for h in meta.headers.iter() {
+        let (w, ht) = (h.layer_size.width(), h.layer_size.height());
+        let bytes = w as u128 * ht as u128 * 16;
+        ensure!(
+            bytes <= decode_budget(len) as u128,
+            "environment map {origin}: not a readable EXR: its header says {w}x{ht} pixels \
+             ({bytes} bytes as f32 RGBA), more than a file of {len} bytes can hold (corrupt?)"
+        );
+    }
+    // The layer that will be read: the first with R, G and B channels.
+    let rgb = |h: &&exr::meta::header::Header| {
+        ["R", "G", "B"]
+            .iter()
+            .all(|n| h.channels.list.iter().any(|c| c.name == **n))
+    };
+    if let Some(h) = meta.headers.iter().find(rgb) {
+        let (w, ht) = (h.layer_size.width(), h.layer_size.height());
+        ensure!(
+            ht >= 1 && w == 2 * ht,
+            "{origin}: an equirectangular map must be twice as wide as high, this one is \
+             {w}x{ht}"
+        );
+    }
+    Ok(())
+}
+
+/// `image::open` with the decoder's buffer limited to [`decode_budget`] (and the crate's
+/// default of 512 MiB).
+fn open_image(path: &Path) -> image::ImageResult<image::DynamicImage> {
+    let len = std::fs::metadata(path).map_or(0, |m| m.len());
+    let mut reader = image::ImageReader::open(path)?;
+    let mut limits = image::Limits::default();
+    limits.max_alloc = Some(decode_budget(len).min(limits.max_alloc.unwrap_or(u64::MAX)));
+    reader.limits(limits);
+    reader.decode()
 }
 
 fn srgb_to_linear(c: f32) -> f32 {

@@ -10,7 +10,6 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use base64::Engine as _;
 use flate2::write::{GzEncoder, ZlibEncoder};
 use flate2::Compression;
 use refrakt::volume::formats::{
@@ -18,38 +17,10 @@ use refrakt::volume::formats::{
 };
 use refrakt::volume::{Volume, Voxels};
 
-const DIMS: [u32; 3] = [5, 4, 3];
-const N: usize = 60;
+#[path = "common/samples.rs"]
+mod samples;
+use samples::*;
 
-fn u8s() -> Vec<u8> {
-    (0..N).map(|i| (i * 7 % 256) as u8).collect()
-}
-fn u16s() -> Vec<u16> {
-    (0..N).map(|i| (i * 1009 % 65536) as u16).collect()
-}
-fn i16s() -> Vec<i16> {
-    (0..N)
-        .map(|i| (i as i32 * 997 % 4000 - 2000) as i16)
-        .collect()
-}
-fn f32s() -> Vec<f32> {
-    (0..N).map(|i| i as f32 * 0.25 - 3.0).collect()
-}
-fn le16(v: &[i16]) -> Vec<u8> {
-    v.iter().flat_map(|x| x.to_le_bytes()).collect()
-}
-fn be16(v: &[i16]) -> Vec<u8> {
-    v.iter().flat_map(|x| x.to_be_bytes()).collect()
-}
-fn le_u16(v: &[u16]) -> Vec<u8> {
-    v.iter().flat_map(|x| x.to_le_bytes()).collect()
-}
-fn be_u16(v: &[u16]) -> Vec<u8> {
-    v.iter().flat_map(|x| x.to_be_bytes()).collect()
-}
-fn le_f32(v: &[f32]) -> Vec<u8> {
-    v.iter().flat_map(|x| x.to_le_bytes()).collect()
-}
 fn as_f32<T: Copy + Into<f64>>(v: &[T]) -> Vec<f32> {
     v.iter().map(|&x| x.into() as f32).collect()
 }
@@ -63,9 +34,6 @@ fn zlib(data: &[u8]) -> Vec<u8> {
     let mut e = ZlibEncoder::new(Vec::new(), Compression::default());
     e.write_all(data).unwrap();
     e.finish().unwrap()
-}
-fn b64(data: &[u8]) -> String {
-    base64::engine::general_purpose::STANDARD.encode(data)
 }
 
 fn write(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {
@@ -652,10 +620,6 @@ fn nifti_errors_name_file_and_reason() {
 
 // ---------------------------------------------------------------------------------------
 // MetaImage
-
-fn mhd(fields: &str, edf: &str) -> String {
-    format!("ObjectType = Image\nNDims = 3\nDimSize = 5 4 3\n{fields}ElementDataFile = {edf}\n")
-}
 
 #[test]
 fn metaimage_round_trips() {
