@@ -22,9 +22,15 @@ fn main() -> ExitCode {
         // --help and --version print in full; a usage error is one line like every other
         // error (clap adds a usage excerpt and a pointer to --help below it).
         Err(e) if e.use_stderr() => {
+            // The message and its details (the missing arguments, a tip), up to the usage.
             let text = e.render().to_string();
-            let first = text.lines().find(|l| !l.trim().is_empty()).unwrap_or("");
-            eprintln!("{} (see --help)", first.trim_end_matches('.'));
+            let message: Vec<&str> = text
+                .lines()
+                .take_while(|l| !l.starts_with("Usage:"))
+                .map(str::trim)
+                .filter(|l| !l.is_empty() && !l.starts_with("For more information"))
+                .collect();
+            eprintln!("{} (see --help)", message.join(" ").trim_end_matches('.'));
             return ExitCode::from(2);
         }
         Err(e) => e.exit(),
