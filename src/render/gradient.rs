@@ -75,13 +75,8 @@ impl GradientVolume {
     /// Build the gradient volume of `volume` (a sampled 3D texture of the scalar value)
     /// now; returns it with the build's GPU time (scope "gradient volume").
     pub fn build(ctx: &Context, volume: &Image, sampler: &Sampler) -> Result<(Self, Timings)> {
-        let desc = ImageDesc {
-            kind: ImageKind::D3,
-            format: vk::Format::R16G16B16A16_SFLOAT,
-            extent: volume.extent(),
-            layers: 1,
-            usage: vk::usage::STORAGE | vk::usage::SAMPLED | vk::usage::TRANSFER_SRC,
-        };
+        let format = vk::Format::R16G16B16A16_SFLOAT;
+        let desc = ImageDesc::computed(ImageKind::D3, format, volume.extent(), 1);
         let image = Image::new(ctx, desc.clone(), "gradient volume")?;
         let scratch = Image::new(ctx, desc, "gradient volume (intermediate)")?;
         // Axis 0: volume -> image; axis 1: image -> scratch; axis 2: scratch -> image.

@@ -102,17 +102,9 @@ pub(crate) struct FrameTarget {
 
 impl FrameTarget {
     pub fn new(ctx: &Context, width: u32, height: u32, name: &str) -> Result<Self> {
-        let image = Image::new(
-            ctx,
-            ImageDesc {
-                kind: ImageKind::D2,
-                format: vk::Format::R32G32B32A32_SFLOAT,
-                extent: [width, height, 1],
-                layers: 1,
-                usage: vk::usage::STORAGE | vk::usage::SAMPLED | vk::usage::TRANSFER_SRC,
-            },
-            name,
-        )?;
+        let format = vk::Format::R32G32B32A32_SFLOAT;
+        let desc = ImageDesc::computed(ImageKind::D2, format, [width, height, 1], 1);
+        let image = Image::new(ctx, desc, name)?;
         let readback = Buffer::readback(ctx, image.layer_bytes()?, &format!("{name} readback"))?;
         Ok(Self {
             image,

@@ -42,13 +42,12 @@ impl PreintegrationTable {
         )?;
         let image = Image::new(
             ctx,
-            ImageDesc {
-                kind: ImageKind::D2Array,
-                format: vk::Format::R32G32B32A32_SFLOAT,
-                extent: [TABLE_SIZE, TABLE_SIZE, 1],
-                layers: 2,
-                usage: vk::usage::STORAGE | vk::usage::SAMPLED | vk::usage::TRANSFER_SRC,
-            },
+            ImageDesc::computed(
+                ImageKind::D2Array,
+                vk::Format::R32G32B32A32_SFLOAT,
+                [TABLE_SIZE, TABLE_SIZE, 1],
+                2,
+            ),
             "preintegration table",
         )?;
         let set = DescriptorSet::new(

@@ -195,6 +195,22 @@ pub struct ImageDesc {
     pub usage: vk::ImageUsageFlags,
 }
 
+impl ImageDesc {
+    /// An image a compute pass writes and later passes sample or copy out (storage,
+    /// sampled and transfer-source usage).
+    pub fn computed(kind: ImageKind, format: vk::Format, extent: [u32; 3], layers: u32) -> Self {
+        Self {
+            kind,
+            format,
+            extent,
+            layers,
+            usage: vk::ImageUsageFlags::STORAGE
+                | vk::ImageUsageFlags::SAMPLED
+                | vk::ImageUsageFlags::TRANSFER_SRC,
+        }
+    }
+}
+
 pub struct Image {
     ctx: Context,
     pub(crate) raw: vk::Image,

@@ -331,13 +331,7 @@ pub(super) fn load_series(dir: &Path, opts: &LoadOptions) -> Result<Volume> {
             Voxels::F32(v)
         }
     };
-    Ok(Volume {
-        dims,
-        spacing,
-        voxels,
-        range: opts.window,
-        axes,
-    })
+    Ok(super::loaded(dims, spacing, voxels, axes, opts))
 }
 
 fn fallback_dz(s: &Slice) -> f64 {

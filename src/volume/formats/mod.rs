@@ -445,13 +445,24 @@ pub(crate) fn build_volume(
             Voxels::F32(v)
         }
     };
-    Ok(Volume {
+    Ok(loaded(dims, spacing, voxels, None, opts))
+}
+
+/// A loaded volume: its voxels, the window the options ask for, the orientation read.
+pub(crate) fn loaded(
+    dims: [u32; 3],
+    spacing: [f32; 3],
+    voxels: Voxels,
+    axes: Option<[[f32; 3]; 3]>,
+    opts: &LoadOptions,
+) -> Volume {
+    Volume {
         dims,
         spacing,
         voxels,
         range: opts.window,
-        axes: None,
-    })
+        axes,
+    }
 }
 
 pub(crate) fn decode_u16(bytes: &[u8], big_endian: bool) -> Vec<u16> {
