@@ -122,8 +122,17 @@ vec3 value_gradient(vec3 p) {
     return jt * (vec3(dx, dy, dz) * dims);
 }
 
+// Features a frame does not use are switched off at pipeline creation (specialization
+// constants 1-4, set by render::refract from the frame's options), so their code costs
+// nothing: llvmpipe runs both sides of a branch on a uniform. Each is true exactly when
+// the runtime condition it guards can hold, so the images do not change.
+layout(constant_id = 1) const bool HAVE_SPECULAR = true;     // P.specular.y > 0
+layout(constant_id = 2) const bool HAVE_CLIP = true;         // a clipping plane is set
+layout(constant_id = 3) const bool HAVE_REFLECTIONS = true;  // P.refraction.y > 0.5
+layout(constant_id = 4) const bool HAVE_SOFT_LIGHT = true;   // softness > 0 (backward)
+
 bool clipped(vec3 p) {
-    if (dot(P.clip.xyz, P.clip.xyz) == 0.0) return false;
+    if (!HAVE_CLIP || dot(P.clip.xyz, P.clip.xyz) == 0.0) return false;
     vec3 w = (P.view_to_world * vec4(p, 1.0)).xyz;
     return dot(P.clip.xyz, w) > P.clip.w;
 }

@@ -267,7 +267,7 @@ void main() {
     vec3 light_prev = vec3(0.0);
     vec3 dir_prev = vec3(0.0);
     float softness = P.light_dir.w;
-    if (softness > 0.0) {
+    if (HAVE_SOFT_LIGHT && softness > 0.0) {
         vec3 dn = normalize(ld_here);
         float radius = softness * ref_step;                          // world units
         vec2 lateral = length(dn.xy) > 1e-6 ? normalize(dn.xy) : vec2(1.0, 0.0);
@@ -424,7 +424,9 @@ void main() {
         // the sum of each segment's own small F is a fraction of the face's, as for a
         // graded face, which physically reflects little.)
         float d_eta = eta_here - vd4.w;
-        if (abs(d_eta) > 1e-4 && (P.refraction.y > 0.5 || (P.specular.y > 0.0 && !unlit))) {
+        bool reflections = HAVE_REFLECTIONS && P.refraction.y > 0.5;
+        bool specular = HAVE_SPECULAR && P.specular.y > 0.0 && !unlit;
+        if (abs(d_eta) > 1e-4 && (reflections || specular)) {
             vec3 mid = vp - 0.5 * seg_len * dir;
             vec3 g = n_here;   // the face's orientation (see below)
             vec3 n = dot(g, g) > 1e-12 ? normalize(g) : dir;
@@ -454,7 +456,7 @@ void main() {
                 // the ray itself is the reflected light (its Snell step turns it back), so
                 // nothing is looked up. (Looking the environment up with F = 1 there and
                 // ending the ray was tried: no visible difference on the wine glass.)
-                if (P.refraction.y > 0.5 && sin_lo < 1.0) {
+                if (reflections && sin_lo < 1.0) {
                     float reflected = fresnel(sqrt(1.0 - sin_lo * sin_lo), eta_hi / eta_lo);
                     // Mirror the direction the ray had on the side it came from.
                     float eta_in = entering ? eta_lo : eta_hi;
@@ -469,7 +471,7 @@ void main() {
                 // where the plane cuts the face its light is a blur of the refracted and
                 // the unrefracted, whose mix depended on how the planes fell: the
                 // highlight banded at the plane spacing.)
-                if (P.specular.y > 0.0 && !unlit) {
+                if (specular) {
                     vec3 front = vp - dir * seg_len;
                     vec3 along = vec3(n.xy, 0.0);
                     float la = length(along);

@@ -679,3 +679,67 @@ fn ea_after_a_sweep_matches_a_fresh_ea_render() {
         assert_eq!(fresh.pixels, after.pixels);
     });
 }
+
+/// Issue 16, item 4: what a frame does not use (specular, clipping, Fresnel reflections,
+/// the backward soft-shadow kernel) is compiled out with specialization constants. The
+/// images equal those of the one pipeline with every feature on, up to the rounding of
+/// differently compiled code, for feature sets that switch each off and on; a wrongly
+/// derived feature set (a highlight, a clip or a reflection lost) would differ by far more.
+#[test]
+fn specialized_pipelines_render_what_the_general_one_renders() {
+    with_context(|ctx| {
+        let vol = ball(24, 0.3);
+        let mut tf = glass(1.5);
+        tf.opacity = Piecewise::new(vec![(0.0, [0.0]), (0.6, [0.0]), (0.9, [0.3])]);
+        tf.colour = Piecewise::constant([0.9, 0.5, 0.3]);
+        let cam = Camera {
+            azimuth: 20.0,
+            elevation: 25.0,
+            distance: 2.4,
+            fov_y: 35.0,
+            target: Vec3::ZERO,
+        };
+        let mut renderer = Renderer::new(ctx, &vol, &tf).unwrap();
+        let clip = Some((Vec3::new(1.0, 0.2, 0.0), 0.05));
+        // (specular, reflections, softness, clip, transport)
+        let cases = [
+            (0.0, false, 0.0, None, LightTransport::Forward),
+            (1.0, false, 0.0, clip, LightTransport::Forward),
+            (0.0, true, 1.0, None, LightTransport::Forward),
+            (1.0, true, 0.0, None, LightTransport::Backward),
+            (0.0, false, 1.0, clip, LightTransport::Backward),
+        ];
+        for (specular, reflections, softness, clip, transport) in cases {
+            let render = |renderer: &mut Renderer, specialize: bool| {
+                let mut opts = frame_options(32, 32, 1.0);
+                opts.sweep = SweepOptions {
+                    light: Light {
+                        softness,
+                        ..headlight(&cam, 0.0)
+                    },
+                    specular,
+                    reflections,
+                    clip,
+                    light_transport: transport,
+                    specialize,
+                    ..Default::default()
+                };
+                renderer.render(Model::Refract, &cam, &opts).unwrap().pixels
+            };
+            let general = render(&mut renderer, false);
+            let special = render(&mut renderer, true);
+            let lit = general.iter().filter(|p| p[0] > 0.01).count();
+            assert!(lit > 50, "the frame shows the ball ({lit} lit pixels)");
+            let max = general
+                .iter()
+                .zip(&special)
+                .flat_map(|(a, b)| (0..4).map(move |c| (a[c] - b[c]).abs()))
+                .fold(0.0f32, f32::max);
+            assert!(
+                max <= 1e-5,
+                "specular {specular}, reflections {reflections}, softness {softness}, clip \
+                 {clip:?}, {transport:?}: specialized differs by {max}"
+            );
+        }
+    });
+}

@@ -206,6 +206,11 @@ pub struct SweepOptions {
     /// the state forward (same passes, barriers, attachments and reads). The image is not
     /// a rendering; the time is the floor the sweep's optics add to.
     pub floor: bool,
+    /// Compile out of the plane shaders what this frame does not use (specular,
+    /// clipping, reflections, the backward soft-shadow kernel; specialization constants).
+    /// False keeps one pipeline with every feature on: the images are the same (tested),
+    /// only slower on drivers that run both sides of a uniform branch (llvmpipe).
+    pub specialize: bool,
 }
 
 impl Default for SweepOptions {
@@ -227,6 +232,7 @@ impl Default for SweepOptions {
             light_rays: 2,
             reflections: true,
             floor: false,
+            specialize: true,
         }
     }
 }
@@ -529,4 +535,4 @@ mod record;
 
 pub(crate) use params::EnvInputs;
 use params::*;
-pub(crate) use pass::SweepPass;
+pub(crate) use pass::{Features, SweepPass};

@@ -1,6 +1,8 @@
 //! The sweep's GPU resources: state images, render passes, framebuffers, descriptor sets
 //! and pipelines, made once per viewport size and ray budget.
 
+use std::collections::HashMap;
+
 use super::*;
 
 /// An image of two layers (the ping-pong of the plane sweep) with a view of each layer:
@@ -44,7 +46,11 @@ pub(crate) struct SweepPass {
     pub(crate) setup_set: DescriptorSet,
     pub(crate) composite_set: DescriptorSet,
     pub(crate) setup: ComputePipeline,
-    pub(crate) sweep: GraphicsPipeline,
+    /// The plane pipelines per feature set (specialization constants); the set with
+    /// every feature on is made with the pass, the others on the first frame that
+    /// needs them.
+    pub(crate) planes: HashMap<Features, PlanePipelines>,
+    pub(crate) have_gradient: bool,
     pub(crate) floor: GraphicsPipeline,
     pub(crate) forward: Option<ForwardPipelines>,
     pub(crate) irradiance: [StateImage; 2],
@@ -66,13 +72,116 @@ pub(crate) struct SweepPass {
     pub(crate) env_params: Buffer,
 }
 
-/// The forward transport's pipelines, all on the plane set's layout so that switching
-/// between them leaves the descriptor set bound.
-pub(crate) struct ForwardPipelines {
+/// The features a frame uses that the plane shaders can leave out: specialization
+/// constants 1-4 (glsl/sweep_common.glsl), each on exactly when its runtime condition
+/// can hold, so switching one off changes no image (tested) and costs nothing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub(crate) struct Features {
+    pub(crate) specular: bool,
+    pub(crate) clip: bool,
+    pub(crate) reflections: bool,
+    pub(crate) soft_light: bool,
+}
+
+impl Features {
+    pub(crate) const ALL: Features = Features {
+        specular: true,
+        clip: true,
+        reflections: true,
+        soft_light: true,
+    };
+
+    pub(crate) fn of(sweep: &SweepOptions) -> Self {
+        if !sweep.specialize {
+            return Self::ALL;
+        }
+        Self {
+            specular: sweep.specular > 0.0,
+            clip: sweep.clip.is_some(),
+            reflections: sweep.reflections,
+            soft_light: sweep.light.softness > 0.0,
+        }
+    }
+
+    /// Constant 0 (the gradient volume is bound), then 1-4.
+    fn constants(self, have_gradient: bool) -> [u32; 5] {
+        [
+            have_gradient as u32,
+            self.specular as u32,
+            self.clip as u32,
+            self.reflections as u32,
+            self.soft_light as u32,
+        ]
+    }
+}
+
+/// The plane pipelines that read the specialization constants: the backward sweep's
+/// and the forward transport's light-ray and viewing-ray passes.
+pub(crate) struct PlanePipelines {
+    pub(crate) sweep: GraphicsPipeline,
+    pub(crate) forward: Option<ForwardPlanes>,
+}
+
+impl PlanePipelines {
+    /// `passes`: the backward sweep's, the light rays', the viewing rays'.
+    fn new(
+        ctx: &Context,
+        passes: [&RenderPass; 3],
+        set: &DescriptorSet,
+        constants: [u32; 5],
+        forward: bool,
+    ) -> Result<Self> {
+        let plane = |fragment, pass, name: &str| {
+            let desc = GraphicsDesc {
+                constants: &constants,
+                ..GraphicsDesc::fullscreen(
+                    shaders::FULLSCREEN_VERT,
+                    fragment,
+                    pass,
+                    set,
+                    std::mem::size_of::<PlanePush>() as u32,
+                )
+            };
+            GraphicsPipeline::new(ctx, &desc, name)
+        };
+        let [sweep_pass, light_pass, view_pass] = passes;
+        Ok(Self {
+            sweep: plane(shaders::SWEEP_FRAG, sweep_pass, "sweep plane")?,
+            forward: if forward {
+                Some(ForwardPlanes {
+                    light: plane(
+                        shaders::SWEEP_LIGHT_FORWARD_FRAG,
+                        light_pass,
+                        "sweep light rays",
+                    )?,
+                    light_soft: plane(
+                        shaders::SWEEP_LIGHT_FORWARD_SOFT_FRAG,
+                        light_pass,
+                        "sweep light rays (soft)",
+                    )?,
+                    view: plane(
+                        shaders::SWEEP_VIEW_FORWARD_FRAG,
+                        view_pass,
+                        "sweep viewing rays",
+                    )?,
+                })
+            } else {
+                None
+            },
+        })
+    }
+}
+
+pub(crate) struct ForwardPlanes {
     pub(crate) light: GraphicsPipeline,
     pub(crate) light_soft: GraphicsPipeline,
-    pub(crate) splat: GraphicsPipeline,
     pub(crate) view: GraphicsPipeline,
+}
+
+/// The forward transport's pipelines that do not depend on the features, on the plane
+/// set's layout so that switching between them leaves the descriptor set bound.
+pub(crate) struct ForwardPipelines {
+    pub(crate) splat: GraphicsPipeline,
     /// Largest splat half-width the device's point sizes allow.
     pub(crate) max_half_width: f32,
 }
@@ -236,7 +345,7 @@ impl SweepPass {
         // without one the shaders compute normals on the fly (specialization constant 0)
         // and never read the binding, which the volume then fills.
         plane_bindings.push(Binding::Texture(gradient.unwrap_or(volume), sampler));
-        let constants = [gradient.is_some() as u32];
+        let have_gradient = gradient.is_some();
         let sweep_set = DescriptorSet::new(ctx, &plane_bindings, "sweep")?;
         let output = FrameTarget::new(ctx, width, height, "sweep frame")?;
         let env_params = Buffer::uniform::<EnvParams>(ctx, "environment params")?;
@@ -260,65 +369,31 @@ impl SweepPass {
 
         let setup =
             ComputePipeline::new(ctx, shaders::SWEEP_SETUP_COMP, &setup_set, 0, "sweep setup")?;
-        // Every plane pipeline: the plane set's layout, the plane push constant and the
-        // specialization constants; they differ in shaders, pass and primitives.
-        let plane_desc = |vertex, fragment, pass| GraphicsDesc {
-            constants: &constants,
-            ..GraphicsDesc::fullscreen(
-                vertex,
-                fragment,
-                pass,
-                &sweep_set,
-                std::mem::size_of::<PlanePush>() as u32,
-            )
-        };
-        let sweep = GraphicsPipeline::new(
-            ctx,
-            &plane_desc(shaders::FULLSCREEN_VERT, shaders::SWEEP_FRAG, &render_pass),
-            "sweep plane",
-        )?;
         let floor = GraphicsPipeline::new(
             ctx,
-            &GraphicsDesc {
-                constants: &[],
-                ..plane_desc(
-                    shaders::FULLSCREEN_VERT,
-                    shaders::SWEEP_FLOOR_FRAG,
-                    &render_pass,
-                )
-            },
+            &GraphicsDesc::fullscreen(
+                shaders::FULLSCREEN_VERT,
+                shaders::SWEEP_FLOOR_FRAG,
+                &render_pass,
+                &sweep_set,
+                std::mem::size_of::<PlanePush>() as u32,
+            ),
             "sweep floor plane",
         )?;
-        let forward = if ctx.info().large_points && ctx.info().fragment_atomics {
-            let plane = |fs, pass, name: &str| {
-                GraphicsPipeline::new(ctx, &plane_desc(shaders::FULLSCREEN_VERT, fs, pass), name)
-            };
+        let forward_capable = ctx.info().large_points && ctx.info().fragment_atomics;
+        let forward = if forward_capable {
             let largest_point = ctx.info().limits.point_size_range[1];
             Some(ForwardPipelines {
-                light: plane(
-                    shaders::SWEEP_LIGHT_FORWARD_FRAG,
-                    &light_pass,
-                    "sweep light rays",
-                )?,
-                light_soft: plane(
-                    shaders::SWEEP_LIGHT_FORWARD_SOFT_FRAG,
-                    &light_pass,
-                    "sweep light rays (soft)",
-                )?,
-                view: plane(
-                    shaders::SWEEP_VIEW_FORWARD_FRAG,
-                    &view_pass,
-                    "sweep viewing rays",
-                )?,
                 splat: GraphicsPipeline::new(
                     ctx,
                     &GraphicsDesc {
                         primitives: Primitives::AdditivePoints,
-                        constants: &[],
-                        ..plane_desc(
+                        ..GraphicsDesc::fullscreen(
                             shaders::LIGHT_SPLAT_VERT,
                             shaders::LIGHT_SPLAT_FRAG,
                             &splat_pass,
+                            &sweep_set,
+                            std::mem::size_of::<PlanePush>() as u32,
                         )
                     },
                     "light splat",
@@ -328,6 +403,14 @@ impl SweepPass {
         } else {
             None
         };
+        let all = PlanePipelines::new(
+            ctx,
+            [&render_pass, &light_pass, &view_pass],
+            &sweep_set,
+            Features::ALL.constants(have_gradient),
+            forward_capable,
+        )?;
+        let planes = HashMap::from([(Features::ALL, all)]);
         let composite = ComputePipeline::new(
             ctx,
             shaders::SWEEP_COMPOSITE_COMP,
@@ -346,7 +429,8 @@ impl SweepPass {
             setup_set,
             composite_set,
             setup,
-            sweep,
+            planes,
+            have_gradient,
             floor,
             forward,
             irradiance,
@@ -363,6 +447,22 @@ impl SweepPass {
             output,
             env_params,
         })
+    }
+
+    /// Make the plane pipelines for `features` if this pass has none yet (once per
+    /// feature set: a few hundred ms of shader compilation on lavapipe).
+    pub(crate) fn ensure_planes(&mut self, ctx: &Context, features: Features) -> Result<()> {
+        if !self.planes.contains_key(&features) {
+            let planes = PlanePipelines::new(
+                ctx,
+                [&self.render_pass, &self.light_pass, &self.view_pass],
+                &self.sweep_set,
+                features.constants(self.have_gradient),
+                self.forward.is_some(),
+            )?;
+            self.planes.insert(features, planes);
+        }
+        Ok(())
     }
 
     /// The same layers of all six state images, bound for the same use.

@@ -15,6 +15,9 @@ impl SweepPass {
     ) -> Result<SweepRecording> {
         let (camera, opts, read_back) = (inputs.camera, inputs.opts, inputs.read_back);
         let (ctx, info, env, sweep) = (inputs.ctx, inputs.info, &inputs.env, &opts.sweep);
+        // The plane pipelines with what this frame does not use compiled out.
+        let features = Features::of(sweep);
+        self.ensure_planes(ctx, features)?;
         let volume_dims = info.dims;
         let (eye, forward, right, up) = camera.frame();
         let travel = -sweep.light.towards.normalize();
@@ -193,11 +196,13 @@ impl SweepPass {
         // Bound once: between planes only push constants change, and the forward
         // transport switches pipelines (same layout, so the set stays bound).
         let forward = forward.filter(|_| !sweep.floor);
-        let plane_pipeline = match (sweep.floor, forward) {
+        let pipelines = &self.planes[&features];
+        let forward_planes = pipelines.forward.as_ref();
+        let plane_pipeline = match (sweep.floor, forward_planes.filter(|_| forward.is_some())) {
             (true, _) => &self.floor,
             (false, Some(f)) if soft => &f.light_soft,
             (false, Some(f)) => &f.light,
-            (false, None) => &self.sweep,
+            (false, None) => &pipelines.sweep,
         };
         rec.bind_graphics(plane_pipeline, &self.sweep_set, self.width, self.height);
         let light_images = [&self.rays[0].image, &self.rays[1].image];
@@ -300,8 +305,11 @@ impl SweepPass {
                         &self.view_framebuffers[write as usize],
                         &views,
                     )?;
-                    rec.bind_pipeline(&f.view);
-                    rec.draw_fullscreen(&f.view, bytemuck::bytes_of(&push))?;
+                    let view = &forward_planes
+                        .expect("made with the forward transport")
+                        .view;
+                    rec.bind_pipeline(view);
+                    rec.draw_fullscreen(view, bytemuck::bytes_of(&push))?;
                     rec.end_render_pass();
                     rec.bind_pipeline(plane_pipeline);
                 }
