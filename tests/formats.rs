@@ -403,44 +403,6 @@ fn nrrd_errors_name_file_and_reason() {
 // ---------------------------------------------------------------------------------------
 // NIfTI-1
 
-/// A NIfTI-1 header; `vox_offset` ≥ 352 leaves room for the 4 extension bytes.
-#[allow(clippy::too_many_arguments)]
-fn nifti_header(
-    dims: &[i16],
-    datatype: i16,
-    bitpix: i16,
-    pixdim: [f32; 3],
-    vox_offset: f32,
-    slope: f32,
-    inter: f32,
-    be: bool,
-) -> Vec<u8> {
-    let mut h = vec![0u8; vox_offset as usize];
-    let p16 = |h: &mut Vec<u8>, o: usize, v: i16| {
-        h[o..o + 2].copy_from_slice(&if be { v.to_be_bytes() } else { v.to_le_bytes() })
-    };
-    let p32 = |h: &mut Vec<u8>, o: usize, v: [u8; 4], r: [u8; 4]| {
-        h[o..o + 4].copy_from_slice(if be { &r } else { &v })
-    };
-    p32(&mut h, 0, 348i32.to_le_bytes(), 348i32.to_be_bytes());
-    p16(&mut h, 40, dims.len() as i16);
-    for (i, &d) in dims.iter().enumerate() {
-        p16(&mut h, 42 + 2 * i, d);
-    }
-    p16(&mut h, 70, datatype);
-    p16(&mut h, 72, bitpix);
-    let f = |h: &mut Vec<u8>, o: usize, v: f32| p32(h, o, v.to_le_bytes(), v.to_be_bytes());
-    f(&mut h, 76, 1.0);
-    for (i, &d) in pixdim.iter().enumerate() {
-        f(&mut h, 80 + 4 * i, d);
-    }
-    f(&mut h, 108, vox_offset);
-    f(&mut h, 112, slope);
-    f(&mut h, 116, inter);
-    h[344..348].copy_from_slice(b"n+1\0");
-    h
-}
-
 #[test]
 fn nifti_round_trips() {
     let dir = tempfile::tempdir().unwrap();

@@ -2,7 +2,10 @@
 //! meets with bad scene files or volumes too large for the device.
 
 mod common;
+#[path = "common/samples.rs"]
+mod samples;
 
+use samples::SMALL;
 use std::path::Path;
 
 use common::{refrakt, with_context};
@@ -33,27 +36,6 @@ fn fails_with(args: &[&str], out: &Path, needles: &[&str]) {
         out.display()
     );
 }
-
-const SMALL: &str = r#"
-name = "tiny"
-[volume]
-builtin = "sphere"
-size = 24
-[transfer]
-colour = [[0.0, 1.0, 0.0, 0.0]]
-opacity = [[0.0, 0.0], [0.5, 0.0], [0.6, 1.0], [1.0, 1.0]]
-[camera]
-eye = [0.0, 0.0, 2.5]
-fov = 30
-[environment]
-map = "none"
-[render]
-width = 24
-height = 20
-background = [0.0, 0.0, 1.0, 1.0]
-tonemap = "none"
-reflections = false
-"#;
 
 #[test]
 fn scene_file_sets_everything_and_flags_override_it() {

@@ -247,7 +247,7 @@ pub fn nrrd_seeds() -> Vec<Seed> {
 
 /// A NIfTI-1 header of `vox_offset` bytes and the offsets of its numbers.
 #[allow(clippy::too_many_arguments)]
-fn nifti_header(
+fn nifti_header_fields(
     dims: &[i16],
     datatype: i16,
     bitpix: i16,
@@ -257,29 +257,7 @@ fn nifti_header(
     inter: f32,
     be: bool,
 ) -> (Vec<u8>, Vec<Field>) {
-    let mut h = vec![0u8; vox_offset as usize];
-    let p16 = |h: &mut Vec<u8>, o: usize, v: i16| {
-        h[o..o + 2].copy_from_slice(&if be { v.to_be_bytes() } else { v.to_le_bytes() })
-    };
-    let p32 = |h: &mut Vec<u8>, o: usize, le: [u8; 4], big: [u8; 4]| {
-        h[o..o + 4].copy_from_slice(if be { &big } else { &le })
-    };
-    p32(&mut h, 0, 348i32.to_le_bytes(), 348i32.to_be_bytes());
-    p16(&mut h, 40, dims.len() as i16);
-    for (i, &d) in dims.iter().enumerate() {
-        p16(&mut h, 42 + 2 * i, d);
-    }
-    p16(&mut h, 70, datatype);
-    p16(&mut h, 72, bitpix);
-    let f = |h: &mut Vec<u8>, o: usize, v: f32| p32(h, o, v.to_le_bytes(), v.to_be_bytes());
-    f(&mut h, 76, 1.0);
-    for (i, &d) in pixdim.iter().enumerate() {
-        f(&mut h, 80 + 4 * i, d);
-    }
-    f(&mut h, 108, vox_offset);
-    f(&mut h, 112, slope);
-    f(&mut h, 116, inter);
-    h[344..348].copy_from_slice(b"n+1\0");
+    let h = nifti_header(dims, datatype, bitpix, pixdim, vox_offset, slope, inter, be);
     let mut fields = vec![
         Field::int(0, 4, be),
         Field::int(70, 2, be),
@@ -303,7 +281,7 @@ pub fn nifti() -> Vec<Seed> {
             "uint8 with pixdim",
             vec![nii(
                 "a.nii",
-                nifti_header(&d, 2, 8, [0.9, 1.1, 2.0], 352.0, 0.0, 0.0, false),
+                nifti_header_fields(&d, 2, 8, [0.9, 1.1, 2.0], 352.0, 0.0, 0.0, false),
                 &u8s(),
             )],
         ),
@@ -311,7 +289,7 @@ pub fn nifti() -> Vec<Seed> {
             "uint16 with scl_slope",
             vec![nii(
                 "b.nii",
-                nifti_header(&d, 512, 16, [1.0; 3], 352.0, 2.0, -5.0, false),
+                nifti_header_fields(&d, 512, 16, [1.0; 3], 352.0, 2.0, -5.0, false),
                 &le_u16(&u16s()),
             )],
         ),
@@ -319,7 +297,7 @@ pub fn nifti() -> Vec<Seed> {
             "int16 big-endian 4-D, extension",
             vec![nii(
                 "d.nii",
-                nifti_header(&[5, 4, 3, 1], 4, 16, [1.0; 3], 400.0, 0.0, 0.0, true),
+                nifti_header_fields(&[5, 4, 3, 1], 4, 16, [1.0; 3], 400.0, 0.0, 0.0, true),
                 &be16(&i16s()),
             )],
         ),
@@ -327,7 +305,7 @@ pub fn nifti() -> Vec<Seed> {
             "int32",
             vec![nii(
                 "f.nii",
-                nifti_header(&d, 8, 32, [1.0; 3], 352.0, 0.0, 0.0, false),
+                nifti_header_fields(&d, 8, 32, [1.0; 3], 352.0, 0.0, 0.0, false),
                 &ints,
             )],
         ),
@@ -335,7 +313,7 @@ pub fn nifti() -> Vec<Seed> {
             "float32 gzip",
             vec![nii(
                 "e.nii.gz",
-                nifti_header(&d, 16, 32, [2.0; 3], 352.0, 0.0, 0.0, false),
+                nifti_header_fields(&d, 16, 32, [2.0; 3], 352.0, 0.0, 0.0, false),
                 &le_f32(&f32s()),
             )
             .post(Post::Gzip)],
@@ -760,27 +738,6 @@ pub fn transfer() -> Vec<Seed> {
 
 // ---------------------------------------------------------------------------------------
 // Scene files
-
-const SMALL: &str = r#"
-name = "tiny"
-[volume]
-builtin = "sphere"
-size = 24
-[transfer]
-colour = [[0.0, 1.0, 0.0, 0.0]]
-opacity = [[0.0, 0.0], [0.5, 0.0], [0.6, 1.0], [1.0, 1.0]]
-[camera]
-eye = [0.0, 0.0, 2.5]
-fov = 30
-[environment]
-map = "none"
-[render]
-width = 24
-height = 20
-background = [0.0, 0.0, 1.0, 1.0]
-tonemap = "none"
-reflections = false
-"#;
 
 const FILES: &str = r#"
 name = "files"
