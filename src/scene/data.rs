@@ -20,8 +20,14 @@ impl Scene {
             VolumeSource::File { .. } | VolumeSource::Fetched { .. }
         );
         let mut notes = Vec::new();
+        if let (false, Some(tf)) = (from_file, &tf) {
+            // Built-in data with its own preset: nothing to report or derive.
+            return (tf.clone(), notes);
+        }
         let h = crate::volume::histogram::Histogram::of(volume);
+        // The raw values behind normalised ones (one pass over f32 data, not one a value).
         let (lo, hi) = volume.value_range();
+        let raw = |s: f32| lo + s * (hi - lo);
         if from_file {
             let window = match &self.volume {
                 VolumeSource::File {
@@ -39,8 +45,8 @@ impl Scene {
                 volume.dims[2],
                 volume.voxels.type_name(),
                 volume.spacing,
-                short(volume.raw_value(h.min)),
-                short(volume.raw_value(h.max)),
+                short(raw(h.min)),
+                short(raw(h.max)),
             ));
         }
         let tf = match tf {
@@ -51,10 +57,10 @@ impl Scene {
                     "transfer functions derived from the histogram: background below {} \
                      (normalised {:.3}), refractive medium (eta {}) above it, opaque above \
                      {} ({:.3}); choose others with --tf",
-                    short(volume.raw_value(t.material)),
+                    short(raw(t.material)),
                     t.material,
                     crate::transfer::DERIVED_ETA,
-                    short(volume.raw_value(t.dense)),
+                    short(raw(t.dense)),
                     t.dense
                 ));
                 tf
@@ -71,13 +77,13 @@ impl Scene {
                  will be empty; map the data onto them with --window LO,HI (e.g. --window \
                  {},{}) or choose other transfer functions with --tf",
                 self.name,
-                short(volume.raw_value(h.min)),
-                short(volume.raw_value(h.max)),
+                short(raw(h.min)),
+                short(raw(h.max)),
                 h.min,
                 h.max,
                 tf.name,
-                short(volume.raw_value(h.min)),
-                short(volume.raw_value(h.max)),
+                short(raw(h.min)),
+                short(raw(h.max)),
             );
         }
         (tf, notes)

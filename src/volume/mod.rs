@@ -257,12 +257,6 @@ impl Volume {
         }
     }
 
-    /// The raw value a normalised (uploaded) value `s` stands for.
-    pub fn raw_value(&self, s: f32) -> f32 {
-        let (lo, hi) = self.value_range();
-        lo + s * (hi - lo)
-    }
-
     pub fn texel_bytes(&self) -> Vec<u8> {
         match &self.voxels {
             Voxels::U8(v) => v.clone(),
