@@ -8,8 +8,8 @@ mod common;
 use common::*;
 use glam::Vec3;
 use refrakt::render::{
-    Camera, Dump, Light, LightTransport, Model, Planes, RenderOptions, Renderer, StateBuffer,
-    SweepOptions,
+    Camera, Dump, Levers, Light, LightTransport, Model, Planes, RenderOptions, Renderer,
+    StateBuffer, SweepOptions,
 };
 use refrakt::transfer::{Piecewise, TransferFunctions};
 use refrakt::vk::Context;
@@ -721,7 +721,10 @@ fn specialized_pipelines_render_what_the_general_one_renders() {
                     reflections,
                     clip,
                     light_transport: transport,
-                    specialize,
+                    levers: Levers {
+                        specialize,
+                        ..Levers::REFERENCE
+                    },
                     ..Default::default()
                 };
                 renderer.render(Model::Refract, &cam, &opts).unwrap().pixels

@@ -38,8 +38,8 @@ pub use sat::SummedAreaTable;
 
 pub use preintegration::{PreintegrationTable, TABLE_SIZE};
 pub use refract::{
-    Clamps, Dump, Light, LightTransport, Planes, StateBuffer, SweepOptions, SweepStats,
-    MAX_ETA_SCALE,
+    Clamps, Dump, Levers, Light, LightTransport, Planes, Region, StateBuffer, SweepOptions,
+    SweepStats, MAX_ETA_SCALE,
 };
 pub use tonemap::ToneMapPass;
 

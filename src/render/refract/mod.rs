@@ -206,11 +206,10 @@ pub struct SweepOptions {
     /// the state forward (same passes, barriers, attachments and reads). The image is not
     /// a rendering; the time is the floor the sweep's optics add to.
     pub floor: bool,
-    /// Compile out of the plane shaders what this frame does not use (specular,
-    /// clipping, reflections, the backward soft-shadow kernel; specialization constants).
-    /// False keeps one pipeline with every feature on: the images are the same (tested),
-    /// only slower on drivers that run both sides of a uniform branch (llvmpipe).
-    pub specialize: bool,
+    /// The speed levers (region drawn per plane, field texture, image-array reads,
+    /// specialization constants): each renders the same image as the plain
+    /// implementation within stated bounds (tested); `Levers::REFERENCE` is the plain one.
+    pub levers: Levers,
 }
 
 impl Default for SweepOptions {
@@ -232,7 +231,7 @@ impl Default for SweepOptions {
             light_rays: 2,
             reflections: true,
             floor: false,
-            specialize: true,
+            levers: Levers::default(),
         }
     }
 }
@@ -529,10 +528,12 @@ impl Clamps {
 /// Most light rays per screen pixel (`SweepOptions::light_rays`).
 pub const MAX_LIGHT_RAYS: u32 = 8;
 
+mod levers;
 mod params;
 mod pass;
 mod record;
 
+pub use levers::{Levers, Region};
 pub(crate) use params::EnvInputs;
 use params::*;
 pub(crate) use pass::{Features, SweepPass};

@@ -92,7 +92,7 @@ impl Features {
     };
 
     pub(crate) fn of(sweep: &SweepOptions) -> Self {
-        if !sweep.specialize {
+        if !sweep.levers.specialize {
             return Self::ALL;
         }
         Self {

@@ -1,0 +1,225 @@
+//! The sweep's speed levers (issue 16): each a switch between the plain implementation
+//! and a faster one that renders the same image (within stated bounds, tested), so that a
+//! performance engineer can time and compare them in one process (`refrakt bench
+//! variants`) and pick any combination from the command line (`--variant`).
+
+use std::fmt;
+
+use anyhow::{bail, Result};
+use serde::{Deserialize, Serialize};
+
+/// Which pixels each plane shades.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Region {
+    /// Every pixel of the viewport on every plane (the thesis' full-screen quad).
+    Full,
+    /// Plane i shades only the bounding rectangle of the screen projection of the part of
+    /// the volume box between the first plane and plane i, widened by a margin: a pixel
+    /// outside it has never seen the volume, so its state is still the setup's (a
+    /// straight camera ray, the unattenuated light).
+    Rect,
+}
+
+/// One combination of the levers. `Levers::default()` is the fastest (what renders
+/// unless told otherwise); [`Levers::REFERENCE`] is the plain implementation every
+/// faster one is compared against.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Levers {
+    /// Which pixels each plane shades.
+    pub region: Region,
+    /// Value and ∇η from a precomputed field texture (one fetch) instead of central
+    /// differences of the volume through the η transfer function (13 fetches).
+    pub field: bool,
+    /// State reads through one image-array view per buffer, indexed by the read layer,
+    /// instead of a choice between two per-layer views (which llvmpipe fetches both of).
+    pub arrays: bool,
+    /// Specialization constants compile out what a frame does not use (specular,
+    /// clipping, reflections, the backward soft-shadow kernel).
+    pub specialize: bool,
+}
+
+impl Default for Levers {
+    fn default() -> Self {
+        Self {
+            region: Region::Rect,
+            field: true,
+            arrays: true,
+            specialize: true,
+        }
+    }
+}
+
+impl Levers {
+    /// Every lever off: the plain implementation.
+    pub const REFERENCE: Levers = Levers {
+        region: Region::Full,
+        field: false,
+        arrays: false,
+        specialize: false,
+    };
+
+    /// The keys of [`Levers::parse`], with their values, for help texts.
+    pub const SYNTAX: &'static str =
+        "region=full|rect, field=off|on, arrays=off|on, specialize=off|on";
+
+    /// `default`, `reference`, or comma-separated `key=value` pairs applied to the
+    /// default (e.g. `region=full,field=off`); a pair may also follow `reference,` to
+    /// switch single levers on from the reference.
+    pub fn parse(spec: &str) -> Result<Levers> {
+        let spec = spec.trim();
+        if spec.is_empty() {
+            bail!(
+                "empty variant: give `default`, `reference` or {}",
+                Self::SYNTAX
+            );
+        }
+        let mut levers = Levers::default();
+        for (k, part) in spec.split(',').map(str::trim).enumerate() {
+            match part {
+                "default" if k == 0 => continue,
+                "reference" if k == 0 => {
+                    levers = Levers::REFERENCE;
+                    continue;
+                }
+                "default" | "reference" => {
+                    bail!("'{part}' can only start a variant (got '{spec}')")
+                }
+                _ => {}
+            }
+            let Some((key, value)) = part.split_once('=') else {
+                bail!(
+                    "'{part}' in variant '{spec}' is not key=value; the keys are {}",
+                    Self::SYNTAX
+                );
+            };
+            let (key, value) = (key.trim(), value.trim());
+            let on = |value: &str| match value {
+                "on" | "true" | "1" => Ok(true),
+                "off" | "false" | "0" => Ok(false),
+                _ => bail!("{key}={value}: expected on or off"),
+            };
+            match key {
+                "region" => {
+                    levers.region = match value {
+                        "full" => Region::Full,
+                        "rect" => Region::Rect,
+                        _ => bail!("region={value}: expected full or rect"),
+                    }
+                }
+                "field" => levers.field = on(value)?,
+                "arrays" => levers.arrays = on(value)?,
+                "specialize" => levers.specialize = on(value)?,
+                _ => bail!(
+                    "unknown lever '{key}' in variant '{spec}'; the keys are {}",
+                    Self::SYNTAX
+                ),
+            }
+        }
+        Ok(levers)
+    }
+
+    /// Each lever flipped away from `self` in turn: the variants that attribute a
+    /// combination's speed to its levers.
+    pub fn each_flipped(self) -> Vec<Levers> {
+        let mut out = Vec::new();
+        let mut v = self;
+        v.region = match self.region {
+            Region::Full => Region::Rect,
+            Region::Rect => Region::Full,
+        };
+        out.push(v);
+        for flip in [
+            |l: &mut Levers| l.field = !l.field,
+            |l: &mut Levers| l.arrays = !l.arrays,
+            |l: &mut Levers| l.specialize = !l.specialize,
+        ] {
+            let mut v = self;
+            flip(&mut v);
+            out.push(v);
+        }
+        out
+    }
+}
+
+impl fmt::Display for Levers {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let on = |b: bool| if b { "on" } else { "off" };
+        write!(
+            f,
+            "region={},field={},arrays={},specialize={}",
+            match self.region {
+                Region::Full => "full",
+                Region::Rect => "rect",
+            },
+            on(self.field),
+            on(self.arrays),
+            on(self.specialize)
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parse_round_trips_and_applies_to_the_default() {
+        let all = [Region::Full, Region::Rect];
+        for region in all {
+            for bits in 0..8u32 {
+                let l = Levers {
+                    region,
+                    field: bits & 1 != 0,
+                    arrays: bits & 2 != 0,
+                    specialize: bits & 4 != 0,
+                };
+                assert_eq!(Levers::parse(&l.to_string()).unwrap(), l);
+            }
+        }
+        let l = Levers::parse("region=full").unwrap();
+        assert_eq!(l.region, Region::Full);
+        assert!(l.field && l.arrays && l.specialize);
+        let r = Levers::parse("reference, field=on").unwrap();
+        assert_eq!(
+            r,
+            Levers {
+                field: true,
+                ..Levers::REFERENCE
+            }
+        );
+        assert_eq!(Levers::parse("default").unwrap(), Levers::default());
+    }
+
+    #[test]
+    fn bad_variants_say_what_is_wrong() {
+        for (spec, needle) in [
+            ("", "empty"),
+            ("region=polygon", "full or rect"),
+            ("field=maybe", "on or off"),
+            ("speed=11", "unknown lever 'speed'"),
+            ("field", "not key=value"),
+            ("field=on,reference", "can only start"),
+        ] {
+            let e = Levers::parse(spec).unwrap_err().to_string();
+            assert!(e.contains(needle), "{spec}: {e}");
+        }
+    }
+
+    #[test]
+    fn each_flipped_differs_in_exactly_one_lever() {
+        let base = Levers::default();
+        let flipped = base.each_flipped();
+        assert_eq!(flipped.len(), 4);
+        for v in flipped {
+            let diffs = [
+                v.region != base.region,
+                v.field != base.field,
+                v.arrays != base.arrays,
+                v.specialize != base.specialize,
+            ];
+            assert_eq!(diffs.iter().filter(|d| **d).count(), 1, "{v}");
+        }
+    }
+}
