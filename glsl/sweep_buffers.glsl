@@ -1,46 +1,66 @@
-// The six state buffers of the plane sweep, each a 2-layer image array sampled through
-// per-layer views (bindings 4 + 2 * buffer + layer). The read layer comes as a push
-// constant; both layers are always valid to the validation layer (GENERAL layout), so
-// nothing is rebound between planes.
+// The six state buffers of the plane sweep, each a 2-layer image array sampled through one
+// view of both layers; the read layer comes as a push constant. Both layers are always
+// valid to the validation layer (GENERAL layout), so nothing is rebound between planes.
 #ifndef REFRAKT_SWEEP_BUFFERS_GLSL
 #define REFRAKT_SWEEP_BUFFERS_GLSL
 
-layout(set = 0, binding = 4) uniform sampler2D light_colour_0;
-layout(set = 0, binding = 5) uniform sampler2D light_colour_1;
-layout(set = 0, binding = 6) uniform sampler2D light_direction_0;
-layout(set = 0, binding = 7) uniform sampler2D light_direction_1;
-layout(set = 0, binding = 8) uniform sampler2D view_position_0;
-layout(set = 0, binding = 9) uniform sampler2D view_position_1;
-layout(set = 0, binding = 10) uniform sampler2D view_direction_0;
-layout(set = 0, binding = 11) uniform sampler2D view_direction_1;
-layout(set = 0, binding = 12) uniform sampler2D colour_opacity_0;
-layout(set = 0, binding = 13) uniform sampler2D colour_opacity_1;
-layout(set = 0, binding = 14) uniform sampler2D medium_0;
-layout(set = 0, binding = 15) uniform sampler2D medium_1;
+layout(set = 0, binding = 4) uniform sampler2DArray light_colour;
+layout(set = 0, binding = 5) uniform sampler2DArray light_direction;
+layout(set = 0, binding = 6) uniform sampler2DArray view_position;
+layout(set = 0, binding = 7) uniform sampler2DArray view_direction;
+layout(set = 0, binding = 8) uniform sampler2DArray colour_opacity;
+layout(set = 0, binding = 9) uniform sampler2DArray medium;
+
+// The `arrays` lever (specialization constant 5): on, a state value of the read layer is
+// one fetch at the push-constant layer; off, the way the sweep first read it, a choice
+// between a fetch of layer 0 and one of layer 1 (then through a view per layer).
+// llvmpipe (Mesa 22.3) runs both sides of that choice even though the layer is uniform:
+// every state read cost two fetches, 19-21 % of a plane and 39 % of the floor kernel
+// (issue 16). Kept as the reference for `bench variants`.
+layout(constant_id = 5) const bool ARRAY_READS = true;
 
 // Bilinear interpolation with full f32 weights. Hardware filtering quantises the weights
 // (8 sub-texel bits on lavapipe, 8 on most GPUs): the light moves a small fraction of a
 // texel per plane, and that rounding, repeated every plane, shifted a ball lens' focus by
 // more than 10 % (measured). Clamp-to-edge addressing.
-vec4 bilinear(sampler2D tex, vec2 uv) {
-    ivec2 size = textureSize(tex, 0);
+struct Bilinear {
+    ivec2 texel[4];
+    float weight[4];
+};
+
+Bilinear bilinear_taps(ivec2 size, vec2 uv) {
     vec2 x = uv * vec2(size) - 0.5;
     ivec2 i = ivec2(floor(x));
     vec2 t = x - vec2(i);
     ivec2 hi = size - 1;
-    vec4 a = texelFetch(tex, clamp(i, ivec2(0), hi), 0);
-    vec4 b = texelFetch(tex, clamp(i + ivec2(1, 0), ivec2(0), hi), 0);
-    vec4 c = texelFetch(tex, clamp(i + ivec2(0, 1), ivec2(0), hi), 0);
-    vec4 d = texelFetch(tex, clamp(i + ivec2(1, 1), ivec2(0), hi), 0);
-    return mix(mix(a, b, t.x), mix(c, d, t.x), t.y);
+    Bilinear b;
+    for (int k = 0; k < 4; ++k) {
+        ivec2 o = ivec2(k & 1, k >> 1);
+        b.texel[k] = clamp(i + o, ivec2(0), hi);
+        b.weight[k] = (o.x == 1 ? t.x : 1.0 - t.x) * (o.y == 1 ? t.y : 1.0 - t.y);
+    }
+    return b;
 }
+
+vec4 bilinear_layer(sampler2DArray tex, uint layer, vec2 uv) {
+    Bilinear b = bilinear_taps(textureSize(tex, 0).xy, uv);
+    vec4 sum = vec4(0.0);
+    for (int k = 0; k < 4; ++k) sum += b.weight[k] * texelFetch(tex, ivec3(b.texel[k], layer), 0);
+    return sum;
+}
+
+// Fetch texel `pixel` of layer `layer` of `tex` as the `arrays` lever says.
+#define FETCH_LAYER(tex, pixel, layer) \
+    (ARRAY_READS ? texelFetch(tex, ivec3((pixel), (layer)), 0) \
+                 : (layer) == 0u ? texelFetch(tex, ivec3((pixel), 0), 0) \
+                                 : texelFetch(tex, ivec3((pixel), 1), 0))
 
 // A state value at an arbitrary position (bilinear) of the read layer.
 #define READ_BUFFER(name, layer, uv) \
-    ((layer) == 0u ? bilinear(name##_0, (uv)) : bilinear(name##_1, (uv)))
+    (ARRAY_READS ? bilinear_layer(name, (layer), (uv)) \
+                 : (layer) == 0u ? bilinear_layer(name, 0u, (uv)) : bilinear_layer(name, 1u, (uv)))
 
 // A state value of this pixel of the read layer (exact, one fetch).
-#define READ_PIXEL(name, layer, pixel) \
-    ((layer) == 0u ? texelFetch(name##_0, (pixel), 0) : texelFetch(name##_1, (pixel), 0))
+#define READ_PIXEL(name, layer, pixel) FETCH_LAYER(name, pixel, layer)
 
 #endif

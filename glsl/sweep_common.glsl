@@ -72,26 +72,39 @@ float eta_of(float s) {
     return P.refraction.x == 1.0 ? eta : 1.0 + P.refraction.x * (eta - 1.0);
 }
 
-// Value, gradient of the value and gradient of eta at view-space p (view-space units), by
-// central differences one voxel apart (eq. 3.16); the six fetches serve both gradients,
-// eta_tf is applied to the neighbours before differencing (thesis sect. 5.2).
-void sample_field(vec3 p, out float value, out vec3 grad_f, out vec3 grad_eta) {
+// The `field` lever (specialization constant 6): value and grad eta from the field
+// texture (render::field), one trilinear fetch, where it is bound.
+layout(constant_id = 6) const bool HAVE_FIELD = true;
+layout(set = 0, binding = 17) uniform sampler3D field_texture;
+
+// Value and gradient of eta at view-space p (view-space units), by central differences
+// one voxel apart (eq. 3.16), eta_tf applied to the neighbours before differencing
+// (thesis sect. 5.2): from the field texture, which holds them per voxel, or from seven
+// volume fetches and six eta lookups.
+void sample_field(vec3 p, out float value, out vec3 grad_eta) {
     vec3 t = to_tex(p);
-    vec3 h = 1.0 / P.volume_dims.xyz;
-    value = value_at_tex(t);
-    vec3 gf, ge;
-    for (int k = 0; k < 3; ++k) {
-        vec3 e = vec3(0.0);
-        e[k] = h[k];
-        float a = value_at_tex(t + e);
-        float b = value_at_tex(t - e);
-        gf[k] = (a - b) / (2.0 * h[k]);
-        ge[k] = (eta_of(a) - eta_of(b)) / (2.0 * h[k]);
+    vec3 ge;
+    if (HAVE_FIELD) {
+        if (any(lessThan(t, vec3(0.0))) || any(greaterThan(t, vec3(1.0)))) {
+            value = 0.0;
+            grad_eta = vec3(0.0);
+            return;
+        }
+        vec4 f = textureLod(field_texture, t, 0.0);
+        value = f.x;
+        // eta' = 1 + k (eta_tf - 1): grad eta' = k grad eta_tf.
+        ge = P.refraction.x * f.yzw;
+    } else {
+        vec3 h = 1.0 / P.volume_dims.xyz;
+        value = value_at_tex(t);
+        for (int k = 0; k < 3; ++k) {
+            vec3 e = vec3(0.0);
+            e[k] = h[k];
+            ge[k] = (eta_of(value_at_tex(t + e)) - eta_of(value_at_tex(t - e))) / (2.0 * h[k]);
+        }
     }
     // d/d(view) = J^T d/d(tex), J = d(tex)/d(view).
-    mat3 jt = transpose(mat3(P.view_to_tex));
-    grad_f = jt * gf;
-    grad_eta = jt * ge;
+    grad_eta = transpose(mat3(P.view_to_tex)) * ge;
 }
 
 // The exact gradient of the trilinearly interpolated value at view-space p (view-space

@@ -11,10 +11,10 @@
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(push_constant) uniform Push { uint layer; } pc;
-layout(set = 0, binding = 16, rgba32f) uniform writeonly image2D frame;
-layout(set = 0, binding = 17) uniform sampler2D env_map;
-layout(set = 0, binding = 18) uniform sampler2D env_sat;
-layout(set = 0, binding = 19) uniform EnvParams {
+layout(set = 0, binding = 10, rgba32f) uniform writeonly image2D frame;
+layout(set = 0, binding = 11) uniform sampler2D env_map;
+layout(set = 0, binding = 12) uniform sampler2D env_sat;
+layout(set = 0, binding = 13) uniform EnvParams {
     vec4 info;   // x = 1 when a map is used, y = rotation about world up (radians),
                  // z = 1 for the SAT footprint, 0 for a single bilinear lookup
     vec4 mean;   // the SAT's mean offset

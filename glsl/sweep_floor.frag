@@ -21,8 +21,8 @@ layout(location = 3) out vec4 out_view_direction;
 layout(location = 4) out vec4 out_colour_opacity;
 layout(location = 5) out vec4 out_medium;
 
-#define CARRY(name) \
-    (pc.read_layer == 0u ? texelFetch(name##_0, p, 0) : texelFetch(name##_1, p, 0))
+// Read like the plane shaders read their own pixel (per the `arrays` lever).
+#define CARRY(name) READ_PIXEL(name, pc.read_layer, p)
 
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);

@@ -6,29 +6,27 @@
 // Irradiance of the last two planes, ping-ponged like the state (plane i in layer i % 2):
 // rgb = flux per unit plane area, relative to the unobstructed light (an unobstructed
 // beam reads the light colour), a unused.
-layout(set = 0, binding = 16) uniform sampler2D irradiance_0;
-layout(set = 0, binding = 17) uniform sampler2D irradiance_1;
+layout(set = 0, binding = 10) uniform sampler2DArray irradiance;
 // xyz = sum of luminance-weighted unit light directions, w = sum of the weights.
-layout(set = 0, binding = 18) uniform sampler2D irradiance_direction_0;
-layout(set = 0, binding = 19) uniform sampler2D irradiance_direction_1;
+layout(set = 0, binding = 11) uniform sampler2DArray irradiance_direction;
 
 // How often the sweep had to bend physics, summed over pixels and planes (read back and
 // printed): 0 = light direction clamped to MIN_FORWARD, 1 = light ray turned back and
 // dropped, 2 = viewing-ray direction clamped, 3 = backward step's intensity gain clamped.
-layout(set = 0, binding = 20, std430) buffer Counters {
+layout(set = 0, binding = 12, std430) buffer Counters {
     uint clamps[4];
 } counters;
 
 // The environment map for Fresnel reflections of viewing rays (a 2 x 1 black map when
 // there is none; SweepParams.refraction.z says whether to use it).
-layout(set = 0, binding = 25) uniform sampler2D reflection_env;
+layout(set = 0, binding = 15) uniform sampler2D reflection_env;
 
 // The smoothed gradient of the value (render::gradient: a derivative-of-Gaussian filter,
 // sigma 1.5 voxels, built once per volume): xyz in value units per voxel, w the smoothed
 // value. Specialization constant 0 says whether it is bound (when it would not fit in
 // memory, the volume stands in for it and is never read through this binding).
 layout(constant_id = 0) const bool HAVE_GRADIENT_VOLUME = true;
-layout(set = 0, binding = 26) uniform sampler3D gradient_volume;
+layout(set = 0, binding = 16) uniform sampler3D gradient_volume;
 
 // Direction of a surface at view-space p, view-space units, zero outside the volume box.
 // With the gradient volume: one trilinear fetch, within ~0.1° of a face's normal not

@@ -56,7 +56,7 @@ const float PI = 3.14159265358979;
 // that is not there must not bend the light that is. Where no light arrives at all, plain
 // bilinear weights keep the direction field defined.
 void light_at(vec2 uv, uint layer, out vec3 light, out vec3 dir) {
-    ivec2 size = textureSize(light_colour_0, 0);
+    ivec2 size = textureSize(light_colour, 0).xy;
     vec2 x = uv * vec2(size) - 0.5;
     ivec2 i = ivec2(floor(x));
     vec2 t = x - vec2(i);
@@ -304,8 +304,8 @@ void main() {
     }
 
     float f_p, f_lp;
-    vec3 grad_f_p, grad_eta_p;
-    sample_field(p, f_p, grad_f_p, grad_eta_p);
+    vec3 grad_eta_p;
+    sample_field(p, f_p, grad_eta_p);
     f_lp = value_at_tex(to_tex(lp));
     float light_len = length(p - lp);
     vec3 seg_c; float seg_a; vec3 seg_m;
@@ -325,13 +325,34 @@ void main() {
     vec4 M4 = READ_PIXEL(medium, R, pixel);
     vec3 vp = vp4.xyz;
     vec3 vd = vd4.xyz;
+    // A pixel's first plane in the drawn region (render::refract::region): its ray is
+    // still where the setup put it, on plane 0, and has crossed empty space since (the
+    // region bounds the box up to beyond this plane). Straight on to this plane, as the
+    // full-screen sweep would have moved it; the value behind it stays the empty space's.
+    // Its skin chain (below) starts as the full-screen sweep's would have, at the light
+    // before any matter: the light of the previous plane where the ray is now.
+    if (vp.z < pc.depth - 0.5 * ds) {   // a whole plane or more behind
+        // Plane by plane, as the full-screen sweep steps it (the same arithmetic, so the
+        // same rounding: in a noisy medium a ray that lands a rounding error elsewhere
+        // may take another turn).
+        vec3 d0 = normalize(vd);
+        for (int k = 0; k < int(P.planes.z) && vp.z < pc.depth - 0.5 * ds; ++k) {
+            vp = vp + d0 * (ds / d0.z);
+        }
+#if FORWARD_LIGHT
+        vec3 l0 = READ_BUFFER(irradiance, R, project(vp)).rgb;
+#else
+        vec3 l0 = READ_BUFFER(light_colour, R, project(vp)).rgb;
+#endif
+        if (P.unlit == 0u) M4.w = chain_encode(dot(l0, vec3(0.2126, 0.7152, 0.0722)), 0.0);
+    }
     vec3 C = CA.rgb;
     float A = CA.a;
     vec3 M = M4.rgb;
 
     float f_v;
-    vec3 grad_f, grad_eta;
-    sample_field(vp, f_v, grad_f, grad_eta);
+    vec3 grad_eta;
+    sample_field(vp, f_v, grad_eta);
     float eta_here = eta_of(f_v);
     vec3 dir = normalize(vd);
     float seg_len = ds / dir.z;   // arc length from plane i-1 to this plane

@@ -6,11 +6,9 @@
 #define REFRAKT_SWEEP_RAYS_GLSL
 
 // rgb = flux, a = view x on the ray's plane.
-layout(set = 0, binding = 21) uniform sampler2D rays_flux_0;
-layout(set = 0, binding = 22) uniform sampler2D rays_flux_1;
+layout(set = 0, binding = 13) uniform sampler2DArray rays_flux;
 // xyz = v = eta dx/ds, w = view y on the ray's plane.
-layout(set = 0, binding = 23) uniform sampler2D rays_direction_0;
-layout(set = 0, binding = 24) uniform sampler2D rays_direction_1;
+layout(set = 0, binding = 14) uniform sampler2DArray rays_direction;
 
 ivec2 ray_grid() { return ivec2(P.light_rays.xy); }
 
@@ -25,7 +23,6 @@ bool ray_exists(ivec2 ij) {
     return all(greaterThanEqual(ij, ivec2(0))) && all(lessThan(ij, ray_grid()));
 }
 
-#define READ_RAY(name, layer, r) \
-    ((layer) == 0u ? texelFetch(name##_0, ray_texel(r), 0) : texelFetch(name##_1, ray_texel(r), 0))
+#define READ_RAY(name, layer, r) FETCH_LAYER(name, ray_texel(r), layer)
 
 #endif

@@ -8,6 +8,7 @@
 //! behind the interface in `model.rs`.
 
 mod ea;
+pub mod field;
 pub mod gradient;
 /// Limits shared with the shaders (build.rs defines each as a GLSL macro).
 pub mod limits;
@@ -53,6 +54,11 @@ pub struct Renderer {
     gradient_status: gradient::GradientStatus,
     gradient_budget: Option<u64>,
     gradient_timings: Timings,
+    /// The field texture (value, ∇η) for the sweep's `field` lever: made with the gradient
+    /// volume when it fits beside it, rebuilt with the transfer functions.
+    field: Option<field::FieldTexture>,
+    field_checked: bool,
+    field_dirty: bool,
     tf: TransferFunctions,
     tf_image: Image,
     tf_dirty: bool,
@@ -151,6 +157,9 @@ impl Renderer {
             gradient_status: gradient::GradientStatus::Unbuilt,
             gradient_budget: None,
             gradient_timings: Timings::default(),
+            field: None,
+            field_checked: false,
+            field_dirty: false,
             tf: tf.clone(),
             tf_image,
             tf_dirty: true,
@@ -190,6 +199,7 @@ impl Renderer {
             upload::write_transfer_texture(&self.ctx, tf, &self.tf_image)?;
             self.tf = tf.clone();
             self.tf_dirty = true;
+            self.field_dirty = true;
         }
         Ok(())
     }
@@ -233,6 +243,39 @@ impl Renderer {
         Ok(t)
     }
 
+    /// Rebuild the field texture now if the transfer functions changed since its last
+    /// build (and it exists: the first refractive frame makes it); returns the GPU timings
+    /// of the build, scope "field texture" (empty if nothing was rebuilt).
+    pub fn update_field(&mut self) -> Result<Timings> {
+        let (Some(field), true) = (self.field.as_mut(), self.field_dirty) else {
+            return Ok(Timings::default());
+        };
+        let (volume, tf) = (&self.volume_tex, &self.tf_image);
+        let t = self
+            .ctx
+            .execute(|rec| field.record_build(rec, volume, tf))?;
+        self.field_dirty = false;
+        Ok(t)
+    }
+
+    /// Whether the sweep has its field texture (the `field` lever can take effect).
+    pub fn has_field_texture(&self) -> bool {
+        self.field.is_some()
+    }
+
+    /// The field texture read back (value, ∂η/∂x, ∂η/∂y, ∂η/∂z per voxel, x fastest; the
+    /// gradient in texture units), if it exists and is built (for tests and diagnostics).
+    pub fn read_field_texture(&mut self) -> Result<Option<Vec<[f32; 4]>>> {
+        self.update_field()?;
+        match &self.field {
+            Some(f) if f.builds() > 0 => {
+                let bytes = self.ctx.read_image(f.image(), 0)?;
+                Ok(Some(bytemuck::cast_slice(&bytes).to_vec()))
+            }
+            _ => Ok(None),
+        }
+    }
+
     /// Everything [`Renderer::render`] and [`Renderer::record`] would refuse for these
     /// arguments, checked without recording anything: camera, options, the step limit and,
     /// for the sweep, the light's side, the camera outside the box and dump planes.
@@ -258,6 +301,7 @@ impl Renderer {
     pub fn render(&mut self, model: Model, camera: &Camera, opts: &RenderOptions) -> Result<Frame> {
         self.check(model, camera, opts)?;
         self.ensure_gradient(model)?;
+        self.ensure_field(model)?;
         let ctx = self.ctx.clone();
         let mut recorded = None;
         let timings = ctx.execute(|rec| {
@@ -308,6 +352,7 @@ impl Renderer {
         );
         self.check(model, camera, opts)?;
         self.ensure_gradient(model)?;
+        self.ensure_field(model)?;
         let r = self.record_inner(rec, model, camera, opts, false)?;
         Ok(RecordedFrame {
             image: &self.target(model)?.image,
@@ -346,6 +391,33 @@ impl Renderer {
         Ok(())
     }
 
+    /// Make the field texture if `model` needs it, once: beside the gradient volume (8
+    /// bytes per voxel once built) in the same budget; built in the frame's recording.
+    fn ensure_field(&mut self, model: Model) -> Result<()> {
+        if !model::needs_gradient(model) || self.field_checked {
+            return Ok(());
+        }
+        self.field_checked = true;
+        let extent = self.volume_tex.extent();
+        let (gradient_build, device_budget) = gradient::GradientVolume::memory(&self.ctx, extent);
+        let budget = self.gradient_budget.unwrap_or(device_budget);
+        let gradient = if self.gradient.is_some() {
+            gradient_build / 2
+        } else {
+            0
+        };
+        if gradient + field::FieldTexture::bytes(extent) <= budget {
+            self.field = Some(field::FieldTexture::new(
+                &self.ctx,
+                &self.volume_tex,
+                &self.tf_image,
+                &self.linear,
+            )?);
+            self.field_dirty = true;
+        }
+        Ok(())
+    }
+
     /// The recording shared by `render` and `record`; arguments already checked.
     fn record_inner(
         &mut self,
@@ -359,6 +431,10 @@ impl Renderer {
             self.preint.record_build(rec, &self.tf)?;
             self.tf_dirty = false;
         }
+        if let (Some(field), true) = (self.field.as_mut(), self.field_dirty) {
+            field.record_build(rec, &self.volume_tex, &self.tf_image)?;
+            self.field_dirty = false;
+        }
 
         let inputs = Inputs {
             camera,
@@ -368,6 +444,7 @@ impl Renderer {
             info: self.volume_info,
             volume: &self.volume_tex,
             gradient: self.gradient.as_ref().map(|g| g.image()),
+            field: self.field.as_ref().map(|f| f.image()),
             tf: &self.tf_image,
             preint: self.preint.image(),
             linear: &self.linear,

@@ -34,6 +34,8 @@ pub(crate) struct Inputs<'a> {
     pub volume: &'a Image,
     /// The smoothed gradient volume, if a model that needs it asked for it and it fits.
     pub gradient: Option<&'a Image>,
+    /// The field texture (value, ∇η; render::field), if the sweep may use it.
+    pub field: Option<&'a Image>,
     /// The transfer functions as a 1D-per-row image.
     pub tf: &'a Image,
     pub preint: &'a Image,

@@ -18,7 +18,7 @@ mod swapchain;
 
 pub use ash::vk::{Format, ImageUsageFlags};
 pub use barriers::Access;
-pub use commands::{Recorder, Timings, Use};
+pub use commands::{Area, Recorder, Timings, Use};
 pub use context::{
     device_type_name, version_string, Context, ContextDesc, DeviceInfo, ValidationLog, WindowSource,
 };

@@ -16,6 +16,10 @@ pub enum Binding<'a> {
     /// Combined image sampler over one layer of an array, in the layout of the given
     /// access (`Access::Sampled` or `Access::SampledGeneral`).
     LayerTexture(&'a LayerView, &'a Sampler, Access),
+    /// Combined image sampler over the image's full view (all layers of an array), in the
+    /// layout of the given access (`Access::SampledGeneral` for the ping-pong images,
+    /// whose other layer is an attachment meanwhile).
+    ArrayTexture(&'a Image, &'a Sampler, Access),
     /// Storage image over the full view, in GENERAL.
     StorageImage(&'a Image),
     Uniform(&'a Buffer),
@@ -36,7 +40,7 @@ impl DescriptorSet {
             | vk::ShaderStageFlags::FRAGMENT
             | vk::ShaderStageFlags::VERTEX;
         let ty = |b: &Binding| match b {
-            Binding::Texture(..) | Binding::LayerTexture(..) => {
+            Binding::Texture(..) | Binding::LayerTexture(..) | Binding::ArrayTexture(..) => {
                 vk::DescriptorType::COMBINED_IMAGE_SAMPLER
             }
             Binding::StorageImage(_) => vk::DescriptorType::STORAGE_IMAGE,
@@ -110,6 +114,11 @@ impl DescriptorSet {
                     image_view: view.raw,
                     image_layout: access.layout(),
                 }],
+                Binding::ArrayTexture(img, s, access) => [vk::DescriptorImageInfo {
+                    sampler: s.raw,
+                    image_view: img.view,
+                    image_layout: access.layout(),
+                }],
                 Binding::StorageImage(img) => [vk::DescriptorImageInfo {
                     sampler: vk::Sampler::null(),
                     image_view: img.view,
@@ -137,7 +146,9 @@ impl DescriptorSet {
                     .dst_set(self.raw)
                     .dst_binding(i as u32);
                 match b {
-                    Binding::Texture(..) | Binding::LayerTexture(..) => w
+                    Binding::Texture(..)
+                    | Binding::LayerTexture(..)
+                    | Binding::ArrayTexture(..) => w
                         .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
                         .image_info(&image_infos[i]),
                     Binding::StorageImage(_) => w

@@ -487,9 +487,13 @@ pub struct Dump {
 #[derive(Clone, Debug)]
 pub struct SweepStats {
     pub planes: Planes,
-    /// State-buffer bytes read and written per plane (render-pass loads, sampled reads
-    /// including filter taps, attachment writes), over the whole viewport.
+    /// State-buffer bytes read and written per plane: render-pass loads and stores of the
+    /// shaded pixels, every texel the plane shaders fetch (four per bilinear read, both
+    /// layers where the `arrays` lever is off), and the forward transport's light rays.
     pub bytes_per_plane: u64,
+    /// Mean fraction of the viewport each plane shades (1 with `Region::Full`; the
+    /// `region` lever's rectangles otherwise).
+    pub shaded_fraction: f64,
     /// How light travelled.
     pub light_transport: LightTransport,
     /// Forward transport: the light rays' grid on the launch plane (one spacing before
@@ -532,8 +536,9 @@ mod levers;
 mod params;
 mod pass;
 mod record;
+mod region;
 
 pub use levers::{Levers, Region};
 pub(crate) use params::EnvInputs;
 use params::*;
-pub(crate) use pass::{Features, SweepPass};
+pub(crate) use pass::{Features, SweepPass, TrafficInputs};

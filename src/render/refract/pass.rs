@@ -35,6 +35,14 @@ impl StateImage {
     }
 }
 
+/// Both layers of each image in one sampled view (the `arrays` lever).
+fn array_bindings<'a>(images: &'a [StateImage], sampler: &'a vk::Sampler) -> Vec<Binding<'a>> {
+    images
+        .iter()
+        .map(|s| Binding::ArrayTexture(&s.image, sampler, Access::SampledGeneral))
+        .collect()
+}
+
 pub(crate) struct SweepPass {
     pub(crate) width: u32,
     pub(crate) height: u32,
@@ -51,7 +59,8 @@ pub(crate) struct SweepPass {
     /// needs them.
     pub(crate) planes: HashMap<Features, PlanePipelines>,
     pub(crate) have_gradient: bool,
-    pub(crate) floor: GraphicsPipeline,
+    /// Whether the field texture is bound (binding 37; the `field` lever).
+    pub(crate) have_field: bool,
     pub(crate) forward: Option<ForwardPipelines>,
     pub(crate) irradiance: [StateImage; 2],
     /// The forward transport's light rays (flux + view x; v + view y): `rays_per_pixel`
@@ -72,15 +81,19 @@ pub(crate) struct SweepPass {
     pub(crate) env_params: Buffer,
 }
 
-/// The features a frame uses that the plane shaders can leave out: specialization
-/// constants 1-4 (glsl/sweep_common.glsl), each on exactly when its runtime condition
-/// can hold, so switching one off changes no image (tested) and costs nothing.
+/// The features a frame uses that the plane shaders can leave out, and the shader levers:
+/// specialization constants 1-6 (glsl/sweep_common.glsl, sweep_buffers.glsl). The first
+/// four are on exactly when their runtime condition can hold, so switching one off changes
+/// no image (tested) and costs nothing; `arrays` and `field` choose how the shaders read
+/// the state and the field (`Levers`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub(crate) struct Features {
     pub(crate) specular: bool,
     pub(crate) clip: bool,
     pub(crate) reflections: bool,
     pub(crate) soft_light: bool,
+    pub(crate) arrays: bool,
+    pub(crate) field: bool,
 }
 
 impl Features {
@@ -89,28 +102,40 @@ impl Features {
         clip: true,
         reflections: true,
         soft_light: true,
+        arrays: true,
+        field: true,
     };
 
-    pub(crate) fn of(sweep: &SweepOptions) -> Self {
-        if !sweep.levers.specialize {
-            return Self::ALL;
+    /// `have_field`: whether the field texture exists (it may not fit in memory).
+    pub(crate) fn of(sweep: &SweepOptions, have_field: bool) -> Self {
+        let levers = sweep.levers;
+        let shader = Self {
+            arrays: levers.arrays,
+            field: levers.field && have_field,
+            ..Self::ALL
+        };
+        if !levers.specialize {
+            return shader;
         }
         Self {
             specular: sweep.specular > 0.0,
             clip: sweep.clip.is_some(),
             reflections: sweep.reflections,
             soft_light: sweep.light.softness > 0.0,
+            ..shader
         }
     }
 
-    /// Constant 0 (the gradient volume is bound), then 1-4.
-    fn constants(self, have_gradient: bool) -> [u32; 5] {
+    /// Constant 0 (the gradient volume is bound), then 1-6.
+    fn constants(self, have_gradient: bool) -> [u32; 7] {
         [
             have_gradient as u32,
             self.specular as u32,
             self.clip as u32,
             self.reflections as u32,
             self.soft_light as u32,
+            self.arrays as u32,
+            self.field as u32,
         ]
     }
 }
@@ -119,6 +144,8 @@ impl Features {
 /// and the forward transport's light-ray and viewing-ray passes.
 pub(crate) struct PlanePipelines {
     pub(crate) sweep: GraphicsPipeline,
+    /// The benchmark floor (`SweepOptions::floor`), reading the state as `sweep` does.
+    pub(crate) floor: GraphicsPipeline,
     pub(crate) forward: Option<ForwardPlanes>,
 }
 
@@ -128,7 +155,7 @@ impl PlanePipelines {
         ctx: &Context,
         passes: [&RenderPass; 3],
         set: &DescriptorSet,
-        constants: [u32; 5],
+        constants: [u32; 7],
         forward: bool,
     ) -> Result<Self> {
         let plane = |fragment, pass, name: &str| {
@@ -147,6 +174,7 @@ impl PlanePipelines {
         let [sweep_pass, light_pass, view_pass] = passes;
         Ok(Self {
             sweep: plane(shaders::SWEEP_FRAG, sweep_pass, "sweep plane")?,
+            floor: plane(shaders::SWEEP_FLOOR_FRAG, sweep_pass, "sweep floor plane")?,
             forward: if forward {
                 Some(ForwardPlanes {
                     light: plane(
@@ -192,6 +220,7 @@ impl SweepPass {
             ctx,
             volume,
             gradient,
+            field,
             tf,
             preint,
             linear: sampler,
@@ -321,31 +350,27 @@ impl SweepPass {
             Binding::Texture(tf, sampler),
             Binding::Texture(preint, sampler),
         ];
+        // Bindings 4-9: the six state images, both layers in one view each (the shaders
+        // index the read layer; glsl/sweep_buffers.glsl).
         let mut sampled: Vec<Binding> = common.to_vec();
-        for s in &states {
-            for view in &s.layers {
-                sampled.push(Binding::LayerTexture(view, sampler, Access::SampledGeneral));
-            }
-        }
+        sampled.extend(array_bindings(&states, sampler));
         let mut plane_bindings = sampled.clone();
-        for irr in &irradiance {
-            for view in &irr.layers {
-                plane_bindings.push(Binding::LayerTexture(view, sampler, Access::SampledGeneral));
-            }
-        }
+        // 10-11: the forward transport's irradiance (glsl/sweep_light.glsl); 12: the clamp
+        // counters; 13-14: the light rays (glsl/sweep_rays.glsl).
+        plane_bindings.extend(array_bindings(&irradiance, sampler));
         plane_bindings.push(Binding::Storage(&counters));
-        for r in &rays {
-            for view in &r.layers {
-                plane_bindings.push(Binding::LayerTexture(view, sampler, Access::SampledGeneral));
-            }
-        }
-        // Binding 25: the environment for Fresnel reflections (glsl/sweep_light.glsl).
+        plane_bindings.extend(array_bindings(&rays, sampler));
+        // 15: the environment for Fresnel reflections (glsl/sweep_light.glsl).
         plane_bindings.push(Binding::Texture(env.map, sampler));
-        // Binding 26: the smoothed gradient volume (render::gradient, glsl/sweep_light.glsl);
+        // 16: the smoothed gradient volume (render::gradient, glsl/sweep_light.glsl);
         // without one the shaders compute normals on the fly (specialization constant 0)
         // and never read the binding, which the volume then fills.
         plane_bindings.push(Binding::Texture(gradient.unwrap_or(volume), sampler));
         let have_gradient = gradient.is_some();
+        // 17: the field texture (render::field; the `field` lever, specialization
+        // constant 6), or the volume in its place, never read then.
+        plane_bindings.push(Binding::Texture(field.unwrap_or(volume), sampler));
+        let have_field = field.is_some();
         let sweep_set = DescriptorSet::new(ctx, &plane_bindings, "sweep")?;
         let output = FrameTarget::new(ctx, width, height, "sweep frame")?;
         let env_params = Buffer::uniform::<EnvParams>(ctx, "environment params")?;
@@ -369,17 +394,6 @@ impl SweepPass {
 
         let setup =
             ComputePipeline::new(ctx, shaders::SWEEP_SETUP_COMP, &setup_set, 0, "sweep setup")?;
-        let floor = GraphicsPipeline::new(
-            ctx,
-            &GraphicsDesc::fullscreen(
-                shaders::FULLSCREEN_VERT,
-                shaders::SWEEP_FLOOR_FRAG,
-                &render_pass,
-                &sweep_set,
-                std::mem::size_of::<PlanePush>() as u32,
-            ),
-            "sweep floor plane",
-        )?;
         let forward_capable = ctx.info().large_points && ctx.info().fragment_atomics;
         let forward = if forward_capable {
             let largest_point = ctx.info().limits.point_size_range[1];
@@ -431,7 +445,7 @@ impl SweepPass {
             setup,
             planes,
             have_gradient,
-            floor,
+            have_field,
             forward,
             irradiance,
             rays,
@@ -490,14 +504,49 @@ impl SweepPass {
             .collect()
     }
 
-    /// State-buffer traffic of one plane (see [`SweepStats::bytes_per_plane`]).
-    pub fn bytes_per_plane(&self, soft: bool, specular: bool) -> u64 {
-        let pixels = self.width as u64 * self.height as u64;
-        // Attachment loads (6) and writes (6); sampled: light direction here (1), light
-        // colour + direction at the back-projected point (2 per tap), viewing-ray state
-        // (4), light colour at the ray (1), light direction at the ray for specular (1).
-        let taps = if soft { 3 } else { 1 };
-        let reads = 6 + 1 + 2 * taps + 4 + 1 + u64::from(specular);
-        pixels * (reads + 6) * STATE_BYTES_PER_PIXEL
+    /// State-buffer traffic of one plane (see [`SweepStats::bytes_per_plane`]): every
+    /// texel the plane shaders fetch or write, as glsl/sweep_plane.glsl does per shaded
+    /// pixel (and, forward, per light ray), for the frame's features and levers.
+    pub fn bytes_per_plane(&self, f: TrafficInputs) -> u64 {
+        // A choice between two layers fetches both on llvmpipe (the `arrays` lever off).
+        let fetch = if f.features.arrays { 1 } else { 2 };
+        let pixel = 1;
+        let bilinear = 4;
+        // Highlights read the light at the face (two bilinear reads), counted for every
+        // shaded pixel: an upper bound, what a SIMD driver running the branch fetches.
+        let specular = if f.features.specular { 2 * bilinear } else { 0 };
+        // The viewing rays: their four buffers, the light and its direction at the
+        // segment (bilinear), the highlight's.
+        let view_reads = 4 * pixel + 2 * bilinear + specular;
+        let texels_per_pixel = if f.forward {
+            // Render-pass load and store of the four viewing-ray attachments.
+            8 + fetch * view_reads
+        } else {
+            // Load and store of the six attachments; the light direction here; per
+            // soft-kernel tap the four texels of light colour and of direction.
+            let taps = if f.features.soft_light { 3 } else { 1 };
+            12 + fetch * (pixel + taps * 2 * bilinear + view_reads)
+        };
+        let mut texels = f.shaded_pixels * texels_per_pixel;
+        if f.forward {
+            // Per light ray: its two texels and, with softness, four neighbours' flux;
+            // load and store of the two ray attachments; the splat reads the ray and its
+            // four neighbours' positions (two texels each).
+            let ray_reads = 2 + if f.soft { 4 } else { 0 } + 2 + 4 * 2;
+            texels += f.light_rays * (4 + fetch * ray_reads);
+        }
+        texels * STATE_BYTES_PER_PIXEL
     }
+}
+
+/// What [`SweepPass::bytes_per_plane`] counts for.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct TrafficInputs {
+    pub(crate) features: Features,
+    pub(crate) forward: bool,
+    pub(crate) soft: bool,
+    /// Mean pixels a plane shades.
+    pub(crate) shaded_pixels: u64,
+    /// Light rays a plane advances (forward).
+    pub(crate) light_rays: u64,
 }

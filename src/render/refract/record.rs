@@ -2,7 +2,7 @@
 //! composite, dumps and timestamps.
 
 use super::*;
-use crate::vk::Use;
+use crate::vk::{Area, Use};
 
 impl SweepPass {
     /// Record one frame into `rec`: setup, every plane, and the composite into
@@ -16,7 +16,7 @@ impl SweepPass {
         let (camera, opts, read_back) = (inputs.camera, inputs.opts, inputs.read_back);
         let (ctx, info, env, sweep) = (inputs.ctx, inputs.info, &inputs.env, &opts.sweep);
         // The plane pipelines with what this frame does not use compiled out.
-        let features = Features::of(sweep);
+        let features = Features::of(sweep, self.have_field);
         self.ensure_planes(ctx, features)?;
         let volume_dims = info.dims;
         let (eye, forward, right, up) = camera.frame();
@@ -167,6 +167,7 @@ impl SweepPass {
         let mut uses: Vec<Use> = [
             inputs.volume,
             inputs.gradient.unwrap_or(inputs.volume),
+            inputs.field.unwrap_or(inputs.volume),
             inputs.tf,
             inputs.preint,
             env.map,
@@ -192,6 +193,22 @@ impl SweepPass {
             Ok(())
         })?;
 
+        // The pixels each plane shades (the `region` lever; region.rs).
+        let (regions, shaded_fraction) = match sweep.levers.region {
+            Region::Full => (
+                vec![Area::full(self.width, self.height); planes.count as usize],
+                1.0,
+            ),
+            Region::Rect => super::region::plane_regions(
+                view_to_tex,
+                &planes,
+                info.ref_step,
+                tan_half,
+                aspect,
+                [self.width, self.height],
+            ),
+        };
+
         rec.begin_scope("sweep");
         // Bound once: between planes only push constants change, and the forward
         // transport switches pipelines (same layout, so the set stays bound).
@@ -199,7 +216,7 @@ impl SweepPass {
         let pipelines = &self.planes[&features];
         let forward_planes = pipelines.forward.as_ref();
         let plane_pipeline = match (sweep.floor, forward_planes.filter(|_| forward.is_some())) {
-            (true, _) => &self.floor,
+            (true, _) => &pipelines.floor,
             (false, Some(f)) if soft => &f.light_soft,
             (false, Some(f)) => &f.light,
             (false, None) => &pipelines.sweep,
@@ -238,11 +255,14 @@ impl SweepPass {
                 None => {
                     let attachments: Vec<(&Image, u32)> =
                         self.states.iter().map(|s| (&s.image, write)).collect();
-                    rec.begin_render_pass(
+                    let area = regions[i as usize];
+                    rec.begin_render_pass_in(
                         &self.render_pass,
                         &self.framebuffers[write as usize],
                         &attachments,
+                        area,
                     )?;
+                    rec.set_scissor(area);
                     rec.draw_fullscreen(plane_pipeline, bytemuck::bytes_of(&push))?;
                     rec.end_render_pass();
                 }
@@ -300,11 +320,14 @@ impl SweepPass {
                     ]);
                     let views: Vec<(&Image, u32)> =
                         self.states[2..].iter().map(|s| (&s.image, write)).collect();
-                    rec.begin_render_pass(
+                    let area = regions[i as usize];
+                    rec.begin_render_pass_in(
                         &self.view_pass,
                         &self.view_framebuffers[write as usize],
                         &views,
+                        area,
                     )?;
+                    rec.set_scissor(area);
                     let view = &forward_planes
                         .expect("made with the forward transport")
                         .view;
@@ -358,7 +381,15 @@ impl SweepPass {
         Ok(SweepRecording {
             stats: SweepStats {
                 planes,
-                bytes_per_plane: self.bytes_per_plane(soft, sweep.specular > 0.0),
+                bytes_per_plane: self.bytes_per_plane(TrafficInputs {
+                    features,
+                    forward: forward.is_some(),
+                    soft,
+                    shaded_pixels: (shaded_fraction * self.width as f64 * self.height as f64)
+                        .round() as u64,
+                    light_rays: grid_dims[0] as u64 * grid_dims[1] as u64,
+                }),
+                shaded_fraction,
                 light_transport: sweep.light_transport,
                 light_grid: grid,
                 light_rays: [grid_dims[0], grid_dims[1], ray_image[0], ray_image[1]],

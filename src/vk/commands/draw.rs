@@ -8,6 +8,39 @@ use crate::vk::{Buffer, DescriptorSet, Framebuffer, GraphicsPipeline, Image, Ren
 
 use super::*;
 
+/// A rectangle of pixels: a render area or scissor.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Area {
+    pub x: u32,
+    pub y: u32,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl Area {
+    pub fn full(width: u32, height: u32) -> Self {
+        Self {
+            x: 0,
+            y: 0,
+            width,
+            height,
+        }
+    }
+
+    fn rect(self) -> vk::Rect2D {
+        vk::Rect2D {
+            offset: vk::Offset2D {
+                x: self.x as i32,
+                y: self.y as i32,
+            },
+            extent: vk::Extent2D {
+                width: self.width,
+                height: self.height,
+            },
+        }
+    }
+}
+
 impl Recorder<'_> {
     /// Bring `attachments` (image, layer) into the pass's attachment state and begin it.
     /// The pass itself performs no layout transitions, so this is the only barrier.
@@ -17,6 +50,36 @@ impl Recorder<'_> {
         framebuffer: &Framebuffer,
         attachments: &[(&Image, u32)],
     ) -> Result<()> {
+        let e = framebuffer.extent;
+        self.begin_render_pass_in(
+            pass,
+            framebuffer,
+            attachments,
+            Area::full(e.width, e.height),
+        )
+    }
+
+    /// [`Self::begin_render_pass`] over `area` only: pixels outside it are neither loaded,
+    /// stored nor cleared (and must be scissored off the draws: [`Self::set_scissor`]).
+    pub fn begin_render_pass_in(
+        &mut self,
+        pass: &RenderPass,
+        framebuffer: &Framebuffer,
+        attachments: &[(&Image, u32)],
+        area: Area,
+    ) -> Result<()> {
+        let e = framebuffer.extent;
+        if area.width == 0
+            || area.height == 0
+            || area.x as u64 + area.width as u64 > e.width as u64
+            || area.y as u64 + area.height as u64 > e.height as u64
+        {
+            bail!(
+                "render area {area:?} is empty or outside the framebuffer ({}x{})",
+                e.width,
+                e.height
+            );
+        }
         if attachments.len() != pass.attachments {
             bail!(
                 "render pass has {} attachments, {} images given",
@@ -34,10 +97,7 @@ impl Recorder<'_> {
         let info = vk::RenderPassBeginInfo::default()
             .render_pass(pass.raw)
             .framebuffer(framebuffer.raw)
-            .render_area(vk::Rect2D {
-                offset: vk::Offset2D::default(),
-                extent: framebuffer.extent,
-            })
+            .render_area(area.rect())
             .clear_values(&clears);
         // SAFETY: recording; pass and framebuffer are compatible (checked at creation).
         unsafe {
@@ -88,6 +148,12 @@ impl Recorder<'_> {
                 }],
             );
         }
+    }
+
+    /// Scissor the following draws to `area` (the viewport stays).
+    pub fn set_scissor(&mut self, area: Area) {
+        // SAFETY: recording; scissor is dynamic in every graphics pipeline.
+        unsafe { self.device().cmd_set_scissor(self.cmd, 0, &[area.rect()]) };
     }
 
     /// Switch to `pipeline`, keeping the descriptor set, viewport and scissor that

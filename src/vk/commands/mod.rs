@@ -16,6 +16,7 @@ use super::resources::color_range;
 use super::{Access, Buffer, ComputePipeline, Context, DescriptorSet, Image};
 
 mod draw;
+pub use draw::Area;
 mod submit;
 mod timings;
 
