@@ -1,6 +1,7 @@
 //! `refrakt` command line: `info` (devices), `render` (one frame to an image, with GPU
 //! timings), `view` (the interactive viewer), `photons` (the CPU photon tracer's reference),
-//! `generate` (write a stand-in volume) and `bench` (the timing tables). The commands live
+//! `generate` (write a stand-in volume) and `bench` (the timing tables, lever A/B and
+//! report comparison). The commands live
 //! in `src/cli/`, one module each.
 
 mod cli;
@@ -91,6 +92,8 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Generate(args) => cli::bench::generate(&args),
         Command::Bench(BenchCommand::Thesis(args)) => cli::bench::bench_thesis(&desc, &args),
         Command::Bench(BenchCommand::Scaling(args)) => cli::bench::bench_scaling(&desc, &args),
+        Command::Bench(BenchCommand::Variants(args)) => cli::bench::bench_variants(&desc, &args),
+        Command::Bench(BenchCommand::Compare(args)) => cli::bench::bench_compare(&args),
     }
 }
 

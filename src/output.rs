@@ -48,10 +48,26 @@ pub fn format_for(path: &Path) -> Result<ImageFormat> {
     Ok(format)
 }
 
+/// The display value in [0, 1] of one linear colour channel: tone mapped, then sRGB
+/// encoded; what a PNG stores before rounding to 8 bits.
+pub fn display_value(c: f32, tone: &ToneMap) -> f32 {
+    linear_to_srgb(tone.apply(c))
+}
+
+/// The display values of a frame's RGB channels, as [`to_srgb8`] writes them to a PNG but
+/// not rounded to 8 bits (for comparing images finer than 1/255).
+pub fn to_display(frame: &Frame, tone: &ToneMap) -> Vec<[f32; 3]> {
+    frame
+        .pixels
+        .iter()
+        .map(|p| [0, 1, 2].map(|i| display_value(p[i], tone)))
+        .collect()
+}
+
 /// 8-bit sRGB RGBA bytes of a frame after tone mapping (alpha stays linear, as PNG
 /// expects).
 pub fn to_srgb8(frame: &Frame, tone: &ToneMap) -> Vec<u8> {
-    let encode = |c: f32| (linear_to_srgb(tone.apply(c)) * 255.0).round() as u8;
+    let encode = |c: f32| (display_value(c, tone) * 255.0).round() as u8;
     frame
         .pixels
         .iter()

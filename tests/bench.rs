@@ -68,6 +68,11 @@ fn tiny_thesis_bench_has_the_documented_structure() {
     assert!(r.meta.device.contains("llvmpipe") || std::env::var("REFRAKT_DEVICE").is_ok());
     assert!(!r.meta.git_commit.is_empty() && !r.meta.date.is_empty());
     assert_eq!((r.settings.frames, r.settings.warmup), (2, 1));
+    // No --variant: the default levers, recorded.
+    assert_eq!(
+        r.settings.variant,
+        Some(refrakt::render::Levers::default().to_string())
+    );
     let names: Vec<&str> = r.rows.iter().map(|r| r.dataset.as_str()).collect();
     assert_eq!(names, ["supernova", "kiwi"]);
     // Scale 0.05 of the thesis' resolutions (Table 6.1: supernova 432³, kiwi 256×256×128)

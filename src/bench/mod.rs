@@ -1,6 +1,8 @@
 //! Benchmark mode: the protocol of the thesis' Tables 6.1 and 6.2 on the local device
-//! (`refrakt bench thesis`), and how the sweep's cost scales with planes and pixels
-//! (`refrakt bench scaling`). Every time is a GPU timestamp difference; a frame's time is
+//! (`refrakt bench thesis`), how the sweep's cost scales with planes and pixels
+//! (`refrakt bench scaling`), the sweep's levers A/B'd in one process (`refrakt bench
+//! variants`), and two reports compared with a noise-aware verdict (`refrakt bench
+//! compare`). Every time is a GPU timestamp difference; a frame's time is
 //! the `render` scope of `Renderer::record` (all passes and barriers of the frame).
 //! docs/BENCH.md documents the protocol and the CSV/JSON schema.
 
@@ -11,7 +13,7 @@ use anyhow::{bail, ensure, Context as _, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::{Deserialize, Serialize};
 
-use crate::render::{upload, Camera, Frame, Model, RenderOptions, Renderer};
+use crate::render::{upload, Camera, Frame, Levers, Model, RenderOptions, Renderer};
 use crate::scene::{Scene, VolumeSource};
 use crate::vk::{self, Context};
 use crate::volume::standins::{self, Dataset, DATASETS};
@@ -36,6 +38,8 @@ pub struct ThesisSettings {
     pub baselines: bool,
     pub data_dir: PathBuf,
     pub progress: bool,
+    /// The sweep's levers every row uses (the floor baseline too).
+    pub levers: Levers,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -164,6 +168,10 @@ pub struct SettingsRecord {
     pub sample_distance: f32,
     pub orbit_deg_per_frame: f32,
     pub rows: Vec<String>,
+    /// The sweep's levers (`--variant`, in `Levers`' text form); absent in reports from
+    /// before `--variant` existed (they rendered that version's default).
+    #[serde(default)]
+    pub variant: Option<String>,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -224,6 +232,72 @@ fn progress_bar(total: u64, show: bool) -> ProgressBar {
     pb
 }
 
+/// The camera of frame `k` (warm-up frames counted): `camera` orbited
+/// [`ORBIT_DEG_PER_FRAME`] per frame about the vertical axis.
+fn orbit(camera: &Camera, k: u32) -> Camera {
+    Camera {
+        azimuth: camera.azimuth + ORBIT_DEG_PER_FRAME * k as f32,
+        ..*camera
+    }
+}
+
+/// One variant's frames as they come (warm-up apart), summarised by [`Collector::finish`].
+#[derive(Default)]
+struct Collector {
+    warm: Vec<f64>,
+    times: Vec<f64>,
+    sweep: Vec<f64>,
+    passes: Passes,
+    planes: Option<u32>,
+    bytes: Option<u64>,
+}
+
+impl Collector {
+    fn add(&mut self, f: &Frame, warmup: bool) -> Result<()> {
+        let ms = frame_ms(f)?;
+        if warmup {
+            self.warm.push(ms);
+            return Ok(());
+        }
+        self.times.push(ms);
+        let get = |n: &str| f.timings.get(n).unwrap_or(0.0);
+        self.passes.setup_ms += get("sweep setup");
+        self.passes.sweep_ms += get("sweep");
+        self.passes.composite_ms += get("composite");
+        self.passes.raymarch_ms += get("ea raymarch");
+        if let Some(s) = &f.sweep {
+            self.sweep.push(get("sweep"));
+            self.planes = Some(s.planes.count);
+            self.bytes = Some(s.bytes_per_plane);
+        }
+        Ok(())
+    }
+
+    /// The variant, with the sweep's plane count and bytes per plane (of the last frame).
+    fn finish(self, name: &str) -> Result<(Variant, Option<u32>, Option<u64>)> {
+        let mut passes = self.passes;
+        let n = self.times.len().max(1) as f64;
+        passes.setup_ms /= n;
+        passes.sweep_ms /= n;
+        passes.composite_ms /= n;
+        passes.raymarch_ms /= n;
+        let stats = Stats::of(&self.times)?;
+        Ok((
+            Variant {
+                variant: name.to_string(),
+                warmup_ms: self.warm,
+                frames_ms: self.times,
+                fps: 1000.0 / stats.mean,
+                stats,
+                passes,
+                sweep_ms: self.sweep,
+            },
+            self.planes,
+            self.bytes,
+        ))
+    }
+}
+
 /// Renders warm-up and measured frames of one variant, orbiting the camera.
 #[allow(clippy::too_many_arguments)]
 fn run_variant(
@@ -236,54 +310,67 @@ fn run_variant(
     frames: u32,
     pb: &ProgressBar,
 ) -> Result<(Variant, Option<u32>, Option<u64>)> {
-    let mut warm = Vec::new();
-    let mut times = Vec::new();
-    let mut sweep = Vec::new();
-    let mut passes = Passes::default();
-    let mut planes = None;
-    let mut bytes = None;
+    let mut c = Collector::default();
     for k in 0..warmup + frames {
-        let cam = Camera {
-            azimuth: camera.azimuth + ORBIT_DEG_PER_FRAME * k as f32,
-            ..*camera
-        };
-        let f = renderer.render(model, &cam, opts)?;
-        let ms = frame_ms(&f)?;
+        let f = renderer.render(model, &orbit(camera, k), opts)?;
         pb.inc(1);
-        if k < warmup {
-            warm.push(ms);
-            continue;
-        }
-        times.push(ms);
-        let get = |n: &str| f.timings.get(n).unwrap_or(0.0);
-        passes.setup_ms += get("sweep setup");
-        passes.sweep_ms += get("sweep");
-        passes.composite_ms += get("composite");
-        passes.raymarch_ms += get("ea raymarch");
-        if let Some(s) = &f.sweep {
-            sweep.push(get("sweep"));
-            planes = Some(s.planes.count);
-            bytes = Some(s.bytes_per_plane);
-        }
+        c.add(&f, k < warmup)?;
     }
-    let n = frames.max(1) as f64;
-    passes.setup_ms /= n;
-    passes.sweep_ms /= n;
-    passes.composite_ms /= n;
-    passes.raymarch_ms /= n;
-    let stats = Stats::of(&times)?;
+    c.finish(name)
+}
+
+/// A thesis stand-in row's scene at `scale` (volume and viewport) and the thesis' sample
+/// distance, its volume loaded (an original from `data_dir` if there is one), and a
+/// renderer with its transfer functions, environment and preintegration table (timed)
+/// set up: what `thesis` and `variants` time.
+pub(crate) struct PreparedRow {
+    pub scene: Scene,
+    pub original: Option<PathBuf>,
+    pub resolution: [u32; 3],
+    pub side: u32,
+    pub preintegration_ms: f64,
+    pub opts: RenderOptions,
+}
+
+/// The viewport side at `scale` (at least 8 pixels).
+fn scaled_side(scale: f64) -> u32 {
+    ((THESIS_VIEWPORT as f64 * scale).round() as u32).max(8)
+}
+
+fn prepare_row(
+    ctx: &Context,
+    d: &Dataset,
+    scale: f64,
+    data_dir: &Path,
+) -> Result<(PreparedRow, Renderer)> {
+    let side = scaled_side(scale);
+    let mut scene = Scene::builtin(d.name)?.context("stand-in scene")?;
+    if let VolumeSource::Standin { scale: s, .. } = &mut scene.volume {
+        *s = scale;
+    }
+    scene.width = side;
+    scene.height = side;
+    scene.sample_distance = THESIS_SAMPLE_DISTANCE;
+    let original = crate::scene::original_in(data_dir, d.name);
+    let volume = scene.load_volume(data_dir, Some(upload::device_limits(ctx)))?;
+    let tf = scene.transfer_functions()?;
+    let mut renderer = Renderer::new(ctx, &volume, &tf)?;
+    renderer.set_environment(scene.environment_map()?.as_ref())?;
+    let preintegration_ms = renderer
+        .update_preintegration()?
+        .get("preintegration")
+        .unwrap_or(0.0);
+    let opts = scene.render_options()?;
     Ok((
-        Variant {
-            variant: name.to_string(),
-            warmup_ms: warm,
-            frames_ms: times,
-            fps: 1000.0 / stats.mean,
-            stats,
-            passes,
-            sweep_ms: sweep,
+        PreparedRow {
+            scene,
+            original,
+            resolution: volume.dims,
+            side,
+            preintegration_ms,
+            opts,
         },
-        planes,
-        bytes,
+        renderer,
     ))
 }
 
@@ -294,27 +381,20 @@ pub fn thesis(ctx: &Context, s: &ThesisSettings) -> Result<Report> {
     let variants = if s.baselines { 3 } else { 1 };
     let total = rows.len() as u64 * (s.warmup + s.frames) as u64 * variants;
     let pb = progress_bar(total, s.progress);
-    let side = ((THESIS_VIEWPORT as f64 * s.scale).round() as u32).max(8);
+    let side = scaled_side(s.scale);
     let mut out = Vec::new();
     for d in rows {
-        let mut scene = Scene::builtin(d.name)?.context("stand-in scene")?;
-        if let VolumeSource::Standin { scale, .. } = &mut scene.volume {
-            *scale = s.scale;
-        }
-        scene.width = side;
-        scene.height = side;
-        scene.sample_distance = THESIS_SAMPLE_DISTANCE;
         pb.set_message(format!("{}: preparing the volume", d.name));
-        let original = crate::scene::original_in(&s.data_dir, d.name);
-        let volume = scene.load_volume(&s.data_dir, Some(upload::device_limits(ctx)))?;
-        let tf = scene.transfer_functions()?;
-        let mut renderer = Renderer::new(ctx, &volume, &tf)?;
-        renderer.set_environment(scene.environment_map()?.as_ref())?;
-        let preintegration_ms = renderer
-            .update_preintegration()?
-            .get("preintegration")
-            .unwrap_or(0.0);
-        let opts = scene.render_options()?;
+        let (row, mut renderer) = prepare_row(ctx, d, s.scale, &s.data_dir)?;
+        let PreparedRow {
+            scene,
+            original,
+            resolution,
+            preintegration_ms,
+            mut opts,
+            ..
+        } = row;
+        opts.sweep.levers = s.levers;
         pb.set_message(d.name.to_string());
         let (refract, planes, bytes) = run_variant(
             &mut renderer,
@@ -380,7 +460,7 @@ pub fn thesis(ctx: &Context, s: &ThesisSettings) -> Result<Report> {
             source: original
                 .map(|p| p.display().to_string())
                 .unwrap_or_else(|| "stand-in".into()),
-            resolution: volume.dims,
+            resolution,
             viewport: [side, side],
             planes,
             preintegration_ms,
@@ -407,15 +487,20 @@ pub fn thesis(ctx: &Context, s: &ThesisSettings) -> Result<Report> {
             sample_distance: THESIS_SAMPLE_DISTANCE,
             orbit_deg_per_frame: ORBIT_DEG_PER_FRAME,
             rows: out.iter().map(|r| r.dataset.clone()).collect(),
+            variant: Some(s.levers.to_string()),
         },
         rows: out,
     })
 }
 
+mod compare;
 mod scaling;
+mod variants;
 mod writers;
 
+pub use compare::*;
 pub use scaling::*;
+pub use variants::*;
 pub use writers::*;
 
 #[cfg(test)]

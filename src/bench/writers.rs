@@ -3,7 +3,7 @@
 
 use super::*;
 
-fn dims(d: [u32; 3]) -> String {
+pub(super) fn dims(d: [u32; 3]) -> String {
     format!("{}×{}×{}", d[0], d[1], d[2])
 }
 
@@ -13,7 +13,8 @@ pub fn markdown(r: &Report) -> String {
     let m = &r.meta;
     let mut s = format!(
         "Device: {} ({}, {} {}, Vulkan {}); refrakt {} ({}); {}\n\
-         Protocol: viewport {}² × scale {} , sample distance {}, {} frames after {} warm-up, camera orbiting {}°/frame; GPU timestamps of the whole frame.\n\n",
+         Protocol: viewport {}² × scale {} , sample distance {}, {} frames after {} warm-up, camera orbiting {}°/frame; GPU timestamps of the whole frame.\n\
+         Sweep variant: {}.\n\n",
         m.device,
         m.device_type,
         m.driver,
@@ -27,7 +28,8 @@ pub fn markdown(r: &Report) -> String {
         r.settings.sample_distance,
         r.settings.frames,
         r.settings.warmup,
-        r.settings.orbit_deg_per_frame
+        r.settings.orbit_deg_per_frame,
+        r.settings.variant.as_deref().unwrap_or("not recorded")
     );
     s += "| Dataset | Thesis resolution | Ours | Viewport | Planes | Thesis ms | Thesis FPS | Thesis GPU | Mean ms | FPS | Median | Min | Max | Std-dev |\n";
     s += "|---|---|---|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|\n";
@@ -122,6 +124,7 @@ pub fn write_csv(r: &Report, path: &Path) -> Result<()> {
         "refrakt_version",
         "git_commit",
         "date",
+        "levers",
     ])?;
     for row in &r.rows {
         let variants = [Some(&row.refract), row.ea.as_ref(), row.floor.as_ref()];
@@ -154,6 +157,7 @@ pub fn write_csv(r: &Report, path: &Path) -> Result<()> {
                     r.meta.refrakt_version.clone(),
                     r.meta.git_commit.clone(),
                     r.meta.date.clone(),
+                    r.settings.variant.clone().unwrap_or_default(),
                 ])?;
             }
         }
@@ -163,7 +167,8 @@ pub fn write_csv(r: &Report, path: &Path) -> Result<()> {
     Ok(())
 }
 
-pub fn write_json(r: &Report, path: &Path) -> Result<()> {
+/// Any report (thesis, variants) as pretty JSON.
+pub fn write_json<T: Serialize>(r: &T, path: &Path) -> Result<()> {
     let text = serde_json::to_string_pretty(r)?;
     std::fs::write(path, text + "\n")
         .with_context(|| format!("{}: cannot write the JSON file", path.display()))

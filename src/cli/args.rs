@@ -4,6 +4,25 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
+use refrakt::render::Levers;
+
+/// `--variant`'s value: the sweep's levers (`Levers::parse`).
+fn parse_variant(s: &str) -> Result<Levers, String> {
+    Levers::parse(s).map_err(|e| format!("{e:#}"))
+}
+
+/// `--variant`'s help, with the syntax `Levers` accepts.
+fn variant_help(what: &str) -> String {
+    format!(
+        "{what} SPEC is `default` (every fast lever on, what renders otherwise), `reference` \
+         (every lever off: the plain implementation), or comma-separated key=value pairs \
+         applied to the default, or to the reference after a leading `reference,` (e.g. \
+         `region=full,field=off`, `reference,arrays=on`); keys: {}. See docs/BENCH.md \
+         (\"A/B a change\").",
+        Levers::SYNTAX
+    )
+}
+
 #[derive(Parser)]
 #[command(
     name = "refrakt",
@@ -66,6 +85,14 @@ pub enum BenchCommand {
     /// Sweep time against plane count (several sample distances) and against pixel count
     /// (several viewports), with least-squares fits.
     Scaling(ScalingArgs),
+    /// A/B the sweep's speed levers: the thesis rows with several variants (--variant)
+    /// rendered interleaved in one process, each variant's time, its ratio to the default
+    /// and its image difference to the reference (max and mean |Δ|, PSNR).
+    Variants(VariantsArgs),
+    /// Compare two `bench thesis` (or two `bench variants`) JSON reports: per row the
+    /// mean and median frame time old → new with a noise-aware verdict; with
+    /// --fail-on-regression, exit status 1 when any row got slower (for CI).
+    Compare(CompareArgs),
 }
 
 #[derive(Args)]
@@ -112,9 +139,82 @@ pub struct ThesisArgs {
     /// Draw the thesis' mean frame times beside ours as an SVG bar chart.
     #[arg(long, value_name = "FILE.svg")]
     pub plot: Option<PathBuf>,
+    #[arg(
+        long,
+        value_name = "SPEC",
+        value_parser = parse_variant,
+        help = variant_help("The sweep's levers every row uses (the floor baseline too), \
+            recorded in the report [default: default].")
+    )]
+    pub variant: Option<Levers>,
     /// No progress bar on stderr.
     #[arg(long)]
     pub quiet: bool,
+}
+
+#[derive(Args)]
+pub struct VariantsArgs {
+    #[arg(
+        long,
+        value_name = "SPEC",
+        value_parser = parse_variant,
+        help = variant_help("A variant to time; repeat the flag for more (a SPEC has commas \
+            of its own). Default: reference, default, and the default with each lever off \
+            alone.")
+    )]
+    pub variant: Vec<Levers>,
+    /// Shrinks viewport and volume together, as `bench thesis --scale` (e.g. 0.25 on
+    /// lavapipe).
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
+    pub scale: f64,
+    /// Measured frames per row and variant.
+    #[arg(long, default_value_t = 20, allow_negative_numbers = true)]
+    pub frames: u32,
+    /// Warm-up frames per row and variant (interleaved like the measured ones), excluded
+    /// from the statistics (reported).
+    #[arg(long, default_value_t = 2, allow_negative_numbers = true)]
+    pub warmup: u32,
+    /// Rows to run, comma-separated (supernova, piggy-bank, glass, hand, head, water, ship,
+    /// kiwi). Default: all.
+    #[arg(long, value_delimiter = ',')]
+    pub rows: Vec<String>,
+    /// Folder with the thesis originals that replace the stand-ins (as `bench thesis`).
+    #[arg(long, value_name = "DIR")]
+    pub data_dir: Option<PathBuf>,
+    /// Write every frame time (warm-up included) with the full context as CSV.
+    #[arg(long, value_name = "FILE.csv")]
+    pub csv: Option<PathBuf>,
+    /// Write the whole report as JSON (schema refrakt-bench-variants/1, docs/BENCH.md).
+    #[arg(long, value_name = "FILE.json")]
+    pub json: Option<PathBuf>,
+    /// No progress bar on stderr.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+#[derive(Args)]
+pub struct CompareArgs {
+    /// The earlier report (e.g. measured on main).
+    #[arg(value_name = "OLD.json")]
+    pub old: PathBuf,
+    /// The later report (e.g. measured on the branch).
+    #[arg(value_name = "NEW.json")]
+    pub new: PathBuf,
+    /// Exit with status 1 when any row (or variant) is "slower".
+    #[arg(long)]
+    pub fail_on_regression: bool,
+    /// Compare reports whose settings differ (device, scale, sample distance, a row's
+    /// viewport, resolution, planes or data) instead of refusing; the differences are
+    /// printed.
+    #[arg(long)]
+    pub allow_mismatch: bool,
+    /// A change of the median counts only beyond K × √(se_old² + se_new²), se = s/√n of
+    /// each side's per-frame times.
+    #[arg(long, value_name = "K", default_value_t = refrakt::bench::NOISE_K)]
+    pub noise_k: f64,
+    /// ... and beyond this percentage of the old median.
+    #[arg(long, value_name = "PERCENT", default_value_t = 100.0 * refrakt::bench::MIN_CHANGE)]
+    pub min_change: f64,
 }
 
 #[derive(Args)]
@@ -341,6 +441,13 @@ pub struct RenderArgs {
     /// (the comparison the thesis' cost discussion needs; compare ratios on lavapipe).
     #[arg(long)]
     pub with_baseline: bool,
+    #[arg(
+        long,
+        value_name = "SPEC",
+        value_parser = parse_variant,
+        help = variant_help("The sweep's speed levers (refract) [default: default].")
+    )]
+    pub variant: Option<Levers>,
     #[command(flatten)]
     pub scene: SceneArgs,
 }

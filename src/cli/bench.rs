@@ -59,6 +59,7 @@ pub fn bench_thesis(desc: &ContextDesc, args: &ThesisArgs) -> Result<ExitCode> {
         baselines: args.baselines,
         data_dir: args.data_dir.clone().unwrap_or_else(scene::data_dir),
         progress: !args.quiet,
+        levers: args.variant.unwrap_or_default(),
     };
     let report = refrakt::bench::thesis(&ctx, &settings)?;
     print!("{}", refrakt::bench::markdown(&report));
@@ -75,6 +76,73 @@ pub fn bench_thesis(desc: &ContextDesc, args: &ThesisArgs) -> Result<ExitCode> {
         println!("wrote {}", p.display());
     }
     finish(ctx)
+}
+
+pub fn bench_variants(desc: &ContextDesc, args: &VariantsArgs) -> Result<ExitCode> {
+    standins::scaled_dims([1, 1, 1], args.scale).context("--scale")?;
+    ensure!(args.frames >= 1, "--frames must be at least 1");
+    refrakt::bench::select_rows(&args.rows).context("--rows")?;
+    refrakt::bench::check_variants(&args.variant).context("--variant")?;
+    if let Some(p) = &args.csv {
+        refrakt::bench::check_output(p, "csv").context("--csv")?;
+    }
+    if let Some(p) = &args.json {
+        refrakt::bench::check_output(p, "json").context("--json")?;
+    }
+    let ctx = Context::new(desc)?;
+    let settings = refrakt::bench::VariantsSettings {
+        scale: args.scale,
+        frames: args.frames,
+        warmup: args.warmup,
+        rows: args.rows.clone(),
+        variants: args.variant.clone(),
+        data_dir: args.data_dir.clone().unwrap_or_else(scene::data_dir),
+        progress: !args.quiet,
+    };
+    let report = refrakt::bench::variants(&ctx, &settings)?;
+    print!("{}", refrakt::bench::variants_markdown(&report));
+    if let Some(p) = &args.csv {
+        refrakt::bench::write_variants_csv(&report, p)?;
+        println!("\nwrote {}", p.display());
+    }
+    if let Some(p) = &args.json {
+        refrakt::bench::write_json(&report, p)?;
+        println!("wrote {}", p.display());
+    }
+    finish(ctx)
+}
+
+/// `bench compare`: no device needed. Exit status 1 with --fail-on-regression when a row
+/// got slower.
+pub fn bench_compare(args: &CompareArgs) -> Result<ExitCode> {
+    let old = refrakt::bench::read_report(&args.old)?;
+    let new = refrakt::bench::read_report(&args.new)?;
+    let options = refrakt::bench::CompareOptions {
+        noise_k: args.noise_k,
+        min_change: args.min_change / 100.0,
+        allow_mismatch: args.allow_mismatch,
+    };
+    let c = refrakt::bench::compare(&args.old, &old, &args.new, &new, options)?;
+    print!("{}", refrakt::bench::compare_markdown(&c));
+    let slower = c.with_verdict(refrakt::bench::Verdict::Slower);
+    if args.fail_on_regression && !slower.is_empty() {
+        let list: Vec<String> = slower
+            .iter()
+            .map(|l| match &l.outcome {
+                refrakt::bench::Outcome::Compared(d) => {
+                    format!("{} {} ({:+.1} %)", l.dataset, l.variant, d.median_pct)
+                }
+                _ => format!("{} {}", l.dataset, l.variant),
+            })
+            .collect();
+        eprintln!(
+            "regression: slower than {}: {}",
+            args.old.display(),
+            list.join(", ")
+        );
+        return Ok(ExitCode::from(1));
+    }
+    Ok(ExitCode::SUCCESS)
 }
 
 pub fn bench_scaling(desc: &ContextDesc, args: &ScalingArgs) -> Result<ExitCode> {

@@ -42,6 +42,10 @@ pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
     // Everything that can be checked without the GPU is checked first, so bad input fails
     // at once with a clear message.
     output::format_for(&args.output)?;
+    if args.variant.is_some() {
+        // --variant is the sweep's: refused with --model ea like --softness and the rest.
+        scene_with_refract_only(&args.scene, &["--variant"])?;
+    }
     let dumps = match &args.dump {
         Some(d) => parse_dumps(d)?,
         None => Vec::new(),
@@ -85,6 +89,10 @@ pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
     } = build_scene(&args.scene, Some(upload::device_limits(&ctx)))?;
     progress.suspend(|| notes.iter().for_each(|n| println!("{n}")));
     opts.sweep.dumps = dumps;
+    if let Some(levers) = args.variant {
+        opts.sweep.levers = levers;
+        progress.suspend(|| println!("sweep variant: {levers}"));
+    }
 
     progress.set_message(format!(
         "uploading the {}x{}x{} volume",

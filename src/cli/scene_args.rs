@@ -63,6 +63,12 @@ pub fn parse_background(s: &str) -> Result<[f32; 4]> {
 
 /// The scene the arguments name, with every given flag applied over it.
 pub fn scene_from_args(args: &SceneArgs) -> Result<Scene> {
+    scene_with_refract_only(args, &[])
+}
+
+/// [`scene_from_args`], with `extra` refractive-model flags a command has beyond the
+/// scene's (e.g. `render --variant`) refused for the EA model like the others.
+pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Result<Scene> {
     let name = args
         .scene
         .as_deref()
@@ -201,10 +207,11 @@ pub fn scene_from_args(args: &SceneArgs) -> Result<Scene> {
     });
     s.apply(o);
     if s.model == Model::Ea {
-        let given = refract_only_flags(args);
+        let mut given = refract_only_flags(args);
+        given.extend(extra);
         ensure!(
             given.is_empty(),
-            "{} {} the refractive model's (--model refract); the EA ray marcher has no \
+            "{} {} the refractive model's (--model refract); the EA ray marcher has no plane sweep, \
              light, refraction or environment",
             given.join(", "),
             if given.len() == 1 { "is" } else { "are" }
