@@ -215,7 +215,7 @@ fn default_variants_are_the_reference_the_default_and_each_lever_off() {
             "reference",
             "default",
             "region=full",
-            "field=off",
+            "field=on",
             "arrays=off",
             "specialize=off"
         ]

@@ -107,10 +107,10 @@ fn check(case: &Case) {
             let d = linear_max(&reference, &f);
             assert!(d <= 1e-5, "{}, {levers}: linear max |Δ| {d}", case.scene);
         }
-        // The drawn region: the bound after tone mapping (measured: identical).
-        // The field texture is another discretisation of ∇η (render/field.rs; its own
-        // test below, the physics tests run with it): the other levers are held to the
-        // bound on top of it.
+        // The drawn region and the default: the bound after tone mapping
+        // (measured: identical). The field texture is another discretisation of ∇η
+        // (render/field.rs; its own test below; off by default): the other levers are held
+        // to the bound on top of it.
         let field_only = Levers {
             field: true,
             ..Levers::REFERENCE
@@ -129,7 +129,14 @@ fn check(case: &Case) {
                     ..Levers::REFERENCE
                 },
             ),
-            (&field_reference, Levers::default()),
+            (&reference, Levers::default()),
+            (
+                &field_reference,
+                Levers {
+                    field: true,
+                    ..Levers::default()
+                },
+            ),
         ];
         for (base, levers) in close {
             let (f, _) = render(&mut renderer, &scene, case, levers);

@@ -159,7 +159,7 @@ pub struct VariantsArgs {
         value_name = "SPEC",
         value_parser = parse_variant,
         help = variant_help("A variant to time; repeat the flag for more (a SPEC has commas \
-            of its own). Default: reference, default, and the default with each lever off \
+            of its own). Default: reference, default, and the default with each lever flipped \
             alone.")
     )]
     pub variant: Vec<Levers>,

@@ -33,7 +33,12 @@ fn spinner(message: &str) -> indicatif::ProgressBar {
 }
 
 /// Timestamp scopes of builds that are not part of a frame (see `Renderer`).
-const ONE_OFF_BUILDS: [&str; 3] = ["gradient volume", "environment SAT", "preintegration"];
+const ONE_OFF_BUILDS: [&str; 4] = [
+    "gradient volume",
+    "environment SAT",
+    "preintegration",
+    "field texture",
+];
 
 pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
     if let Some(code) = list_and_exit(&args.scene)? {
@@ -169,8 +174,10 @@ pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
     if let Some(stats) = &frame.sweep {
         let planes = stats.planes.count;
         println!(
-            "sweep: {planes} planes, spacing {:.5}, {:.1} MiB of state-buffer traffic per plane",
+            "sweep: {planes} planes, spacing {:.5}, {:.0} % of the viewport shaded per plane \
+             (mean), {:.1} MiB of state-buffer traffic per plane",
             stats.planes.spacing,
+            100.0 * stats.shaded_fraction,
             stats.bytes_per_plane as f64 / (1 << 20) as f64
         );
         if let Some(ms) = frame.timings.get("sweep") {
