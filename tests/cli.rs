@@ -88,6 +88,52 @@ fn render_writes_png_and_exr_with_timings() {
     }
 }
 
+/// `--pass-timings` times the forward transport's three draws of every plane apart: the
+/// three sums are nested in the sweep's scope (never more than it) and cover its draws
+/// (most of it: what is left is barriers between planes).
+#[test]
+fn pass_timings_split_the_sweep_into_its_draws() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("out.png");
+    let o = refrakt(&[
+        "render",
+        "-o",
+        path.to_str().unwrap(),
+        "--width",
+        "32",
+        "--height",
+        "32",
+        "--volume-size",
+        "24",
+        "--pass-timings",
+    ]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let ms = |name: &str| -> f64 {
+        out.lines()
+            .find_map(|l| {
+                let rest = l.trim_start().strip_prefix(name)?;
+                let v = rest.trim_start().split_whitespace().next()?;
+                rest.starts_with(' ')
+                    .then(|| v.parse::<f64>().ok())
+                    .flatten()
+            })
+            .unwrap_or_else(|| panic!("no '{name}' time in:\n{out}"))
+    };
+    let sweep = ms("sweep");
+    let parts = ["sweep: light rays", "sweep: splat", "sweep: viewing rays"].map(ms);
+    let sum: f64 = parts.iter().sum();
+    assert!(parts.iter().all(|p| *p > 0.0), "{parts:?}\n{out}");
+    assert!(
+        sum <= sweep * 1.001,
+        "parts {sum} ms > sweep {sweep} ms\n{out}"
+    );
+    assert!(
+        sum >= 0.5 * sweep,
+        "parts {sum} ms cover too little of {sweep} ms\n{out}"
+    );
+}
+
 #[test]
 fn ea_model_and_dumps_from_the_command_line() {
     let dir = tempfile::tempdir().unwrap();
@@ -504,6 +550,7 @@ fn ea_refuses_the_refractive_models_flags() {
         (&["--clip", "1,0,0,0"][..], "--clip"),
         (&["--eta-scale", "2"][..], "--eta-scale"),
         (&["--dump", "medium@1"][..], "dumps"),
+        (&["--pass-timings"][..], "--pass-timings"),
     ] {
         let mut args = vec!["render", "--model", "ea", "--volume-size", "16", "-o", o];
         args.extend(flags);

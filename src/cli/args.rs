@@ -448,6 +448,11 @@ pub struct RenderArgs {
         help = variant_help("The sweep's speed levers (refract) [default: default].")
     )]
     pub variant: Option<Levers>,
+    /// Time the forward light transport's three draws of every plane apart (light rays,
+    /// splat, viewing rays; summed over the planes) with GPU timestamps around each: a
+    /// profile, which the extra timestamps may slow a little (refract).
+    #[arg(long)]
+    pub pass_timings: bool,
     #[command(flatten)]
     pub scene: SceneArgs,
 }

@@ -47,9 +47,17 @@ pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
     // Everything that can be checked without the GPU is checked first, so bad input fails
     // at once with a clear message.
     output::format_for(&args.output)?;
-    if args.variant.is_some() {
-        // --variant is the sweep's: refused with --model ea like --softness and the rest.
-        scene_with_refract_only(&args.scene, &["--variant"])?;
+    if args.variant.is_some() || args.pass_timings {
+        // --variant and --pass-timings are the sweep's: refused with --model ea like
+        // --softness and the rest.
+        let mut flags = Vec::new();
+        if args.variant.is_some() {
+            flags.push("--variant");
+        }
+        if args.pass_timings {
+            flags.push("--pass-timings");
+        }
+        scene_with_refract_only(&args.scene, &flags)?;
     }
     let dumps = match &args.dump {
         Some(d) => parse_dumps(d)?,
@@ -94,6 +102,7 @@ pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
     } = build_scene(&args.scene, Some(upload::device_limits(&ctx)))?;
     progress.suspend(|| notes.iter().for_each(|n| println!("{n}")));
     opts.sweep.dumps = dumps;
+    opts.sweep.pass_timings = args.pass_timings;
     if let Some(levers) = args.variant {
         opts.sweep.levers = levers;
         progress.suspend(|| println!("sweep variant: {levers}"));
@@ -161,8 +170,16 @@ pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
             println!("  {name:<16} {ms:9.3} ms");
         }
         println!("GPU time of the frame, per pass:");
-        for (name, ms) in scopes.iter().filter(|(n, _)| n != "render" && !one_off(n)) {
-            println!("  {name:<16} {ms:9.3} ms");
+        // A pass timed per plane (--pass-timings) has one scope per plane: summed.
+        let mut names: Vec<&str> = Vec::new();
+        for (name, _) in scopes.iter().filter(|(n, _)| n != "render" && !one_off(n)) {
+            if !names.contains(&name.as_str()) {
+                names.push(name);
+            }
+        }
+        for name in names {
+            let ms = frame.timings.get(name).unwrap_or(0.0);
+            println!("  {name:<20} {ms:9.3} ms");
         }
         if let Some(ms) = frame.timings.get("render") {
             println!(

@@ -301,7 +301,7 @@ impl Renderer {
     pub fn render(&mut self, model: Model, camera: &Camera, opts: &RenderOptions) -> Result<Frame> {
         self.check(model, camera, opts)?;
         self.ensure_gradient(model)?;
-        self.ensure_field(model)?;
+        self.ensure_field(model, opts)?;
         let ctx = self.ctx.clone();
         let mut recorded = None;
         let timings = ctx.execute(|rec| {
@@ -352,7 +352,7 @@ impl Renderer {
         );
         self.check(model, camera, opts)?;
         self.ensure_gradient(model)?;
-        self.ensure_field(model)?;
+        self.ensure_field(model, opts)?;
         let r = self.record_inner(rec, model, camera, opts, false)?;
         Ok(RecordedFrame {
             image: &self.target(model)?.image,
@@ -391,10 +391,11 @@ impl Renderer {
         Ok(())
     }
 
-    /// Make the field texture if `model` needs it, once: beside the gradient volume (8
-    /// bytes per voxel once built) in the same budget; built in the frame's recording.
-    fn ensure_field(&mut self, model: Model) -> Result<()> {
-        if !model::needs_gradient(model) || self.field_checked {
+    /// Make the field texture the first time a frame of `model` asks for it (the sweep's
+    /// `field` lever), once: beside the gradient volume (8 bytes per voxel once built) in
+    /// the same budget; built in the frame's recording.
+    fn ensure_field(&mut self, model: Model, opts: &RenderOptions) -> Result<()> {
+        if !model::needs_gradient(model) || !opts.sweep.levers.field || self.field_checked {
             return Ok(());
         }
         self.field_checked = true;
@@ -414,6 +415,8 @@ impl Renderer {
                 &self.linear,
             )?);
             self.field_dirty = true;
+            // The pass's descriptor set names the volume in the field's place: make it anew.
+            self.passes.remove(&model);
         }
         Ok(())
     }

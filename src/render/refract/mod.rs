@@ -210,6 +210,10 @@ pub struct SweepOptions {
     /// specialization constants): each renders the same image as the plain
     /// implementation within stated bounds (tested); `Levers::REFERENCE` is the plain one.
     pub levers: Levers,
+    /// Profile: GPU timestamps around the forward transport's three draws of every plane
+    /// (scopes "sweep: light rays", "sweep: splat", "sweep: viewing rays", one per plane;
+    /// `Timings::get` sums them).
+    pub pass_timings: bool,
 }
 
 impl Default for SweepOptions {
@@ -232,6 +236,7 @@ impl Default for SweepOptions {
             reflections: true,
             floor: false,
             levers: Levers::default(),
+            pass_timings: false,
         }
     }
 }

@@ -267,6 +267,10 @@ impl SweepPass {
                     rec.end_render_pass();
                 }
                 Some(f) => {
+                    let timed = sweep.pass_timings;
+                    if timed {
+                        rec.begin_scope("sweep: light rays");
+                    }
                     // 1. The light rays advance to plane i (over the ray images).
                     rec.begin_render_pass(
                         &self.light_pass,
@@ -279,6 +283,10 @@ impl SweepPass {
                     rec.draw_fullscreen(plane_pipeline, bytemuck::bytes_of(&push))?;
                     rec.end_render_pass();
                     rec.set_viewport(self.width, self.height);
+                    if timed {
+                        rec.end_scope();
+                        rec.begin_scope("sweep: splat");
+                    }
                     // 2. They deposit their flux on plane i: irradiance layer `write`
                     // (plane i - 2's, read by no draw any more) becomes an attachment.
                     rec.transition_many(&[
@@ -304,6 +312,10 @@ impl SweepPass {
                         grid_dims[0] * grid_dims[1],
                     )?;
                     rec.end_render_pass();
+                    if timed {
+                        rec.end_scope();
+                        rec.begin_scope("sweep: viewing rays");
+                    }
                     // 3. The viewing rays cross the segment from plane i - 1 to plane i,
                     // lit by the irradiance of both (layers `read` and `write`).
                     rec.transition_many(&[
@@ -334,6 +346,9 @@ impl SweepPass {
                     rec.bind_pipeline(view);
                     rec.draw_fullscreen(view, bytemuck::bytes_of(&push))?;
                     rec.end_render_pass();
+                    if timed {
+                        rec.end_scope();
+                    }
                     rec.bind_pipeline(plane_pipeline);
                 }
             }

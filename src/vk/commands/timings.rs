@@ -7,7 +7,9 @@ use crate::vk::Context;
 
 use super::*;
 
-pub(super) const MAX_QUERIES: u32 = 256;
+/// Enough for per-plane scopes of a profile (three per plane, 2 timestamps each, over a
+/// thousand planes).
+pub(super) const MAX_QUERIES: u32 = 8192;
 
 /// GPU time of each named scope, in recording order, in milliseconds.
 #[derive(Clone, Debug, Default)]
