@@ -113,7 +113,7 @@ fn pass_timings_split_the_sweep_into_its_draws() {
         out.lines()
             .find_map(|l| {
                 let rest = l.trim_start().strip_prefix(name)?;
-                let v = rest.trim_start().split_whitespace().next()?;
+                let v = rest.split_whitespace().next()?;
                 rest.starts_with(' ')
                     .then(|| v.parse::<f64>().ok())
                     .flatten()
