@@ -187,4 +187,12 @@ fn scaling_bench_reports_both_series_and_fits() {
     let pixels: Vec<u64> = r.by_pixels.iter().map(|p| p.pixels).collect();
     assert_eq!(pixels, [32 * 32, 48 * 48]);
     assert!(r.planes_fit.r2.is_finite() && r.pixels_fit.r2.is_finite());
+    // The region lever shades some of each plane, never more than all of it.
+    for p in r.by_planes.iter().chain(&r.by_pixels) {
+        assert!(
+            p.shaded_pixels > 0.0 && p.shaded_pixels <= p.pixels as f64,
+            "{p:?}"
+        );
+    }
+    assert!(stdout.contains("per plane and shaded pixel"), "{stdout}");
 }

@@ -7,6 +7,10 @@ use super::*;
 pub struct Point {
     pub planes: u32,
     pub pixels: u64,
+    /// Mean pixels a plane shades (the `region` lever's rectangles; = pixels with
+    /// `region=full`).
+    #[serde(default)]
+    pub shaded_pixels: f64,
     pub sweep_ms: f64,
 }
 
@@ -84,6 +88,7 @@ pub fn scaling(
     let mut measure = |opts: &RenderOptions| -> Result<Point> {
         let mut sum = 0.0;
         let mut planes = 0;
+        let mut shaded = 1.0;
         for k in 0..=frames {
             let f = renderer.render(Model::Refract, &scene.camera, opts)?;
             pb.inc(1);
@@ -91,10 +96,13 @@ pub fn scaling(
                 sum += f.timings.get("sweep").context("no timestamps")?;
             }
             planes = f.sweep.as_ref().map(|s| s.planes.count).unwrap_or(0);
+            shaded = f.sweep.as_ref().map_or(1.0, |s| s.shaded_fraction);
         }
+        let pixels = opts.width as u64 * opts.height as u64;
         Ok(Point {
             planes,
-            pixels: opts.width as u64 * opts.height as u64,
+            pixels,
+            shaded_pixels: shaded * pixels as f64,
             sweep_ms: sum / frames as f64,
         })
     };
@@ -140,20 +148,47 @@ pub fn scaling(
     })
 }
 
+/// How far the cost per plane and shaded pixel strays from its median over every point of
+/// the report, in percent (most below, most above): how nearly the sweep's cost is
+/// proportional to planes × shaded pixels (issue 16's goal: within ±15 %).
+pub fn proportionality(r: &ScalingReport) -> Option<(f64, f64)> {
+    let v: Vec<f64> = r
+        .by_planes
+        .iter()
+        .chain(&r.by_pixels)
+        .filter(|p| p.planes > 0 && p.shaded_pixels > 0.0)
+        .map(|p| p.sweep_ms / (p.planes as f64 * p.shaded_pixels))
+        .collect();
+    let median = Stats::of(&v).ok()?.median;
+    let lo = v.iter().cloned().fold(f64::INFINITY, f64::min);
+    let hi = v.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+    Some((100.0 * (lo / median - 1.0), 100.0 * (hi / median - 1.0)))
+}
+
 pub fn scaling_markdown(r: &ScalingReport) -> String {
     let mut s = format!(
         "Device: {} ({}); scene {}; mean sweep GPU ms of {} frames per point\n\n",
         r.meta.device, r.meta.driver_info, r.scene, r.frames
     );
-    s += "| Planes | Pixels | Sweep ms | ms per plane | ns per plane-pixel |\n|---:|---:|---:|---:|---:|\n";
+    s += "| Planes | Pixels | Shaded per plane | Sweep ms | ms per plane | ns per plane-pixel | ns per plane-shaded-pixel |\n|---:|---:|---:|---:|---:|---:|---:|\n";
+    let per_shaded = |p: &Point| p.sweep_ms * 1e6 / (p.planes as f64 * p.shaded_pixels);
     for p in r.by_planes.iter().chain(&r.by_pixels) {
         s += &format!(
-            "| {} | {} | {:.2} | {:.3} | {:.2} |\n",
+            "| {} | {} | {:.0} | {:.2} | {:.3} | {:.2} | {:.2} |\n",
             p.planes,
             p.pixels,
+            p.shaded_pixels,
             p.sweep_ms,
             p.sweep_ms / p.planes as f64,
-            p.sweep_ms * 1e6 / (p.planes as f64 * p.pixels as f64)
+            p.sweep_ms * 1e6 / (p.planes as f64 * p.pixels as f64),
+            per_shaded(p)
+        );
+    }
+    if let Some(spread) = proportionality(r) {
+        s += &format!(
+            "\nCost per plane and shaded pixel: within {:+.1} % / {:+.1} % of its median over \
+             all points (cost ∝ planes × shaded pixels would be 0 %)\n",
+            spread.0, spread.1
         );
     }
     s += &format!(
