@@ -367,27 +367,13 @@ pub(crate) fn psnr_text(p: Option<f64>) -> String {
 
 /// The report as Markdown: the protocol, the variants' levers, and one table per row.
 pub fn variants_markdown(r: &VariantsReport) -> String {
-    let m = &r.meta;
     let st = &r.settings;
-    let mut s = format!(
-        "Device: {} ({}, {} {}, Vulkan {}); refrakt {} ({}); {}\n\
-         Protocol: viewport {}² × scale {}, sample distance {}, {} frames after {} warm-up per \
+    let mut s = device_line(&r.meta);
+    s += &format!(
+        "Protocol: viewport {}² × scale {}, sample distance {}, {} frames after {} warm-up per \
          variant, interleaved (frame k of every variant before frame k+1 of any), camera \
          orbiting {}°/frame; GPU timestamps of the whole frame.\n\n",
-        m.device,
-        m.device_type,
-        m.driver,
-        m.driver_info,
-        m.vulkan,
-        m.refrakt_version,
-        m.git_commit,
-        m.date,
-        THESIS_VIEWPORT,
-        st.scale,
-        st.sample_distance,
-        st.frames,
-        st.warmup,
-        st.orbit_deg_per_frame
+        THESIS_VIEWPORT, st.scale, st.sample_distance, st.frames, st.warmup, st.orbit_deg_per_frame
     );
     s += "Variants (in the order each frame renders them):\n\n";
     for v in &st.variants {
@@ -489,7 +475,7 @@ pub fn write_variants_csv(r: &VariantsReport, path: &Path) -> Result<()> {
                 .zip(v.sweep_ms.iter().map(Some).chain(std::iter::repeat(None)))
                 .map(|((t, o), sw)| (false, t, o, sw));
             for (k, (warmup, t, o, sweep)) in warm.chain(measured).enumerate() {
-                w.write_record([
+                let mut record = vec![
                     VARIANTS_SCHEMA.to_string(),
                     row.dataset.clone(),
                     v.variant.clone(),
@@ -499,20 +485,16 @@ pub fn write_variants_csv(r: &VariantsReport, path: &Path) -> Result<()> {
                     o.to_string(),
                     format!("{t:.6}"),
                     sweep.map(|x| format!("{x:.6}")).unwrap_or_default(),
-                    row.resolution[0].to_string(),
-                    row.resolution[1].to_string(),
-                    row.resolution[2].to_string(),
-                    row.viewport[0].to_string(),
-                    row.planes.to_string(),
-                    r.settings.scale.to_string(),
-                    r.settings.sample_distance.to_string(),
-                    r.meta.device.clone(),
-                    r.meta.driver.clone(),
-                    r.meta.vulkan.clone(),
-                    r.meta.refrakt_version.clone(),
-                    r.meta.git_commit.clone(),
-                    r.meta.date.clone(),
-                ])?;
+                ];
+                record.extend(size_columns(
+                    row.resolution,
+                    row.viewport,
+                    row.planes,
+                    r.settings.scale,
+                    r.settings.sample_distance,
+                ));
+                record.extend(meta_columns(&r.meta));
+                w.write_record(&record)?;
             }
         }
     }

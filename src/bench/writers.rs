@@ -9,12 +9,10 @@ pub(super) fn dims(d: [u32; 3]) -> String {
 
 /// The report as Markdown: the thesis table beside ours, the per-pass breakdown, and the
 /// baselines when measured.
-pub fn markdown(r: &Report) -> String {
-    let m = &r.meta;
-    let mut s = format!(
-        "Device: {} ({}, {} {}, Vulkan {}); refrakt {} ({}); {}\n\
-         Protocol: viewport {}² × scale {} , sample distance {}, {} frames after {} warm-up, camera orbiting {}°/frame; GPU timestamps of the whole frame.\n\
-         Sweep variant: {}.\n\n",
+/// The first line of every report: device, driver, build and date.
+pub(crate) fn device_line(m: &Meta) -> String {
+    format!(
+        "Device: {} ({}, {} {}, Vulkan {}); refrakt {} ({}); {}\n",
         m.device,
         m.device_type,
         m.driver,
@@ -22,7 +20,15 @@ pub fn markdown(r: &Report) -> String {
         m.vulkan,
         m.refrakt_version,
         m.git_commit,
-        m.date,
+        m.date
+    )
+}
+
+pub fn markdown(r: &Report) -> String {
+    let mut s = device_line(&r.meta);
+    s += &format!(
+        "Protocol: viewport {}² × scale {} , sample distance {}, {} frames after {} warm-up, camera orbiting {}°/frame; GPU timestamps of the whole frame.\n\
+         Sweep variant: {}.\n\n",
         THESIS_VIEWPORT,
         r.settings.scale,
         r.settings.sample_distance,
@@ -135,30 +141,25 @@ pub fn write_csv(r: &Report, path: &Path) -> Result<()> {
                 .map(|t| (true, t))
                 .chain(v.frames_ms.iter().map(|t| (false, t)));
             for (k, (warm, t)) in all.enumerate() {
-                w.write_record([
+                let mut record = vec![
                     SCHEMA.to_string(),
                     row.dataset.clone(),
                     v.variant.clone(),
                     k.to_string(),
                     warm.to_string(),
                     format!("{t:.6}"),
-                    row.resolution[0].to_string(),
-                    row.resolution[1].to_string(),
-                    row.resolution[2].to_string(),
-                    row.viewport[0].to_string(),
-                    row.planes.to_string(),
-                    r.settings.scale.to_string(),
-                    r.settings.sample_distance.to_string(),
-                    row.thesis.ms.to_string(),
-                    row.thesis.gpu.clone(),
-                    r.meta.device.clone(),
-                    r.meta.driver.clone(),
-                    r.meta.vulkan.clone(),
-                    r.meta.refrakt_version.clone(),
-                    r.meta.git_commit.clone(),
-                    r.meta.date.clone(),
-                    r.settings.variant.clone().unwrap_or_default(),
-                ])?;
+                ];
+                record.extend(size_columns(
+                    row.resolution,
+                    row.viewport,
+                    row.planes,
+                    r.settings.scale,
+                    r.settings.sample_distance,
+                ));
+                record.extend([row.thesis.ms.to_string(), row.thesis.gpu.clone()]);
+                record.extend(meta_columns(&r.meta));
+                record.push(r.settings.variant.clone().unwrap_or_default());
+                w.write_record(&record)?;
             }
         }
     }
@@ -168,6 +169,39 @@ pub fn write_csv(r: &Report, path: &Path) -> Result<()> {
 }
 
 /// Any report (thesis, variants) as pretty JSON.
+/// CSV columns of a row's size and the run's sampling: res_x, res_y, res_z, viewport,
+/// planes, scale, sample_distance.
+pub(crate) fn size_columns(
+    resolution: [u32; 3],
+    viewport: [u32; 2],
+    planes: u32,
+    scale: f64,
+    sample_distance: f32,
+) -> [String; 7] {
+    [
+        resolution[0].to_string(),
+        resolution[1].to_string(),
+        resolution[2].to_string(),
+        viewport[0].to_string(),
+        planes.to_string(),
+        scale.to_string(),
+        sample_distance.to_string(),
+    ]
+}
+
+/// CSV columns of the device and build: device, driver, vulkan, refrakt_version,
+/// git_commit, date.
+pub(crate) fn meta_columns(meta: &Meta) -> [String; 6] {
+    [
+        meta.device.clone(),
+        meta.driver.clone(),
+        meta.vulkan.clone(),
+        meta.refrakt_version.clone(),
+        meta.git_commit.clone(),
+        meta.date.clone(),
+    ]
+}
+
 pub fn write_json<T: Serialize>(r: &T, path: &Path) -> Result<()> {
     let text = serde_json::to_string_pretty(r)?;
     std::fs::write(path, text + "\n")
