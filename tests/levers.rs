@@ -265,6 +265,8 @@ fn the_field_texture_holds_the_value_and_the_central_difference_of_eta() {
             ..Default::default()
         };
         opts.sweep.light = refrakt::render::Light::for_camera(&scene_cam);
+        // The field texture is made the first time a frame asks for it.
+        opts.sweep.levers.field = true;
         renderer.render(Model::Refract, &scene_cam, &opts).unwrap();
         let field = renderer
             .read_field_texture()
