@@ -17,6 +17,7 @@ mod options;
 pub mod preintegration;
 pub mod refract;
 pub mod sat;
+pub mod sat3d;
 mod tonemap;
 pub mod upload;
 

@@ -237,7 +237,7 @@ pub fn format_size(format: vk::Format) -> Result<u32> {
         | vk::Format::B8G8R8A8_SRGB
         | vk::Format::A8B8G8R8_UNORM_PACK32
         | vk::Format::A8B8G8R8_SRGB_PACK32 => 4,
-        vk::Format::R16G16B16A16_SFLOAT | vk::Format::R32G32_SFLOAT => 8,
+        vk::Format::R16G16B16A16_SFLOAT | vk::Format::R32G32_SFLOAT | vk::Format::R32G32_UINT => 8,
         vk::Format::R32G32B32A32_SFLOAT => 16,
         other => bail!("format {other:?} has no known texel size"),
     })
