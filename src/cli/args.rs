@@ -14,11 +14,12 @@ fn parse_variant(s: &str) -> Result<Levers, String> {
 /// `--variant`'s help, with the syntax `Levers` accepts.
 fn variant_help(what: &str) -> String {
     format!(
-        "{what} SPEC is `default` (every fast lever on, what renders otherwise), `reference` \
-         (every lever off: the plain implementation), or comma-separated key=value pairs \
-         applied to the default, or to the reference after a leading `reference,` (e.g. \
-         `region=full,field=off`, `reference,arrays=on`); keys: {}. See docs/BENCH.md \
-         (\"A/B a change\").",
+        "{what} SPEC is `default` ({}: the levers that keep the image, what renders \
+         otherwise), `reference` (every lever off: the plain implementation), or \
+         comma-separated key=value pairs applied to the default, or to the reference after a \
+         leading `reference,` (e.g. `region=full,arrays=off`, `reference,arrays=on`); keys: \
+         {}. See docs/BENCH.md (\"A/B a change\").",
+        Levers::default(),
         Levers::SYNTAX
     )
 }
