@@ -217,7 +217,8 @@ fn default_variants_are_the_reference_the_default_and_each_lever_off() {
             "region=full",
             "field=on",
             "arrays=off",
-            "specialize=off"
+            "specialize=off",
+            "splat=compute"
         ]
     );
     // Each flipped variant differs from the default in one lever.
@@ -233,7 +234,7 @@ fn default_variants_are_the_reference_the_default_and_each_lever_off() {
     }
     let row = &r.rows[0];
     assert_eq!(row.dataset, "kiwi");
-    assert_eq!(row.variants.len(), 6);
+    assert_eq!(row.variants.len(), 7);
     assert!(row.variants.iter().all(|v| v.frames_ms.len() == 1));
     assert_eq!(row.variants[0].image.psnr_db, None);
 }

@@ -10,7 +10,7 @@ mod common;
 
 use common::with_context;
 use refrakt::output::to_srgb8;
-use refrakt::render::{Camera, Frame, Levers, LightTransport, Model, Region, Renderer};
+use refrakt::render::{Camera, Frame, Levers, LightTransport, Model, Region, Renderer, Splat};
 use refrakt::scene::Scene;
 use refrakt::tone::ToneMap;
 
@@ -107,6 +107,26 @@ fn check(case: &Case) {
             let d = linear_max(&reference, &f);
             assert!(d <= 1e-5, "{}, {levers}: linear max |Δ| {d}", case.scene);
         }
+        // The compute splat sums the same deposits in 32.32 fixed point instead of f32
+        // blending: rounding of the deposits only, and an order-independent sum, so two
+        // frames are bit-identical (float atomics would not be).
+        let compute = Levers {
+            splat: Splat::Compute,
+            ..Levers::REFERENCE
+        };
+        let (first, _) = render(&mut renderer, &scene, case, compute);
+        let (second, _) = render(&mut renderer, &scene, case, compute);
+        assert!(
+            first.pixels == second.pixels,
+            "{}: the compute splat is not reproducible",
+            case.scene
+        );
+        let d = linear_max(&reference, &first);
+        eprintln!(
+            "{} {:?} sd {} {compute}: linear max |Δ| {d:.3e}",
+            case.scene, case.transport, case.sample_distance
+        );
+        assert!(d <= 1e-5, "{}, {compute}: linear max |Δ| {d}", case.scene);
         // The drawn region and the default: the bound after tone mapping
         // (measured: identical). The field texture is another discretisation of ∇η
         // (render/field.rs; its own test below; off by default): the other levers are held
@@ -130,6 +150,13 @@ fn check(case: &Case) {
                 },
             ),
             (&reference, Levers::default()),
+            (
+                &reference,
+                Levers {
+                    splat: Splat::Compute,
+                    ..Levers::default()
+                },
+            ),
             (
                 &field_reference,
                 Levers {

@@ -506,17 +506,22 @@ pub fn write_variants_csv(r: &VariantsReport, path: &Path) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::Region;
+    use crate::render::{Region, Splat};
 
     #[test]
     fn names_read_back_to_their_levers() {
         for region in [Region::Full, Region::Rect] {
-            for bits in 0..8u32 {
+            for bits in 0..16u32 {
                 let l = Levers {
                     region,
                     field: bits & 1 != 0,
                     arrays: bits & 2 != 0,
                     specialize: bits & 4 != 0,
+                    splat: if bits & 8 != 0 {
+                        Splat::Compute
+                    } else {
+                        Splat::Raster
+                    },
                 };
                 let n = variant_name(l);
                 assert_eq!(Levers::parse(&n).unwrap(), l, "{n}");
@@ -548,7 +553,8 @@ mod tests {
                 "region=full",
                 "field=on",
                 "arrays=off",
-                "specialize=off"
+                "specialize=off",
+                "splat=compute"
             ]
         );
     }

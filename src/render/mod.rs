@@ -40,7 +40,7 @@ pub use sat::SummedAreaTable;
 
 pub use preintegration::{PreintegrationTable, TABLE_SIZE};
 pub use refract::{
-    Clamps, Dump, Levers, Light, LightTransport, Planes, Region, StateBuffer, SweepOptions,
+    Clamps, Dump, Levers, Light, LightTransport, Planes, Region, Splat, StateBuffer, SweepOptions,
     SweepStats, MAX_ETA_SCALE,
 };
 pub use tonemap::ToneMapPass;

@@ -21,13 +21,29 @@ pub enum Region {
     Rect,
 }
 
+/// How the forward transport's light rays deposit their flux on a plane (both give the same
+/// deposits, light_splat_ray.glsl).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Splat {
+    /// One point sprite per ray, blended additively into two RGBA32F attachments.
+    Raster,
+    /// One compute invocation per ray adding 32.32 fixed-point values with integer
+    /// atomics, then a resolve into the irradiance images: order-independent sums, so
+    /// still bit-reproducible frame to frame.
+    Compute,
+}
+
 /// One combination of the levers. `Levers::default()` (what renders unless told
 /// otherwise) has every lever on that renders the plain implementation's image
 /// ([`Levers::REFERENCE`], every lever off) within float rounding: region, arrays,
 /// specialize. The field texture is off by default: it is another discretisation of ∇η
 /// (render/field.rs) whose images differ visibly at some pixels of noisy media (measured
 /// up to 0.71 of display range at single pixels, mean 2e-3 to 1e-2) for 1-5 % of the
-/// frame on lavapipe (docs/BENCH.md).
+/// frame on lavapipe (docs/BENCH.md). The compute splat is off by default: it renders the
+/// raster splat's image within float rounding, but on lavapipe its integer atomics cost
+/// more than the sprites (1.0-1.55x the frame, measured); it was built for GPUs, where
+/// the sprites' blending into RGBA32F was 84 % of the forward sweep (H100, measured).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Levers {
@@ -42,6 +58,8 @@ pub struct Levers {
     /// Specialization constants compile out what a frame does not use (specular,
     /// clipping, reflections, the backward soft-shadow kernel).
     pub specialize: bool,
+    /// How the forward transport's light rays deposit their flux.
+    pub splat: Splat,
 }
 
 impl Default for Levers {
@@ -51,6 +69,7 @@ impl Default for Levers {
             field: false,
             arrays: true,
             specialize: true,
+            splat: Splat::Raster,
         }
     }
 }
@@ -62,11 +81,12 @@ impl Levers {
         field: false,
         arrays: false,
         specialize: false,
+        splat: Splat::Raster,
     };
 
     /// The keys of [`Levers::parse`], with their values, for help texts.
     pub const SYNTAX: &'static str =
-        "region=full|rect, field=off|on, arrays=off|on, specialize=off|on";
+        "region=full|rect, field=off|on, arrays=off|on, specialize=off|on, splat=raster|compute";
 
     /// `default`, `reference`, or comma-separated `key=value` pairs applied to the
     /// default (e.g. `region=full,field=off`); a pair may also follow `reference,` to
@@ -115,6 +135,13 @@ impl Levers {
                 "field" => levers.field = on(value)?,
                 "arrays" => levers.arrays = on(value)?,
                 "specialize" => levers.specialize = on(value)?,
+                "splat" => {
+                    levers.splat = match value {
+                        "raster" => Splat::Raster,
+                        "compute" => Splat::Compute,
+                        _ => bail!("splat={value}: expected raster or compute"),
+                    }
+                }
                 _ => bail!(
                     "unknown lever '{key}' in variant '{spec}'; the keys are {}",
                     Self::SYNTAX
@@ -138,6 +165,12 @@ impl Levers {
             |l: &mut Levers| l.field = !l.field,
             |l: &mut Levers| l.arrays = !l.arrays,
             |l: &mut Levers| l.specialize = !l.specialize,
+            |l: &mut Levers| {
+                l.splat = match l.splat {
+                    Splat::Raster => Splat::Compute,
+                    Splat::Compute => Splat::Raster,
+                }
+            },
         ] {
             let mut v = self;
             flip(&mut v);
@@ -152,14 +185,18 @@ impl fmt::Display for Levers {
         let on = |b: bool| if b { "on" } else { "off" };
         write!(
             f,
-            "region={},field={},arrays={},specialize={}",
+            "region={},field={},arrays={},specialize={},splat={}",
             match self.region {
                 Region::Full => "full",
                 Region::Rect => "rect",
             },
             on(self.field),
             on(self.arrays),
-            on(self.specialize)
+            on(self.specialize),
+            match self.splat {
+                Splat::Raster => "raster",
+                Splat::Compute => "compute",
+            }
         )
     }
 }
@@ -172,19 +209,24 @@ mod tests {
     fn parse_round_trips_and_applies_to_the_default() {
         let all = [Region::Full, Region::Rect];
         for region in all {
-            for bits in 0..8u32 {
+            for bits in 0..16u32 {
                 let l = Levers {
                     region,
                     field: bits & 1 != 0,
                     arrays: bits & 2 != 0,
                     specialize: bits & 4 != 0,
+                    splat: if bits & 8 != 0 {
+                        Splat::Compute
+                    } else {
+                        Splat::Raster
+                    },
                 };
                 assert_eq!(Levers::parse(&l.to_string()).unwrap(), l);
             }
         }
         let l = Levers::parse("region=full").unwrap();
         assert_eq!(l.region, Region::Full);
-        assert!(!l.field && l.arrays && l.specialize);
+        assert!(!l.field && l.arrays && l.specialize && l.splat == Splat::Raster);
         let r = Levers::parse("reference, field=on").unwrap();
         assert_eq!(
             r,
@@ -201,6 +243,7 @@ mod tests {
         for (spec, needle) in [
             ("", "empty"),
             ("region=polygon", "full or rect"),
+            ("splat=gather", "raster or compute"),
             ("field=maybe", "on or off"),
             ("speed=11", "unknown lever 'speed'"),
             ("field", "not key=value"),
@@ -215,13 +258,14 @@ mod tests {
     fn each_flipped_differs_in_exactly_one_lever() {
         let base = Levers::default();
         let flipped = base.each_flipped();
-        assert_eq!(flipped.len(), 4);
+        assert_eq!(flipped.len(), 5);
         for v in flipped {
             let diffs = [
                 v.region != base.region,
                 v.field != base.field,
                 v.arrays != base.arrays,
                 v.specialize != base.specialize,
+                v.splat != base.splat,
             ];
             assert_eq!(diffs.iter().filter(|d| **d).count(), 1, "{v}");
         }

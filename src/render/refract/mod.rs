@@ -543,7 +543,7 @@ mod pass;
 mod record;
 mod region;
 
-pub use levers::{Levers, Region};
+pub use levers::{Levers, Region, Splat};
 pub(crate) use params::EnvInputs;
 use params::*;
 pub(crate) use pass::{Features, SweepPass, TrafficInputs};

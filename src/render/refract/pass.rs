@@ -69,6 +69,10 @@ pub(crate) struct SweepPass {
     pub(crate) rays_per_pixel: u32,
     pub(crate) splat_pass: RenderPass,
     pub(crate) splat_framebuffers: [Framebuffer; 2],
+    /// The compute splat's fixed-point sums (glsl/light_splat_fixed.glsl): seven
+    /// channels of two words per pixel, zero between planes.
+    pub(crate) splat_sums: Buffer,
+    pub(crate) splat_resolve_set: DescriptorSet,
     /// Forward transport: the light rays' pass (the two light buffers) and the viewing
     /// rays' pass (the other four), per written layer.
     pub(crate) light_pass: RenderPass,
@@ -210,6 +214,10 @@ pub(crate) struct ForwardPlanes {
 /// set's layout so that switching between them leaves the descriptor set bound.
 pub(crate) struct ForwardPipelines {
     pub(crate) splat: GraphicsPipeline,
+    /// The `splat=compute` lever: deposits into [`SweepPass::splat_sums`], then a resolve
+    /// of the sums into the irradiance images (glsl/light_splat.comp, _resolve.comp).
+    pub(crate) splat_compute: ComputePipeline,
+    pub(crate) splat_resolve: ComputePipeline,
     /// Largest splat half-width the device's point sizes allow.
     pub(crate) max_half_width: f32,
 }
@@ -334,6 +342,14 @@ impl SweepPass {
             sub_fb(&view_pass, 2..6, 0, "sweep viewing rays")?,
             sub_fb(&view_pass, 2..6, 1, "sweep viewing rays")?,
         ];
+        // 7 channels x 2 words x 4 bytes per pixel (glsl/light_splat_fixed.glsl).
+        let splat_sums = Buffer::new(
+            ctx,
+            width as u64 * height as u64 * 56,
+            vk::usage::STORAGE_BUFFER | vk::usage::BUFFER_TRANSFER_DST,
+            vk::Memory::Gpu,
+            "light splat sums",
+        )?;
         let counters = Buffer::new(
             ctx,
             16,
@@ -371,6 +387,8 @@ impl SweepPass {
         // constant 6), or the volume in its place, never read then.
         plane_bindings.push(Binding::Texture(field.unwrap_or(volume), sampler));
         let have_field = field.is_some();
+        // 18: the compute splat's sums (the `splat` lever).
+        plane_bindings.push(Binding::Storage(&splat_sums));
         let sweep_set = DescriptorSet::new(ctx, &plane_bindings, "sweep")?;
         let output = FrameTarget::new(ctx, width, height, "sweep frame")?;
         let env_params = Buffer::uniform::<EnvParams>(ctx, "environment params")?;
@@ -391,6 +409,15 @@ impl SweepPass {
             setup_bindings.push(Binding::StorageImage(&r.image));
         }
         let setup_set = DescriptorSet::new(ctx, &setup_bindings, "sweep setup")?;
+        let splat_resolve_set = DescriptorSet::new(
+            ctx,
+            &[
+                Binding::Storage(&splat_sums),
+                Binding::StorageImage(&irradiance[0].image),
+                Binding::StorageImage(&irradiance[1].image),
+            ],
+            "light splat resolve",
+        )?;
 
         let setup =
             ComputePipeline::new(ctx, shaders::SWEEP_SETUP_COMP, &setup_set, 0, "sweep setup")?;
@@ -412,6 +439,22 @@ impl SweepPass {
                     },
                     "light splat",
                 )?,
+                splat_compute: ComputePipeline::new(
+                    ctx,
+                    shaders::LIGHT_SPLAT_COMP,
+                    &sweep_set,
+                    std::mem::size_of::<PlanePush>() as u32,
+                    "light splat (compute)",
+                )?,
+                splat_resolve: ComputePipeline::new(
+                    ctx,
+                    shaders::LIGHT_SPLAT_RESOLVE_COMP,
+                    &splat_resolve_set,
+                    16,
+                    "light splat resolve",
+                )?,
+                // Both splats deposit the same boxes, so the point sprites' limit holds for
+                // the compute one too.
                 max_half_width: MAX_SPLAT_HALF_WIDTH.min(((largest_point - 2.0) / 2.0).floor()),
             })
         } else {
@@ -452,6 +495,8 @@ impl SweepPass {
             rays_per_pixel,
             splat_pass,
             splat_framebuffers,
+            splat_sums,
+            splat_resolve_set,
             light_pass,
             light_framebuffers,
             view_pass,
@@ -534,6 +579,13 @@ impl SweepPass {
             // four neighbours' positions (two texels each).
             let ray_reads = 2 + if f.soft { 4 } else { 0 } + 2 + 4 * 2;
             texels += f.light_rays * (4 + fetch * ray_reads);
+            if f.compute_splat {
+                // The resolve, over the viewport: the sums' 14 words read and zeroed
+                // (7 texels' worth) and two texels written. (Neither splat's deposits
+                // are counted: how many pixels a ray's box covers is known on the GPU
+                // only.)
+                texels += f.viewport_pixels * 9;
+            }
         }
         texels * STATE_BYTES_PER_PIXEL
     }
@@ -549,4 +601,7 @@ pub(crate) struct TrafficInputs {
     pub(crate) shaded_pixels: u64,
     /// Light rays a plane advances (forward).
     pub(crate) light_rays: u64,
+    /// The `splat=compute` lever (forward), and the viewport its resolve covers.
+    pub(crate) compute_splat: bool,
+    pub(crate) viewport_pixels: u64,
 }

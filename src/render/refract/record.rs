@@ -183,8 +183,15 @@ impl SweepPass {
                 access,
             },
         ));
+        // The compute splat's unit (glsl/light_splat_fixed.glsl): the brightest channel.
+        let unit = sweep.light.colour.into_iter().fold(0.0f32, f32::max);
+        let unit = if unit > 0.0 { unit } else { 1.0 };
+        let compute_splat = forward.is_some() && sweep.levers.splat == Splat::Compute;
         rec.pass("sweep setup", &uses, |rec| {
             rec.clear_storage(&self.counters);
+            if compute_splat {
+                rec.clear_storage(&self.splat_sums);
+            }
             // The setup covers the screen and the ray images (rays_per_pixel times taller).
             let setup_groups = [ray_image[0].div_ceil(8), ray_image[1].div_ceil(8), 1];
             rec.dispatch(&self.setup, &self.setup_set, &[], setup_groups)?;
@@ -288,30 +295,61 @@ impl SweepPass {
                         rec.begin_scope("sweep: splat");
                     }
                     // 2. They deposit their flux on plane i: irradiance layer `write`
-                    // (plane i - 2's, read by no draw any more) becomes an attachment.
+                    // (plane i - 2's, read by no draw any more) is overwritten.
                     rec.transition_many(&[
                         (light_images[0], write..write + 1, Access::SampledGeneral),
                         (light_images[1], write..write + 1, Access::SampledGeneral),
                     ]);
-                    rec.begin_render_pass(
-                        &self.splat_pass,
-                        &self.splat_framebuffers[write as usize],
-                        &[
-                            (&self.irradiance[0].image, write),
-                            (&self.irradiance[1].image, write),
-                        ],
-                    )?;
-                    rec.bind_pipeline(&f.splat);
-                    let splat_push = PlanePush {
-                        read_layer: write,
-                        ..push
-                    };
-                    rec.draw(
-                        &f.splat,
-                        bytemuck::bytes_of(&splat_push),
-                        grid_dims[0] * grid_dims[1],
-                    )?;
-                    rec.end_render_pass();
+                    match sweep.levers.splat {
+                        Splat::Raster => {
+                            rec.begin_render_pass(
+                                &self.splat_pass,
+                                &self.splat_framebuffers[write as usize],
+                                &[
+                                    (&self.irradiance[0].image, write),
+                                    (&self.irradiance[1].image, write),
+                                ],
+                            )?;
+                            rec.bind_pipeline(&f.splat);
+                            let splat_push = PlanePush {
+                                read_layer: write,
+                                ..push
+                            };
+                            rec.draw(
+                                &f.splat,
+                                bytemuck::bytes_of(&splat_push),
+                                grid_dims[0] * grid_dims[1],
+                            )?;
+                            rec.end_render_pass();
+                        }
+                        Splat::Compute => {
+                            // The previous plane's resolve zeroed the sums.
+                            rec.compute_storage_barrier(&self.splat_sums);
+                            let rays = grid_dims[0] * grid_dims[1];
+                            let splat_push = [i, write, push.depth.to_bits(), unit.to_bits()];
+                            rec.dispatch(
+                                &f.splat_compute,
+                                &self.sweep_set,
+                                bytemuck::bytes_of(&splat_push),
+                                [rays.div_ceil(64), 1, 1],
+                            )?;
+                            rec.compute_storage_barrier(&self.splat_sums);
+                            // The resolve's storage views name both layers, so both
+                            // are ordered after their last reads (only `write` is
+                            // written).
+                            rec.transition_many(&[
+                                (&self.irradiance[0].image, 0..2, Access::ComputeStorage),
+                                (&self.irradiance[1].image, 0..2, Access::ComputeStorage),
+                            ]);
+                            let resolve_push = [write, self.width, self.height, unit.to_bits()];
+                            rec.dispatch(
+                                &f.splat_resolve,
+                                &self.splat_resolve_set,
+                                bytemuck::bytes_of(&resolve_push),
+                                groups,
+                            )?;
+                        }
+                    }
                     if timed {
                         rec.end_scope();
                         rec.begin_scope("sweep: viewing rays");
@@ -319,16 +357,8 @@ impl SweepPass {
                     // 3. The viewing rays cross the segment from plane i - 1 to plane i,
                     // lit by the irradiance of both (layers `read` and `write`).
                     rec.transition_many(&[
-                        (
-                            &self.irradiance[0].image,
-                            write..write + 1,
-                            Access::SampledGeneral,
-                        ),
-                        (
-                            &self.irradiance[1].image,
-                            write..write + 1,
-                            Access::SampledGeneral,
-                        ),
+                        (&self.irradiance[0].image, 0..2, Access::SampledGeneral),
+                        (&self.irradiance[1].image, 0..2, Access::SampledGeneral),
                     ]);
                     let views: Vec<(&Image, u32)> =
                         self.states[2..].iter().map(|s| (&s.image, write)).collect();
@@ -403,6 +433,8 @@ impl SweepPass {
                     shaded_pixels: (shaded_fraction * self.width as f64 * self.height as f64)
                         .round() as u64,
                     light_rays: grid_dims[0] as u64 * grid_dims[1] as u64,
+                    compute_splat,
+                    viewport_pixels: self.width as u64 * self.height as u64,
                 }),
                 shaded_fraction,
                 light_transport: sweep.light_transport,

@@ -223,6 +223,22 @@ impl Recorder<'_> {
         }
     }
 
+    /// Order every earlier compute-shader access to the storage `buffer` (reads, writes,
+    /// atomics) before every later one: passes that accumulate into a buffer and the pass
+    /// that reads and clears it, back to back.
+    pub fn compute_storage_barrier(&mut self, buffer: &Buffer) {
+        let rw = vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE;
+        let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
+        let barrier = [buffer_barrier(buffer, compute, rw, compute, rw)];
+        // SAFETY: recording; the buffer is alive.
+        unsafe {
+            self.device().cmd_pipeline_barrier2(
+                self.cmd,
+                &vk::DependencyInfo::default().buffer_memory_barriers(&barrier),
+            )
+        };
+    }
+
     /// Copy a storage buffer that shaders wrote into a host-visible `dst` (made with
     /// [`Buffer::readback`]) and make it visible to the host.
     pub fn copy_storage_to_host(&mut self, src: &Buffer, dst: &Buffer) {
