@@ -559,6 +559,57 @@ fn ea_refuses_the_refractive_models_flags() {
     }
 }
 
+/// Issue 17: the AO model takes the light but not the sweep's flags; its own flags are
+/// refused by the other models and checked; a good AO render writes its image.
+#[test]
+fn ao_takes_its_flags_and_refuses_the_others() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("ao.png");
+    let o = out.to_str().unwrap();
+    let small = [
+        "--volume-size",
+        "16",
+        "--width",
+        "24",
+        "--height",
+        "24",
+        "-o",
+        o,
+    ];
+    for (model, flags, needle) in [
+        ("ao", &["--softness", "1"][..], "--softness"),
+        ("ao", &["--eta-scale", "2"][..], "--eta-scale"),
+        ("ao", &["--dump", "medium@1"][..], "dumps"),
+        ("ao", &["--ao-radius", "12"][..], "power of two"),
+        ("ao", &["--ao-diffuse", "1.5"][..], "[0, 1]"),
+        ("refract", &["--ao-radius", "8"][..], "--ao-radius"),
+        ("ea", &["--ao-diffuse", "0.2"][..], "--ao-diffuse"),
+    ] {
+        let mut args = vec!["render", "sphere", "--model", model];
+        args.extend(small);
+        args.extend(flags);
+        assert_clean_failure(&args, needle);
+        assert!(!out.exists(), "{flags:?} left an image");
+    }
+    let mut args = vec!["render", "sphere", "--model", "ao"];
+    args.extend(small);
+    args.extend([
+        "--light",
+        "0,1,1",
+        "--ao-radius",
+        "4",
+        "--ao-diffuse",
+        "0.3",
+    ]);
+    let r = refrakt(&args);
+    assert!(r.status.success(), "{}", stderr(&r));
+    assert!(out.exists());
+    let text = String::from_utf8_lossy(&r.stdout);
+    for scope in ["extinction volume", "sat3d", "ao raymarch"] {
+        assert!(text.contains(scope), "no '{scope}' timing in:\n{text}");
+    }
+}
+
 /// Issue 15, item 9: each refusal gives its true reason, on one line.
 #[test]
 fn refusals_name_their_true_reason() {

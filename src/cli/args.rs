@@ -262,6 +262,9 @@ pub enum ModelArg {
     Refract,
     /// Emission-absorption ray marcher (the baseline).
     Ea,
+    /// Volumetric ambient occlusion (3D summed-area table of extinction) with a Lambert
+    /// term from --light (Ament et al.'s comparison; --ao-radius, --ao-diffuse).
+    Ao,
 }
 
 /// Scene options shared by `render` and `view`.
@@ -359,12 +362,22 @@ pub struct SceneArgs {
     pub background: Option<String>,
     /// World-space direction towards the light, "x,y,z" (refract). It must lie in the
     /// viewer's hemisphere: the sweep runs front to back, so light cannot come from behind
-    /// the volume. Default: from above, tilted towards the camera.
+    /// the volume. Also the AO model's diffuse light. Default: from above, tilted towards
+    /// the camera.
     #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
     pub light: Option<String>,
-    /// Light colour, linear "r,g,b" (refract) [default: 1,1,1].
+    /// Light colour, linear "r,g,b" (refract, ao) [default: 1,1,1].
     #[arg(long)]
     pub light_colour: Option<String>,
+    /// Ambient occlusion (--model ao): half-size, in voxels, of the largest cube around a
+    /// sample whose extinction occludes it; a power of two (the cubes double from 1)
+    /// [default: 16].
+    #[arg(long, value_name = "VOXELS")]
+    pub ao_radius: Option<u32>,
+    /// Ambient occlusion (--model ao): weight of the light's Lambert term (gradient
+    /// normal, unshadowed) against the ambient term, 0-1 [default: 0.5].
+    #[arg(long, value_name = "W", allow_negative_numbers = true)]
+    pub ao_diffuse: Option<f32>,
     /// Light softness: radius, in voxels, of the elliptical filter applied to the light at
     /// every plane; 0 = hard shadows and sharp caustics (refract) [default: 0.5].
     #[arg(long, allow_negative_numbers = true)]

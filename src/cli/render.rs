@@ -33,11 +33,16 @@ fn spinner(message: &str) -> indicatif::ProgressBar {
 }
 
 /// Timestamp scopes of builds that are not part of a frame (see `Renderer`).
-const ONE_OFF_BUILDS: [&str; 4] = [
+const ONE_OFF_BUILDS: [&str; 9] = [
     "gradient volume",
     "environment SAT",
     "preintegration",
     "field texture",
+    refrakt::render::ao::EXTINCTION_SCOPE,
+    refrakt::render::sat3d::SCOPE,
+    refrakt::render::sat3d::AXIS_SCOPES[0],
+    refrakt::render::sat3d::AXIS_SCOPES[1],
+    refrakt::render::sat3d::AXIS_SCOPES[2],
 ];
 
 pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {

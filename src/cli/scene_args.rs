@@ -142,6 +142,7 @@ pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Resu
     o.model = args.model.map(|m| match m {
         ModelArg::Ea => Model::Ea,
         ModelArg::Refract => Model::Refract,
+        ModelArg::Ao => Model::Ao,
     });
     if args.no_preintegration {
         o.preintegrated = Some(false);
@@ -205,16 +206,44 @@ pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Resu
         ToneArg::Reinhard => output::ToneOperator::Reinhard,
         ToneArg::None => output::ToneOperator::None,
     });
+    o.ao_radius = args.ao_radius;
+    o.ao_diffuse = args.ao_diffuse;
     s.apply(o);
-    if s.model == Model::Ea {
+    if s.model != Model::Ao {
+        let given: Vec<&str> = [
+            ("--ao-radius", args.ao_radius.is_some()),
+            ("--ao-diffuse", args.ao_diffuse.is_some()),
+        ]
+        .into_iter()
+        .filter_map(|(flag, given)| given.then_some(flag))
+        .collect();
+        ensure!(
+            given.is_empty(),
+            "{} only appl{} to the ambient-occlusion model (--model ao), not {}",
+            given.join(", "),
+            if given.len() == 1 { "ies" } else { "y" },
+            s.model.name()
+        );
+    }
+    if s.model != Model::Refract {
         let mut given = refract_only_flags(args);
+        if s.model == Model::Ao {
+            // The AO model lights its Lambert term with the scene's light.
+            given.retain(|f| !matches!(*f, "--light" | "--light-colour"));
+        }
         given.extend(extra);
         ensure!(
             given.is_empty(),
-            "{} {} the refractive model's (--model refract); the EA ray marcher has no plane sweep, \
-             light, refraction or environment",
+            "{} {} the refractive model's (--model refract); the {} model has no plane sweep, \
+             refraction or environment{}",
             given.join(", "),
-            if given.len() == 1 { "is" } else { "are" }
+            if given.len() == 1 { "is" } else { "are" },
+            s.model.name(),
+            if s.model == Model::Ea {
+                ", and no light"
+            } else {
+                ""
+            }
         );
     }
     Ok(s)

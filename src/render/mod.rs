@@ -7,6 +7,7 @@
 //! environment SAT) are files here; each optical model is a folder (`ea/`, `refract/`)
 //! behind the interface in `model.rs`.
 
+pub mod ao;
 mod ea;
 pub mod field;
 pub mod gradient;
@@ -60,6 +61,10 @@ pub struct Renderer {
     field: Option<field::FieldTexture>,
     field_checked: bool,
     field_dirty: bool,
+    /// The extinction volume and its 3D SAT, for the ambient models: made on their first
+    /// frame, rebuilt with the transfer functions.
+    extinction: Option<ao::ExtinctionSat>,
+    extinction_dirty: bool,
     tf: TransferFunctions,
     tf_image: Image,
     tf_dirty: bool,
@@ -161,6 +166,8 @@ impl Renderer {
             field: None,
             field_checked: false,
             field_dirty: false,
+            extinction: None,
+            extinction_dirty: false,
             tf: tf.clone(),
             tf_image,
             tf_dirty: true,
@@ -201,6 +208,7 @@ impl Renderer {
             self.tf = tf.clone();
             self.tf_dirty = true;
             self.field_dirty = true;
+            self.extinction_dirty = true;
         }
         Ok(())
     }
@@ -259,6 +267,27 @@ impl Renderer {
         Ok(t)
     }
 
+    /// The ambient occlusion the AO model computes (`glsl/ao.glsl`) at `points` (texture
+    /// coordinates of the volume box) with `opts`' radius, of the current transfer
+    /// functions (the extinction volume and its table are made or rebuilt first, in their
+    /// own submission): the model's occlusion, evaluated on the GPU, for checks against
+    /// closed forms.
+    pub fn ambient_occlusion_at(
+        &mut self,
+        points: &[[f32; 3]],
+        opts: &ao::AoOptions,
+    ) -> Result<Vec<f32>> {
+        opts.validate()?;
+        self.ensure_extinction(Model::Ao)?;
+        let e = self.extinction.as_mut().expect("made above");
+        if self.extinction_dirty {
+            let (volume, tf) = (&self.volume_tex, &self.tf_image);
+            self.ctx.execute(|rec| e.record_build(rec, volume, tf))?;
+            self.extinction_dirty = false;
+        }
+        e.occlusion_on_gpu(&self.ctx, points, opts.shells())
+    }
+
     /// Whether the sweep has its field texture (the `field` lever can take effect).
     pub fn has_field_texture(&self) -> bool {
         self.field.is_some()
@@ -303,6 +332,7 @@ impl Renderer {
         self.check(model, camera, opts)?;
         self.ensure_gradient(model)?;
         self.ensure_field(model, opts)?;
+        self.ensure_extinction(model)?;
         let ctx = self.ctx.clone();
         let mut recorded = None;
         let timings = ctx.execute(|rec| {
@@ -354,6 +384,7 @@ impl Renderer {
         self.check(model, camera, opts)?;
         self.ensure_gradient(model)?;
         self.ensure_field(model, opts)?;
+        self.ensure_extinction(model)?;
         let r = self.record_inner(rec, model, camera, opts, false)?;
         Ok(RecordedFrame {
             image: &self.target(model)?.image,
@@ -422,6 +453,37 @@ impl Renderer {
         Ok(())
     }
 
+    /// Make the extinction volume and its 3D SAT the first time a frame of `model` needs
+    /// them (the ambient models); built in the frame's recording. Refused with the sizes
+    /// when they do not fit the device's budget (the gradient volume's).
+    fn ensure_extinction(&mut self, model: Model) -> Result<()> {
+        if !model::needs_extinction(model) || self.extinction.is_some() {
+            return Ok(());
+        }
+        let extent = self.volume_tex.extent();
+        let (_, device_budget) = gradient::GradientVolume::memory(&self.ctx, extent);
+        let budget = self.gradient_budget.unwrap_or(device_budget);
+        let needed = ao::ExtinctionSat::bytes(extent);
+        ensure!(
+            needed <= budget,
+            "the {} model needs {} MiB for the extinction volume and its summed-area table              ({}x{}x{} voxels, 12 bytes each); the device budget is {} MiB: use a smaller              volume (--scale)",
+            model.name(),
+            needed >> 20,
+            extent[0],
+            extent[1],
+            extent[2],
+            budget >> 20
+        );
+        self.extinction = Some(ao::ExtinctionSat::new(
+            &self.ctx,
+            &self.volume_tex,
+            &self.tf_image,
+            &self.linear,
+        )?);
+        self.extinction_dirty = true;
+        Ok(())
+    }
+
     /// The recording shared by `render` and `record`; arguments already checked.
     fn record_inner(
         &mut self,
@@ -439,6 +501,10 @@ impl Renderer {
             field.record_build(rec, &self.volume_tex, &self.tf_image)?;
             self.field_dirty = false;
         }
+        if let (Some(e), true) = (self.extinction.as_mut(), self.extinction_dirty) {
+            e.record_build(rec, &self.volume_tex, &self.tf_image)?;
+            self.extinction_dirty = false;
+        }
 
         let inputs = Inputs {
             camera,
@@ -449,6 +515,7 @@ impl Renderer {
             volume: &self.volume_tex,
             gradient: self.gradient.as_ref().map(|g| g.image()),
             field: self.field.as_ref().map(|f| f.image()),
+            extinction: self.extinction.as_ref(),
             tf: &self.tf_image,
             preint: self.preint.image(),
             linear: &self.linear,

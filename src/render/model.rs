@@ -17,7 +17,7 @@
 use anyhow::Result;
 
 use super::refract::{EnvInputs, SweepRecording};
-use super::{ea, refract, Camera, FrameTarget, Model, RenderOptions, VolumeInfo};
+use super::{ao, ea, refract, Camera, FrameTarget, Model, RenderOptions, VolumeInfo};
 use crate::vk::{Context, Image, Recorder, Sampler};
 
 /// The renderer's GPU resources, as every model sees them, and the frame asked for.
@@ -36,6 +36,8 @@ pub(crate) struct Inputs<'a> {
     pub gradient: Option<&'a Image>,
     /// The field texture (value, ∇η; render::field), if the sweep may use it.
     pub field: Option<&'a Image>,
+    /// The extinction volume and its 3D SAT, if the model needs them (ambient models).
+    pub extinction: Option<&'a super::ao::ExtinctionSat>,
     /// The transfer functions as a 1D-per-row image.
     pub tf: &'a Image,
     pub preint: &'a Image,
@@ -72,7 +74,7 @@ pub(crate) fn check(
     opts: &RenderOptions,
 ) -> Result<()> {
     match model {
-        Model::Ea => ea::check(opts),
+        Model::Ea | Model::Ao => ea::check(model, opts),
         Model::Refract => refract::check_model(info, camera, opts),
     }
 }
@@ -80,8 +82,17 @@ pub(crate) fn check(
 /// Whether `model` reads the gradient volume (built on its first frame).
 pub(crate) fn needs_gradient(model: Model) -> bool {
     match model {
-        Model::Ea => false,
+        Model::Ea | Model::Ao => false,
         Model::Refract => true,
+    }
+}
+
+/// Whether `model` reads the extinction volume and its 3D SAT (built on its first frame,
+/// rebuilt with the transfer functions).
+pub(crate) fn needs_extinction(model: Model) -> bool {
+    match model {
+        Model::Ao => true,
+        Model::Ea | Model::Refract => false,
     }
 }
 
@@ -90,6 +101,7 @@ pub(crate) fn make_pass(model: Model, inputs: &Inputs) -> Result<Box<dyn ModelPa
     let opts = inputs.opts;
     Ok(match model {
         Model::Ea => Box::new(ea::EaPass::new(inputs, opts.width, opts.height)?),
+        Model::Ao => Box::new(ao::AoPass::new(inputs, opts.width, opts.height)?),
         Model::Refract => Box::new(refract::SweepPass::new(
             inputs,
             opts.width,

@@ -13,6 +13,8 @@ pub enum Model {
     Ea,
     /// The refractive plane sweep (thesis ch. 4, Algorithm 1).
     Refract,
+    /// Volumetric ambient occlusion from a 3D summed-area table (render::ao).
+    Ao,
 }
 
 impl Model {
@@ -20,6 +22,7 @@ impl Model {
         match self {
             Model::Ea => "ea",
             Model::Refract => "refract",
+            Model::Ao => "ao",
         }
     }
 }
@@ -49,6 +52,9 @@ pub struct RenderOptions {
     pub termination_alpha: f32,
     /// Light, specular, clipping and diagnostics of the refractive model.
     pub sweep: SweepOptions,
+    /// Radius and diffuse weight of the ambient-occlusion model (its light is
+    /// `sweep.light`: direction and colour).
+    pub ao: super::ao::AoOptions,
 }
 
 impl Default for RenderOptions {
@@ -61,6 +67,7 @@ impl Default for RenderOptions {
             background: [0.08, 0.08, 0.1, 1.0],
             termination_alpha: 0.99,
             sweep: SweepOptions::default(),
+            ao: Default::default(),
         }
     }
 }
@@ -89,6 +96,7 @@ impl RenderOptions {
             "termination alpha {} must be in [0, 1]",
             self.termination_alpha
         );
+        self.ao.validate()?;
         self.sweep.validate()
     }
 }

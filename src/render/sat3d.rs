@@ -58,7 +58,7 @@ use bytemuck::{Pod, Zeroable};
 use crate::shaders;
 use crate::vk::{
     self, Access, Binding, Buffer, ComputePipeline, Context, DescriptorSet, Filter, Image,
-    ImageDesc, ImageKind, Memory, Sampler, Timings, Use,
+    ImageDesc, ImageKind, Memory, Recorder, Sampler, Timings, Use,
 };
 
 /// The timings scope of the build.
@@ -151,6 +151,14 @@ impl Sat3d {
     /// (larger ones are clamped; a transfer function's largest extinction, say). Returns it
     /// with the build's GPU time (scope [`SCOPE`]).
     pub fn build(ctx: &Context, field: &Image, bound: f32) -> Result<(Self, Timings)> {
+        let mut sat = Self::new(ctx, field)?;
+        let timings = sat.rebuild(ctx, field, bound)?;
+        Ok((sat, timings))
+    }
+
+    /// The table for `field`, not built yet: [`Sat3d::record_rebuild`] fills it (with the
+    /// field's producer in the same recording).
+    pub fn new(ctx: &Context, field: &Image) -> Result<Self> {
         ensure!(
             field.desc().kind == ImageKind::D3,
             "the 3D SAT needs a 3D field, '{}' is {:?}",
@@ -176,7 +184,7 @@ impl Sat3d {
             std::mem::size_of::<ScanPush>() as u32,
             "3D SAT",
         )?;
-        let mut sat = Self {
+        Ok(Self {
             table,
             extent,
             exponent: 0,
@@ -185,9 +193,7 @@ impl Sat3d {
             _sampler: sampler,
             set,
             pipeline,
-        };
-        let timings = sat.rebuild(ctx, field, bound)?;
-        Ok((sat, timings))
+        })
     }
 
     /// Rebuild the table in place from `field` — the image it was built from, rewritten
@@ -195,6 +201,13 @@ impl Sat3d {
     /// table, descriptor set and pipeline: what a transfer-function change costs. Returns
     /// the GPU time (scope [`SCOPE`]).
     pub fn rebuild(&mut self, ctx: &Context, field: &Image, bound: f32) -> Result<Timings> {
+        ctx.execute(|rec| self.record_rebuild(rec, field, bound))
+    }
+
+    /// [`Sat3d::rebuild`] recorded into `rec` (e.g. a frame's recording, so that it is
+    /// ordered after earlier frames that read the table and before the frame that reads
+    /// it).
+    pub fn record_rebuild(&mut self, rec: &mut Recorder, field: &Image, bound: f32) -> Result<()> {
         ensure!(
             field.id() == self.field_id,
             "the 3D SAT rebuilds from the field it was built from, not '{}'",
@@ -214,33 +227,31 @@ impl Sat3d {
             [w.div_ceil(GROUP), h, 1],
         ];
         let (table, set, pipeline) = (&self.table, &self.set, &self.pipeline);
-        let timings = ctx.execute(|rec| {
-            let uses = [
-                Use::all(field, Access::Sampled),
-                Use::all(table, Access::ComputeStorage),
-            ];
-            rec.pass(SCOPE, &uses, |rec| {
-                for (axis, groups) in groups.into_iter().enumerate() {
-                    if axis > 0 {
-                        // Each scan reads what the previous one wrote.
-                        rec.transition_all(table, Access::ComputeStorage);
-                    }
-                    let push = ScanPush {
-                        axis: axis as i32,
-                        scale: 2f32.powi(exponent),
-                        bound,
-                    };
-                    rec.begin_scope(AXIS_SCOPES[axis]);
-                    rec.dispatch(pipeline, set, bytemuck::bytes_of(&push), groups)?;
-                    rec.end_scope();
+        let uses = [
+            Use::all(field, Access::Sampled),
+            Use::all(table, Access::ComputeStorage),
+        ];
+        rec.pass(SCOPE, &uses, |rec| {
+            for (axis, groups) in groups.into_iter().enumerate() {
+                if axis > 0 {
+                    // Each scan reads what the previous one wrote.
+                    rec.transition_all(table, Access::ComputeStorage);
                 }
-                // Readers' declared uses transition the table.
-                Ok(())
-            })
+                let push = ScanPush {
+                    axis: axis as i32,
+                    scale: 2f32.powi(exponent),
+                    bound,
+                };
+                rec.begin_scope(AXIS_SCOPES[axis]);
+                rec.dispatch(pipeline, set, bytemuck::bytes_of(&push), groups)?;
+                rec.end_scope();
+            }
+            // Readers' declared uses transition the table.
+            Ok(())
         })?;
         self.exponent = exponent;
         self.bound = bound;
-        Ok(timings)
+        Ok(())
     }
 
     /// The table (R32G32_UINT, 3D): sample it with texelFetch through `glsl/sat3d.glsl`.
@@ -280,7 +291,6 @@ impl Sat3d {
     /// Box averages evaluated on the GPU by `glsl/sat3d.glsl`'s `sat_box_average`
     /// (`glsl/sat3d_probe.comp`), one per box: the shader-side read path, for tests.
     pub fn box_averages_on_gpu(&self, ctx: &Context, boxes: &[VoxelBox]) -> Result<Vec<f32>> {
-        let count = boxes.len().max(1);
         let texels: Vec<[i32; 4]> = boxes
             .iter()
             .flat_map(|b| {
@@ -290,44 +300,65 @@ impl Sat3d {
                 ]
             })
             .collect();
-        let mut input = Buffer::new(
+        self.probe(
             ctx,
-            (count * 32) as u64,
+            shaders::SAT3D_PROBE_COMP,
+            bytemuck::cast_slice(&texels),
+            boxes.len(),
+            0,
+        )
+    }
+
+    /// Run a probe shader over the table: `count` items of `input` (a storage buffer at
+    /// binding 1) to one f32 each (binding 2), the table at binding 0, push constants
+    /// (dims.xyz, `w`; inv_scale; count) as `glsl/sat3d_probe.comp` declares them.
+    pub(crate) fn probe(
+        &self,
+        ctx: &Context,
+        spirv: &[u8],
+        input: &[u8],
+        count: usize,
+        w: i32,
+    ) -> Result<Vec<f32>> {
+        let slots = count.max(1);
+        let mut input_buffer = Buffer::new(
+            ctx,
+            input.len().max(16) as u64,
             vk::usage::STORAGE_BUFFER,
             Memory::Upload,
-            "3D SAT probe boxes",
+            "3D SAT probe input",
         )?;
-        input.write(0, bytemuck::cast_slice(&texels))?;
+        input_buffer.write(0, input)?;
         let output = Buffer::new(
             ctx,
-            (count * 4) as u64,
+            (slots * 4) as u64,
             vk::usage::STORAGE_BUFFER | vk::usage::BUFFER_TRANSFER_SRC,
             Memory::Gpu,
-            "3D SAT probe averages",
+            "3D SAT probe results",
         )?;
-        let host = Buffer::readback(ctx, (count * 4) as u64, "3D SAT probe readback")?;
+        let host = Buffer::readback(ctx, (slots * 4) as u64, "3D SAT probe readback")?;
         let sampler = Sampler::new(ctx, Filter::Nearest, "3D SAT probe")?;
         let set = DescriptorSet::new(
             ctx,
             &[
                 Binding::Texture(&self.table, &sampler),
-                Binding::Storage(&input),
+                Binding::Storage(&input_buffer),
                 Binding::Storage(&output),
             ],
             "3D SAT probe",
         )?;
         let pipeline = ComputePipeline::new(
             ctx,
-            shaders::SAT3D_PROBE_COMP,
+            spirv,
             &set,
             std::mem::size_of::<ProbePush>() as u32,
             "3D SAT probe",
         )?;
-        let [w, h, d] = self.extent.map(|e| e as i32);
+        let [x, y, z] = self.extent.map(|e| e as i32);
         let push = ProbePush {
-            dims: [w, h, d, 0],
+            dims: [x, y, z, w],
             inv_scale: self.inv_scale(),
-            count: boxes.len() as u32,
+            count: count as u32,
             pad: [0; 2],
         };
         ctx.execute(|rec| {
@@ -339,14 +370,14 @@ impl Sat3d {
                         &pipeline,
                         &set,
                         bytemuck::bytes_of(&push),
-                        [(count as u32).div_ceil(GROUP), 1, 1],
+                        [(slots as u32).div_ceil(GROUP), 1, 1],
                     )
                 },
             )?;
             rec.copy_storage_to_host(&output, &host);
             Ok(())
         })?;
-        host.read_values(boxes.len())
+        host.read_values(count)
     }
 }
 

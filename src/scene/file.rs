@@ -96,6 +96,8 @@ struct RenderTable {
     clip: Option<[f32; 4]>,
     exposure: Option<f32>,
     tonemap: Option<String>,
+    ao_radius: Option<u32>,
+    ao_diffuse: Option<f32>,
 }
 
 /// "x", "xy", "xyz", ... (or "none") to the axes to mirror.
@@ -125,7 +127,8 @@ pub fn parse_model(s: &str) -> Result<Model> {
     match s {
         "refract" => Ok(Model::Refract),
         "ea" => Ok(Model::Ea),
-        _ => bail!("model '{s}' is not one of refract, ea"),
+        "ao" => Ok(Model::Ao),
+        _ => bail!("model '{s}' is not one of refract, ea, ao"),
     }
 }
 
@@ -339,6 +342,8 @@ impl SceneFile {
             o.reflections = r.reflections;
             o.clip = r.clip.map(|c| Some((Vec3::new(c[0], c[1], c[2]), c[3])));
             o.exposure = r.exposure;
+            o.ao_radius = r.ao_radius;
+            o.ao_diffuse = r.ao_diffuse;
             if let Some(t) = r.tonemap {
                 o.tonemap = Some(parse_tonemap(&t).context("[render]")?);
             }

@@ -14,6 +14,7 @@ use serde::Deserialize;
 
 use crate::environment::EnvironmentMap;
 use crate::output::{ToneMap, ToneOperator};
+use crate::render::ao::AoOptions;
 use crate::render::{Camera, Light, LightTransport, Model, RenderOptions, SweepOptions};
 use crate::transfer::TransferFunctions;
 use crate::volume::formats::DeviceLimits;
@@ -98,6 +99,8 @@ pub struct Scene {
     pub clip: Option<(Vec3, f32)>,
     pub exposure: f32,
     pub tonemap: ToneOperator,
+    /// The ambient-occlusion model's radius and diffuse weight.
+    pub ao: AoOptions,
     /// The scene file this came from, if any (the viewer reloads when it changes).
     pub file: Option<PathBuf>,
 }
@@ -124,6 +127,8 @@ pub struct Overrides {
     pub clip: Option<Option<(Vec3, f32)>>,
     pub exposure: Option<f32>,
     pub tonemap: Option<ToneOperator>,
+    pub ao_radius: Option<u32>,
+    pub ao_diffuse: Option<f32>,
     pub azimuth: Option<f32>,
     pub elevation: Option<f32>,
     pub distance: Option<f32>,
@@ -162,6 +167,8 @@ impl Scene {
         set(&mut self.clip, o.clip);
         set(&mut self.exposure, o.exposure);
         set(&mut self.tonemap, o.tonemap);
+        set(&mut self.ao.radius, o.ao_radius);
+        set(&mut self.ao.diffuse, o.ao_diffuse);
         set(&mut self.camera.azimuth, o.azimuth);
         set(&mut self.camera.elevation, o.elevation);
         set(&mut self.camera.distance, o.distance);
@@ -246,6 +253,7 @@ impl Default for Scene {
             clip: None,
             exposure: 0.0,
             tonemap: ToneOperator::Aces,
+            ao: AoOptions::default(),
             file: None,
         }
     }
@@ -506,6 +514,7 @@ impl Scene {
                 env_rotation: self.env_rotation,
                 ..Default::default()
             },
+            ao: self.ao,
             ..Default::default()
         };
         opts.validate()?;

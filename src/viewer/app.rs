@@ -309,7 +309,8 @@ impl App {
                             "m" => {
                                 *model = match *model {
                                     Model::Refract => Model::Ea,
-                                    Model::Ea => Model::Refract,
+                                    Model::Ea => Model::Ao,
+                                    Model::Ao => Model::Refract,
                                 };
                                 said = Some(format!("model {}", model.name()));
                             }

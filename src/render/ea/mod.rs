@@ -9,10 +9,11 @@ use super::{FrameTarget, RenderOptions};
 use crate::shaders;
 use crate::vk::{Access, Binding, Buffer, ComputePipeline, DescriptorSet, Recorder, Use};
 
-/// std140 mirror of `Params` in glsl/ea.comp.
+/// std140 mirror of `Params` in glsl/ea.comp: what the shared march (glsl/march.glsl)
+/// reads, also the head of the AO model's block.
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
-struct Params {
+pub(super) struct MarchParams {
     cam_pos: [f32; 4],
     cam_forward: [f32; 4],
     cam_right: [f32; 4],
@@ -23,12 +24,61 @@ struct Params {
     size: [u32; 4],
 }
 
+impl MarchParams {
+    /// The camera, box and march of the frame `inputs` ask for, into a `width` × `height`
+    /// image.
+    pub(super) fn new(inputs: &Inputs, width: u32, height: u32) -> Self {
+        let (info, camera, opts) = (inputs.info, inputs.camera, inputs.opts);
+        let (eye, forward, right, up) = camera.frame();
+        let tan_half = (camera.fov_y.to_radians() * 0.5).tan();
+        let aspect = width as f32 / height as f32;
+        Self {
+            cam_pos: [eye.x, eye.y, eye.z, tan_half],
+            cam_forward: [forward.x, forward.y, forward.z, aspect],
+            cam_right: [right.x, right.y, right.z, 0.0],
+            cam_up: [up.x, up.y, up.z, 0.0],
+            box_half: [
+                info.half_extent.x,
+                info.half_extent.y,
+                info.half_extent.z,
+                info.ref_step,
+            ],
+            background: opts.background,
+            march: [
+                opts.sample_distance,
+                opts.termination_alpha,
+                if opts.preintegrated { 1.0 } else { 0.0 },
+                0.0,
+            ],
+            size: [width, height, 0, 0],
+        }
+    }
+}
+
+/// The host layout of [`MarchParams`] for `spirv::check_block` (the AO model's test puts
+/// its own members after it).
+#[cfg(test)]
+pub(super) fn march_layout() -> Vec<(&'static str, usize, usize)> {
+    crate::host_layout!(MarchParams {
+        cam_pos,
+        cam_forward,
+        cam_right,
+        cam_up,
+        box_half,
+        background,
+        march,
+        size,
+    })
+}
+
 /// What the EA model refuses that every model accepts.
-pub(super) fn check(opts: &RenderOptions) -> Result<()> {
+/// (and the other ray-marched models: they have no state buffers either).
+pub(super) fn check(model: super::Model, opts: &RenderOptions) -> Result<()> {
     ensure!(
         opts.sweep.dumps.is_empty(),
-        "state-buffer dumps are the refractive sweep's (--model refract); the EA ray \
-         marcher has no state buffers"
+        "state-buffer dumps are the refractive sweep's (--model refract); the {} ray \
+         marcher has no state buffers",
+        model.name()
     );
     Ok(())
 }
@@ -46,7 +96,7 @@ impl EaPass {
     pub fn new(inputs: &Inputs, width: u32, height: u32) -> Result<Self> {
         let ctx = inputs.ctx;
         let sampler = inputs.linear;
-        let params = Buffer::uniform::<Params>(ctx, "ea params")?;
+        let params = Buffer::uniform::<MarchParams>(ctx, "ea params")?;
         let output = FrameTarget::new(ctx, width, height, "ea frame")?;
         let set = DescriptorSet::new(
             ctx,
@@ -82,30 +132,8 @@ impl ModelPass for EaPass {
 
     /// The ray march; the most steps a ray takes is the box diagonal's.
     fn record(&mut self, rec: &mut Recorder, inputs: &Inputs) -> Result<Recorded> {
-        let (info, camera, opts) = (inputs.info, inputs.camera, inputs.opts);
-        let (eye, forward, right, up) = camera.frame();
-        let tan_half = (camera.fov_y.to_radians() * 0.5).tan();
-        let aspect = self.width as f32 / self.height as f32;
-        let p = Params {
-            cam_pos: [eye.x, eye.y, eye.z, tan_half],
-            cam_forward: [forward.x, forward.y, forward.z, aspect],
-            cam_right: [right.x, right.y, right.z, 0.0],
-            cam_up: [up.x, up.y, up.z, 0.0],
-            box_half: [
-                info.half_extent.x,
-                info.half_extent.y,
-                info.half_extent.z,
-                info.ref_step,
-            ],
-            background: opts.background,
-            march: [
-                opts.sample_distance,
-                opts.termination_alpha,
-                if opts.preintegrated { 1.0 } else { 0.0 },
-                0.0,
-            ],
-            size: [self.width, self.height, 0, 0],
-        };
+        let (info, opts) = (inputs.info, inputs.opts);
+        let p = MarchParams::new(inputs, self.width, self.height);
         rec.update_uniform(&self.params, bytemuck::bytes_of(&p))?;
         let uses = [
             Use::all(inputs.volume, Access::Sampled),
@@ -131,21 +159,11 @@ mod tests {
 
     #[test]
     fn params_match_the_shaders_block() {
-        let host = crate::host_layout!(Params {
-            cam_pos,
-            cam_forward,
-            cam_right,
-            cam_up,
-            box_half,
-            background,
-            march,
-            size,
-        });
         crate::vk::spirv::check_block(
             shaders::EA_COMP,
             "Params",
-            &host,
-            std::mem::size_of::<Params>(),
+            &march_layout(),
+            std::mem::size_of::<MarchParams>(),
             true,
         )
         .unwrap();

@@ -1,0 +1,306 @@
+//! Volumetric ambient occlusion (`--model ao`, issue 17 item 1): the SAT method Ament et
+//! al. (seed 002) compare their ambient scattering against (Schlegel et al.). The
+//! emission–absorption march of the EA model (`glsl/march.glsl`), each segment's emission
+//! lit by the ambient light that reaches it through the surrounding medium and by an
+//! unshadowed directional light through the gradient (`glsl/ao.comp`).
+//!
+//! The ambient light is the transmittance over a radius around the sample, the
+//! extinction at each distance estimated from nested cubes of voxels (`glsl/ao.glsl`):
+//! their sums come from the 3D summed-area table ([`super::sat3d`]) of the extinction
+//! volume σ_t = −ln(1 − α_tf) per reference step (`glsl/extinction.comp`), both rebuilt on
+//! the GPU in the frame's recording when the transfer functions change (scopes
+//! [`EXTINCTION_SCOPE`] and [`super::sat3d::SCOPE`]: what a transfer-function change costs
+//! this model, reported like the preintegration table's). Path lengths are in voxels,
+//! taken as reference steps: exact for cubic voxels, an approximation for anisotropic ones.
+
+use anyhow::{ensure, Result};
+use bytemuck::{Pod, Zeroable};
+
+use super::model::{Inputs, ModelPass, Recorded};
+use super::sat3d::Sat3d;
+use super::{FrameTarget, RenderOptions};
+use crate::shaders;
+use crate::vk::{
+    self, Access, Binding, Buffer, ComputePipeline, Context, DescriptorSet, Filter, Image,
+    ImageDesc, ImageKind, Recorder, Sampler, Use,
+};
+
+/// The timings scope of the extinction volume's build.
+pub const EXTINCTION_SCOPE: &str = "extinction volume";
+
+/// Largest extinction per voxel the volume holds (`glsl/extinction.comp`: α < 1 − 10⁻⁶):
+/// the SAT's bound.
+pub const MAX_EXTINCTION: f32 = 13.9;
+
+/// Options of the ambient-occlusion model.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AoOptions {
+    /// Half-size, in voxels, of the largest cube the occlusion looks at (a power of two:
+    /// the cubes double from 1).
+    pub radius: u32,
+    /// Weight of the directional light's Lambert term against the ambient term, in [0, 1].
+    pub diffuse: f32,
+}
+
+impl Default for AoOptions {
+    fn default() -> Self {
+        Self {
+            radius: 16,
+            diffuse: 0.5,
+        }
+    }
+}
+
+/// Largest [`AoOptions::radius`].
+pub const MAX_RADIUS: u32 = 256;
+
+impl AoOptions {
+    pub fn validate(&self) -> Result<()> {
+        ensure!(
+            self.radius.is_power_of_two() && self.radius <= MAX_RADIUS,
+            "ambient-occlusion radius {} must be a power of two from 1 to {MAX_RADIUS} voxels \
+             (the occlusion cubes double in size)",
+            self.radius
+        );
+        ensure!(
+            self.diffuse.is_finite() && (0.0..=1.0).contains(&self.diffuse),
+            "diffuse weight {} must be in [0, 1]",
+            self.diffuse
+        );
+        Ok(())
+    }
+
+    /// The nested cubes beyond the sample's voxel: half-sizes 1, 2, 4, ..., radius.
+    pub fn shells(&self) -> i32 {
+        self.radius.trailing_zeros() as i32 + 1
+    }
+}
+
+/// The extinction volume of the current transfer functions and its 3D summed-area table:
+/// the input of the ambient models, owned by the renderer.
+pub struct ExtinctionSat {
+    extinction: Image,
+    set: DescriptorSet,
+    pipeline: ComputePipeline,
+    sat: Sat3d,
+}
+
+impl ExtinctionSat {
+    /// Bytes it takes for a volume of `extent`: 4 per voxel of extinction, 8 of table.
+    pub fn bytes(extent: [u32; 3]) -> u64 {
+        12 * extent.iter().map(|&e| e as u64).product::<u64>()
+    }
+
+    /// Made empty; [`ExtinctionSat::record_build`] fills it.
+    pub fn new(ctx: &Context, volume: &Image, tf: &Image, sampler: &Sampler) -> Result<Self> {
+        let desc = ImageDesc::computed(ImageKind::D3, vk::Format::R32_SFLOAT, volume.extent(), 1);
+        let extinction = Image::new(ctx, desc, "extinction volume")?;
+        let set = DescriptorSet::new(
+            ctx,
+            &[
+                Binding::Texture(volume, sampler),
+                Binding::Texture(tf, sampler),
+                Binding::StorageImage(&extinction),
+            ],
+            "extinction volume",
+        )?;
+        let pipeline =
+            ComputePipeline::new(ctx, shaders::EXTINCTION_COMP, &set, 0, "extinction volume")?;
+        let sat = Sat3d::new(ctx, &extinction)?;
+        Ok(Self {
+            extinction,
+            set,
+            pipeline,
+            sat,
+        })
+    }
+
+    /// Compute the extinction of `volume` through `tf` and rebuild the table from it.
+    pub fn record_build(&mut self, rec: &mut Recorder, volume: &Image, tf: &Image) -> Result<()> {
+        let [w, h, d] = self.extinction.extent();
+        let uses = [
+            Use::all(volume, Access::Sampled),
+            Use::all(tf, Access::Sampled),
+            Use::all(&self.extinction, Access::ComputeStorage),
+        ];
+        rec.pass(EXTINCTION_SCOPE, &uses, |rec| {
+            rec.dispatch(
+                &self.pipeline,
+                &self.set,
+                &[],
+                [w.div_ceil(8), h.div_ceil(8), d],
+            )
+        })?;
+        self.sat
+            .record_rebuild(rec, &self.extinction, MAX_EXTINCTION)
+    }
+
+    pub fn sat(&self) -> &Sat3d {
+        &self.sat
+    }
+
+    /// The ambient occlusion `glsl/ao.glsl` computes at each point (texture coordinates)
+    /// with `shells` cubes, evaluated on the GPU: for tests against closed forms.
+    pub fn occlusion_on_gpu(
+        &self,
+        ctx: &Context,
+        points: &[[f32; 3]],
+        shells: i32,
+    ) -> Result<Vec<f32>> {
+        let texels: Vec<[f32; 4]> = points.iter().map(|p| [p[0], p[1], p[2], 0.0]).collect();
+        self.sat.probe(
+            ctx,
+            shaders::AO_PROBE_COMP,
+            bytemuck::cast_slice(&texels),
+            points.len(),
+            shells,
+        )
+    }
+}
+
+/// std140 mirror of `Params` in glsl/ao.comp (ea.comp's block, then the model's).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct Params {
+    march: super::ea::MarchParams,
+    light: [f32; 4],
+    light_colour: [f32; 4],
+    dims: [i32; 4],
+    sat: [f32; 4],
+}
+
+pub(super) struct AoPass {
+    params: Buffer,
+    output: FrameTarget,
+    /// Kept for the set (the table is read with texelFetch through it).
+    _nearest: Sampler,
+    set: DescriptorSet,
+    pipeline: ComputePipeline,
+    width: u32,
+    height: u32,
+}
+
+impl AoPass {
+    pub fn new(inputs: &Inputs, width: u32, height: u32) -> Result<Self> {
+        let ctx = inputs.ctx;
+        let ambient = inputs
+            .extinction
+            .ok_or_else(|| anyhow::anyhow!("the AO model needs the extinction volume"))?;
+        let sampler = inputs.linear;
+        let nearest = Sampler::new(ctx, Filter::Nearest, "ao table")?;
+        let params = Buffer::uniform::<Params>(ctx, "ao params")?;
+        let output = FrameTarget::new(ctx, width, height, "ao frame")?;
+        let set = DescriptorSet::new(
+            ctx,
+            &[
+                Binding::Uniform(&params),
+                Binding::Texture(inputs.volume, sampler),
+                Binding::Texture(inputs.tf, sampler),
+                Binding::Texture(inputs.preint, sampler),
+                Binding::StorageImage(&output.image),
+                Binding::Texture(ambient.sat().image(), &nearest),
+            ],
+            "ao",
+        )?;
+        let pipeline = ComputePipeline::new(ctx, shaders::AO_COMP, &set, 0, "ao raymarch")?;
+        Ok(Self {
+            params,
+            output,
+            _nearest: nearest,
+            set,
+            pipeline,
+            width,
+            height,
+        })
+    }
+}
+
+impl ModelPass for AoPass {
+    fn fits(&self, opts: &RenderOptions) -> bool {
+        (self.width, self.height) == (opts.width, opts.height)
+    }
+
+    fn output(&self) -> &FrameTarget {
+        &self.output
+    }
+
+    fn record(&mut self, rec: &mut Recorder, inputs: &Inputs) -> Result<Recorded> {
+        let (info, opts) = (inputs.info, inputs.opts);
+        let ambient = inputs
+            .extinction
+            .ok_or_else(|| anyhow::anyhow!("the AO model needs the extinction volume"))?;
+        let towards = opts.sweep.light.towards.normalize();
+        let c = opts.sweep.light.colour;
+        let [x, y, z] = info.dims.map(|d| d as i32);
+        let p = Params {
+            march: super::ea::MarchParams::new(inputs, self.width, self.height),
+            light: [towards.x, towards.y, towards.z, opts.ao.diffuse],
+            light_colour: [c[0], c[1], c[2], 0.0],
+            dims: [x, y, z, opts.ao.shells()],
+            sat: [ambient.sat().inv_scale(), 0.0, 0.0, 0.0],
+        };
+        rec.update_uniform(&self.params, bytemuck::bytes_of(&p))?;
+        let uses = [
+            Use::all(inputs.volume, Access::Sampled),
+            Use::all(inputs.tf, Access::Sampled),
+            Use::all(inputs.preint, Access::Sampled),
+            Use::all(ambient.sat().image(), Access::Sampled),
+            Use::all(&self.output.image, Access::ComputeStorage),
+        ];
+        let groups = [self.width.div_ceil(8), self.height.div_ceil(8), 1];
+        rec.pass("ao raymarch", &uses, |rec| {
+            rec.dispatch(&self.pipeline, &self.set, &[], groups)
+        })?;
+        Ok(Recorded {
+            max_steps: super::steps_for(info.half_extent, info.ref_step, opts.sample_distance)
+                as u32,
+            sweep: None,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn params_match_the_shaders_block() {
+        let mut host = crate::render::ea::march_layout();
+        for (name, offset, size) in crate::host_layout!(Params {
+            light,
+            light_colour,
+            dims,
+            sat,
+        }) {
+            host.push((name, offset, size));
+        }
+        crate::vk::spirv::check_block(
+            shaders::AO_COMP,
+            "Params",
+            &host,
+            std::mem::size_of::<Params>(),
+            true,
+        )
+        .unwrap();
+    }
+
+    #[test]
+    fn radii_are_powers_of_two_and_give_their_shells() {
+        for (radius, shells) in [(1, 1), (2, 2), (16, 5), (256, 9)] {
+            let o = AoOptions {
+                radius,
+                ..Default::default()
+            };
+            o.validate().unwrap();
+            assert_eq!(o.shells(), shells);
+        }
+        for radius in [0, 3, 12, 512] {
+            let o = AoOptions {
+                radius,
+                ..Default::default()
+            };
+            let e = o.validate().unwrap_err().to_string();
+            assert!(e.contains("power of two"), "{e}");
+        }
+    }
+}
