@@ -33,17 +33,10 @@ fn spinner(message: &str) -> indicatif::ProgressBar {
 }
 
 /// Timestamp scopes of builds that are not part of a frame (see `Renderer`).
-const ONE_OFF_BUILDS: [&str; 9] = [
-    "gradient volume",
-    "environment SAT",
-    "preintegration",
-    "field texture",
-    refrakt::render::ao::EXTINCTION_SCOPE,
-    refrakt::render::sat3d::SCOPE,
-    refrakt::render::sat3d::AXIS_SCOPES[0],
-    refrakt::render::sat3d::AXIS_SCOPES[1],
-    refrakt::render::sat3d::AXIS_SCOPES[2],
-];
+fn one_off(scope: &str) -> bool {
+    refrakt::render::REBUILD_SCOPES.contains(&scope)
+        || refrakt::render::sat3d::AXIS_SCOPES.contains(&scope)
+}
 
 pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
     if let Some(code) = list_and_exit(&args.scene)? {
@@ -168,7 +161,6 @@ pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
     } else {
         // One-off builds are outside the frame: they run again only when their inputs
         // change (volume, transfer functions, environment map), not per frame.
-        let one_off = |n: &str| ONE_OFF_BUILDS.contains(&n);
         let scopes = &frame.timings.scopes;
         println!("GPU time of the one-off builds (again only when their inputs change):");
         for (name, ms) in scopes.iter().filter(|(n, _)| one_off(n)) {

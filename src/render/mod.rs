@@ -46,6 +46,19 @@ pub use refract::{
 };
 pub use tonemap::ToneMapPass;
 
+/// The timestamp scopes of everything the renderer rebuilds only when its inputs change
+/// (volume, transfer functions, environment, light), outside a frame's "render" scope:
+/// what a transfer-function or light change costs is the sum of these in the first frame
+/// after it (nested scopes, like the SAT's per-axis ones, are not listed).
+pub const REBUILD_SCOPES: [&str; 6] = [
+    "gradient volume",
+    "environment SAT",
+    "preintegration",
+    "field texture",
+    ao::EXTINCTION_SCOPE,
+    sat3d::SCOPE,
+];
+
 /// GPU state for one volume and its transfer functions.
 pub struct Renderer {
     ctx: Context,

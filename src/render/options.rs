@@ -18,6 +18,26 @@ pub enum Model {
 }
 
 impl Model {
+    /// Every model, in the order `bench models` compares them (EA first: the ratios'
+    /// base).
+    pub const ALL: [Model; 3] = [Model::Ea, Model::Ao, Model::Refract];
+
+    /// Whether the model lights the volume with [`SweepOptions::light`] (direction and
+    /// colour): a light change can cost it a rebuild.
+    pub fn uses_light(self) -> bool {
+        match self {
+            Model::Ea => false,
+            Model::Ao | Model::Refract => true,
+        }
+    }
+
+    /// Whether the model has a phase function (a phase-function change applies).
+    pub fn has_phase_function(self) -> bool {
+        match self {
+            Model::Ea | Model::Ao | Model::Refract => false,
+        }
+    }
+
     pub fn name(self) -> &'static str {
         match self {
             Model::Ea => "ea",
