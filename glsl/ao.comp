@@ -45,7 +45,7 @@ layout(set = 0, binding = 5) uniform usampler3D sat_table;
 
 vec3 to_tex(vec3 p) { return p / (2.0 * P.box_half.xyz) + 0.5; }
 
-float sample_shade(vec3 p) {
+vec3 sample_shade(vec3 p, vec3 dir) {
     vec3 tex = to_tex(p);
     float ao = ao_transmittance(tex, P.dims.w);
     vec3 h = 1.0 / vec3(P.dims.xyz);
@@ -55,7 +55,7 @@ float sample_shade(vec3 p) {
         texture(volume, tex + vec3(0, 0, h.z)).r - texture(volume, tex - vec3(0, 0, h.z)).r);
     // A change of the value below 1e-4 across two voxels is no surface.
     float lambert = dot(g, g) > 1e-8 ? abs(dot(normalize(g), P.light.xyz)) : 1.0;
-    return ao * ((1.0 - P.light.w) + P.light.w * lambert);
+    return P.light_colour.rgb * (ao * ((1.0 - P.light.w) + P.light.w * lambert));
 }
 #include "march.glsl"
 

@@ -23,7 +23,7 @@ layout(set = 0, binding = 2) uniform sampler1DArray tf;
 layout(set = 0, binding = 3) uniform sampler2DArray preint;
 layout(set = 0, binding = 4, rgba32f) uniform writeonly image2D frame;
 
-float sample_shade(vec3 p) { return 1.0; }
+vec3 sample_shade(vec3 p, vec3 dir) { return vec3(1.0); }
 #include "march.glsl"
 
 void main() {

@@ -6,9 +6,11 @@
 //
 // Before including, declare the Params block P (ea.comp's fields first), the samplers
 // volume, tf, preint, and define
-//   float sample_shade(vec3 p)   the light a segment's emission is scaled by, at its
-//                                midpoint p (world units): 1 for EA, ambient occlusion
-//                                and diffuse light for AO.
+//   vec3 sample_shade(vec3 p, vec3 dir)   the light a segment's emission is scaled by,
+//                                at its midpoint p (world units) seen along the unit
+//                                ray direction dir: 1 for EA, ambient occlusion and
+//                                diffuse light for AO, shadowed light through the phase
+//                                function for single scattering.
 #ifndef REFRAKT_MARCH_GLSL
 #define REFRAKT_MARCH_GLSL
 
@@ -58,7 +60,7 @@ vec4 march_ray(vec3 eye, vec3 dir) {
                 colour = ca.rgb * alpha;
                 medium = correct_medium(m, ratio);
             }
-            if (alpha > 0.0) colour *= sample_shade(mid);
+            if (alpha > 0.0) colour *= sample_shade(mid, dir);
             C += (1.0 - A) * M * colour;
             A += (1.0 - A) * alpha;
             M *= medium;

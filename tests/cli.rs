@@ -559,7 +559,7 @@ fn ea_refuses_the_refractive_models_flags() {
     }
 }
 
-/// Issue 17: the AO model takes the light but not the sweep's flags; its own flags are
+/// Issue 17: the AO and single-scattering models take the light but not the sweep's flags; its own flags are
 /// refused by the other models and checked; a good AO render writes its image.
 #[test]
 fn ao_takes_its_flags_and_refuses_the_others() {
@@ -584,6 +584,11 @@ fn ao_takes_its_flags_and_refuses_the_others() {
         ("ao", &["--ao-diffuse", "1.5"][..], "[0, 1]"),
         ("refract", &["--ao-radius", "8"][..], "--ao-radius"),
         ("ea", &["--ao-diffuse", "0.2"][..], "--ao-diffuse"),
+        ("single", &["--g", "1.5"][..], "anisotropy"),
+        ("single", &["--albedo", "2"][..], "albedo"),
+        ("single", &["--softness", "1"][..], "--softness"),
+        ("ao", &["--g", "0.3"][..], "--g"),
+        ("refract", &["--albedo", "0.5"][..], "--albedo"),
     ] {
         let mut args = vec!["render", "sphere", "--model", model];
         args.extend(small);
@@ -606,6 +611,17 @@ fn ao_takes_its_flags_and_refuses_the_others() {
     assert!(out.exists());
     let text = String::from_utf8_lossy(&r.stdout);
     for scope in ["extinction volume", "sat3d", "ao raymarch"] {
+        assert!(text.contains(scope), "no '{scope}' timing in:\n{text}");
+    }
+    std::fs::remove_file(&out).unwrap();
+    let mut args = vec!["render", "sphere", "--model", "single"];
+    args.extend(small);
+    args.extend(["--light", "0,1,1", "--g", "0.6", "--albedo", "0.8"]);
+    let r = refrakt(&args);
+    assert!(r.status.success(), "{}", stderr(&r));
+    assert!(out.exists());
+    let text = String::from_utf8_lossy(&r.stdout);
+    for scope in ["transmittance cache", "single raymarch"] {
         assert!(text.contains(scope), "no '{scope}' timing in:\n{text}");
     }
 }

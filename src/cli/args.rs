@@ -265,6 +265,9 @@ pub enum ModelArg {
     /// Volumetric ambient occlusion (3D summed-area table of extinction) with a Lambert
     /// term from --light (Ament et al.'s comparison; --ao-radius, --ao-diffuse).
     Ao,
+    /// Single scattering with hard shadows from a transmittance cache, Henyey-Greenstein
+    /// phase function (--light, --g, --albedo).
+    Single,
 }
 
 /// Scene options shared by `render` and `view`.
@@ -378,6 +381,14 @@ pub struct SceneArgs {
     /// normal, unshadowed) against the ambient term, 0-1 [default: 0.5].
     #[arg(long, value_name = "W", allow_negative_numbers = true)]
     pub ao_diffuse: Option<f32>,
+    /// Scattering models (--model single): Henyey-Greenstein anisotropy of the phase
+    /// function, -0.99 to 0.99; 0 isotropic, positive forward scattering [default: 0].
+    #[arg(long, value_name = "G", allow_negative_numbers = true)]
+    pub g: Option<f32>,
+    /// Scattering models (--model single): albedo, the fraction of the extinguished light
+    /// that is scattered, 0-1 [default: 0.9].
+    #[arg(long, allow_negative_numbers = true)]
+    pub albedo: Option<f32>,
     /// Light softness: radius, in voxels, of the elliptical filter applied to the light at
     /// every plane; 0 = hard shadows and sharp caustics (refract) [default: 0.5].
     #[arg(long, allow_negative_numbers = true)]

@@ -143,6 +143,7 @@ pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Resu
         ModelArg::Ea => Model::Ea,
         ModelArg::Refract => Model::Refract,
         ModelArg::Ao => Model::Ao,
+        ModelArg::Single => Model::Single,
     });
     if args.no_preintegration {
         o.preintegrated = Some(false);
@@ -208,7 +209,25 @@ pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Resu
     });
     o.ao_radius = args.ao_radius;
     o.ao_diffuse = args.ao_diffuse;
+    o.g = args.g;
+    o.albedo = args.albedo;
     s.apply(o);
+    if !s.model.has_phase_function() {
+        let given: Vec<&str> = [
+            ("--g", args.g.is_some()),
+            ("--albedo", args.albedo.is_some()),
+        ]
+        .into_iter()
+        .filter_map(|(flag, given)| given.then_some(flag))
+        .collect();
+        ensure!(
+            given.is_empty(),
+            "{} only appl{} to the scattering models (--model single), not {}",
+            given.join(", "),
+            if given.len() == 1 { "ies" } else { "y" },
+            s.model.name()
+        );
+    }
     if s.model != Model::Ao {
         let given: Vec<&str> = [
             ("--ao-radius", args.ao_radius.is_some()),
@@ -227,8 +246,8 @@ pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Resu
     }
     if s.model != Model::Refract {
         let mut given = refract_only_flags(args);
-        if s.model == Model::Ao {
-            // The AO model lights its Lambert term with the scene's light.
+        if s.model.uses_light() {
+            // The AO and scattering models light the volume with the scene's light.
             given.retain(|f| !matches!(*f, "--light" | "--light-colour"));
         }
         given.extend(extra);

@@ -19,6 +19,7 @@ pub mod preintegration;
 pub mod refract;
 pub mod sat;
 pub mod sat3d;
+pub mod single;
 mod tonemap;
 pub mod upload;
 
@@ -50,13 +51,14 @@ pub use tonemap::ToneMapPass;
 /// (volume, transfer functions, environment, light), outside a frame's "render" scope:
 /// what a transfer-function or light change costs is the sum of these in the first frame
 /// after it (nested scopes, like the SAT's per-axis ones, are not listed).
-pub const REBUILD_SCOPES: [&str; 6] = [
+pub const REBUILD_SCOPES: [&str; 7] = [
     "gradient volume",
     "environment SAT",
     "preintegration",
     "field texture",
     ao::EXTINCTION_SCOPE,
     sat3d::SCOPE,
+    single::CACHE_SCOPE,
 ];
 
 /// GPU state for one volume and its transfer functions.
@@ -76,8 +78,11 @@ pub struct Renderer {
     field_dirty: bool,
     /// The extinction volume and its 3D SAT, for the ambient models: made on their first
     /// frame, rebuilt with the transfer functions.
-    extinction: Option<ao::ExtinctionSat>,
+    extinction: Option<ao::Extinction>,
     extinction_dirty: bool,
+    /// The single-scattering model's transmittance cache: made on its first frame,
+    /// rebuilt when the extinction or the light's direction changed.
+    transmittance: Option<single::TransmittanceCache>,
     tf: TransferFunctions,
     tf_image: Image,
     tf_dirty: bool,
@@ -181,6 +186,7 @@ impl Renderer {
             field_dirty: false,
             extinction: None,
             extinction_dirty: false,
+            transmittance: None,
             tf: tf.clone(),
             tf_image,
             tf_dirty: true,
@@ -470,30 +476,64 @@ impl Renderer {
     /// them (the ambient models); built in the frame's recording. Refused with the sizes
     /// when they do not fit the device's budget (the gradient volume's).
     fn ensure_extinction(&mut self, model: Model) -> Result<()> {
-        if !model::needs_extinction(model) || self.extinction.is_some() {
+        let Some(with_sat) = model::needs_extinction(model) else {
+            return Ok(());
+        };
+        let has_sat = self.extinction.as_ref().is_some_and(|e| e.sat().is_ok());
+        let with_cache = model == Model::Single;
+        let ready = self.extinction.is_some()
+            && (has_sat || !with_sat)
+            && (self.transmittance.is_some() || !with_cache);
+        if ready {
             return Ok(());
         }
         let extent = self.volume_tex.extent();
         let (_, device_budget) = gradient::GradientVolume::memory(&self.ctx, extent);
         let budget = self.gradient_budget.unwrap_or(device_budget);
-        let needed = ao::ExtinctionSat::bytes(extent);
+        let cache = with_cache || self.transmittance.is_some();
+        let needed = ao::Extinction::bytes(extent, with_sat || has_sat)
+            + if cache {
+                single::TransmittanceCache::bytes(extent)
+            } else {
+                0
+            };
         ensure!(
             needed <= budget,
-            "the {} model needs {} MiB for the extinction volume and its summed-area table              ({}x{}x{} voxels, 12 bytes each); the device budget is {} MiB: use a smaller              volume (--scale)",
+            "the {} model needs {} MiB for the extinction volume{} ({}x{}x{} voxels); the \
+             device budget is {} MiB: use a smaller volume (--scale)",
             model.name(),
             needed >> 20,
+            if with_sat {
+                " and its summed-area table"
+            } else {
+                " and the transmittance cache"
+            },
             extent[0],
             extent[1],
             extent[2],
             budget >> 20
         );
-        self.extinction = Some(ao::ExtinctionSat::new(
-            &self.ctx,
-            &self.volume_tex,
-            &self.tf_image,
-            &self.linear,
-        )?);
-        self.extinction_dirty = true;
+        if self.extinction.is_none() {
+            self.extinction = Some(ao::Extinction::new(
+                &self.ctx,
+                &self.volume_tex,
+                &self.tf_image,
+                &self.linear,
+            )?);
+            self.extinction_dirty = true;
+        }
+        let extinction = self.extinction.as_mut().expect("made above");
+        if with_sat && !has_sat {
+            extinction.add_sat(&self.ctx)?;
+            self.extinction_dirty = true;
+        }
+        if with_cache && self.transmittance.is_none() {
+            self.transmittance = Some(single::TransmittanceCache::new(
+                &self.ctx,
+                extinction,
+                &self.linear,
+            )?);
+        }
         Ok(())
     }
 
@@ -518,6 +558,14 @@ impl Renderer {
             e.record_build(rec, &self.volume_tex, &self.tf_image)?;
             self.extinction_dirty = false;
         }
+        if let (Model::Single, Some(cache), Some(e)) =
+            (model, self.transmittance.as_mut(), self.extinction.as_ref())
+        {
+            let towards = single::light_towards(opts);
+            if !cache.is_current(towards, e) {
+                cache.record_build(rec, e, self.volume_info, towards)?;
+            }
+        }
 
         let inputs = Inputs {
             camera,
@@ -529,6 +577,7 @@ impl Renderer {
             gradient: self.gradient.as_ref().map(|g| g.image()),
             field: self.field.as_ref().map(|f| f.image()),
             extinction: self.extinction.as_ref(),
+            transmittance: self.transmittance.as_ref(),
             tf: &self.tf_image,
             preint: self.preint.image(),
             linear: &self.linear,

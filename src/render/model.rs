@@ -17,7 +17,7 @@
 use anyhow::Result;
 
 use super::refract::{EnvInputs, SweepRecording};
-use super::{ao, ea, refract, Camera, FrameTarget, Model, RenderOptions, VolumeInfo};
+use super::{ao, ea, refract, single, Camera, FrameTarget, Model, RenderOptions, VolumeInfo};
 use crate::vk::{Context, Image, Recorder, Sampler};
 
 /// The renderer's GPU resources, as every model sees them, and the frame asked for.
@@ -37,7 +37,9 @@ pub(crate) struct Inputs<'a> {
     /// The field texture (value, ∇η; render::field), if the sweep may use it.
     pub field: Option<&'a Image>,
     /// The extinction volume and its 3D SAT, if the model needs them (ambient models).
-    pub extinction: Option<&'a super::ao::ExtinctionSat>,
+    pub extinction: Option<&'a super::ao::Extinction>,
+    /// The single-scattering model's transmittance cache, if it needs it.
+    pub transmittance: Option<&'a super::single::TransmittanceCache>,
     /// The transfer functions as a 1D-per-row image.
     pub tf: &'a Image,
     pub preint: &'a Image,
@@ -74,7 +76,7 @@ pub(crate) fn check(
     opts: &RenderOptions,
 ) -> Result<()> {
     match model {
-        Model::Ea | Model::Ao => ea::check(model, opts),
+        Model::Ea | Model::Ao | Model::Single => ea::check(model, opts),
         Model::Refract => refract::check_model(info, camera, opts),
     }
 }
@@ -82,17 +84,18 @@ pub(crate) fn check(
 /// Whether `model` reads the gradient volume (built on its first frame).
 pub(crate) fn needs_gradient(model: Model) -> bool {
     match model {
-        Model::Ea | Model::Ao => false,
+        Model::Ea | Model::Ao | Model::Single => false,
         Model::Refract => true,
     }
 }
 
-/// Whether `model` reads the extinction volume and its 3D SAT (built on its first frame,
-/// rebuilt with the transfer functions).
-pub(crate) fn needs_extinction(model: Model) -> bool {
+/// Whether `model` reads the extinction volume (built on its first frame, rebuilt with
+/// the transfer functions), and whether it needs its 3D SAT too.
+pub(crate) fn needs_extinction(model: Model) -> Option<bool> {
     match model {
-        Model::Ao => true,
-        Model::Ea | Model::Refract => false,
+        Model::Ao => Some(true),
+        Model::Single => Some(false),
+        Model::Ea | Model::Refract => None,
     }
 }
 
@@ -102,6 +105,7 @@ pub(crate) fn make_pass(model: Model, inputs: &Inputs) -> Result<Box<dyn ModelPa
     Ok(match model {
         Model::Ea => Box::new(ea::EaPass::new(inputs, opts.width, opts.height)?),
         Model::Ao => Box::new(ao::AoPass::new(inputs, opts.width, opts.height)?),
+        Model::Single => Box::new(single::SinglePass::new(inputs, opts.width, opts.height)?),
         Model::Refract => Box::new(refract::SweepPass::new(
             inputs,
             opts.width,

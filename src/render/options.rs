@@ -15,25 +15,28 @@ pub enum Model {
     Refract,
     /// Volumetric ambient occlusion from a 3D summed-area table (render::ao).
     Ao,
+    /// Single scattering with shadows from a transmittance cache (render::single).
+    Single,
 }
 
 impl Model {
     /// Every model, in the order `bench models` compares them (EA first: the ratios'
     /// base).
-    pub const ALL: [Model; 3] = [Model::Ea, Model::Ao, Model::Refract];
+    pub const ALL: [Model; 4] = [Model::Ea, Model::Ao, Model::Single, Model::Refract];
 
     /// Whether the model lights the volume with [`SweepOptions::light`] (direction and
     /// colour): a light change can cost it a rebuild.
     pub fn uses_light(self) -> bool {
         match self {
             Model::Ea => false,
-            Model::Ao | Model::Refract => true,
+            Model::Ao | Model::Single | Model::Refract => true,
         }
     }
 
     /// Whether the model has a phase function (a phase-function change applies).
     pub fn has_phase_function(self) -> bool {
         match self {
+            Model::Single => true,
             Model::Ea | Model::Ao | Model::Refract => false,
         }
     }
@@ -43,6 +46,7 @@ impl Model {
             Model::Ea => "ea",
             Model::Refract => "refract",
             Model::Ao => "ao",
+            Model::Single => "single",
         }
     }
 }
@@ -75,6 +79,48 @@ pub struct RenderOptions {
     /// Radius and diffuse weight of the ambient-occlusion model (its light is
     /// `sweep.light`: direction and colour).
     pub ao: super::ao::AoOptions,
+    /// Phase function and albedo of the scattering models.
+    pub scatter: ScatterOptions,
+}
+
+/// How the scattering models' media scatter light.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScatterOptions {
+    /// Henyey–Greenstein anisotropy g in (−1, 1): 0 isotropic, > 0 forward scattering.
+    pub g: f32,
+    /// Scattering albedo Λ = σ_s / σ_t in [0, 1] (the transfer function's colour is the
+    /// medium's scattering colour).
+    pub albedo: f32,
+}
+
+/// Largest |g| of the phase function (at ±1 it is a delta: no longer a phase function a
+/// table or a cache can hold).
+pub const MAX_ANISOTROPY: f32 = 0.99;
+
+impl Default for ScatterOptions {
+    fn default() -> Self {
+        // Ament et al.'s table is built for an albedo of 0.9.
+        Self {
+            g: 0.0,
+            albedo: 0.9,
+        }
+    }
+}
+
+impl ScatterOptions {
+    pub fn validate(&self) -> Result<()> {
+        ensure!(
+            self.g.is_finite() && self.g.abs() <= MAX_ANISOTROPY,
+            "phase-function anisotropy g = {} must be in [-{MAX_ANISOTROPY}, {MAX_ANISOTROPY}]",
+            self.g
+        );
+        ensure!(
+            self.albedo.is_finite() && (0.0..=1.0).contains(&self.albedo),
+            "albedo {} must be in [0, 1] (a medium cannot scatter more light than it removes)",
+            self.albedo
+        );
+        Ok(())
+    }
 }
 
 impl Default for RenderOptions {
@@ -88,6 +134,7 @@ impl Default for RenderOptions {
             termination_alpha: 0.99,
             sweep: SweepOptions::default(),
             ao: Default::default(),
+            scatter: Default::default(),
         }
     }
 }
@@ -117,6 +164,7 @@ impl RenderOptions {
             self.termination_alpha
         );
         self.ao.validate()?;
+        self.scatter.validate()?;
         self.sweep.validate()
     }
 }

@@ -98,6 +98,8 @@ struct RenderTable {
     tonemap: Option<String>,
     ao_radius: Option<u32>,
     ao_diffuse: Option<f32>,
+    g: Option<f32>,
+    albedo: Option<f32>,
 }
 
 /// "x", "xy", "xyz", ... (or "none") to the axes to mirror.
@@ -128,7 +130,8 @@ pub fn parse_model(s: &str) -> Result<Model> {
         "refract" => Ok(Model::Refract),
         "ea" => Ok(Model::Ea),
         "ao" => Ok(Model::Ao),
-        _ => bail!("model '{s}' is not one of refract, ea, ao"),
+        "single" => Ok(Model::Single),
+        _ => bail!("model '{s}' is not one of refract, ea, ao, single"),
     }
 }
 
@@ -344,6 +347,8 @@ impl SceneFile {
             o.exposure = r.exposure;
             o.ao_radius = r.ao_radius;
             o.ao_diffuse = r.ao_diffuse;
+            o.g = r.g;
+            o.albedo = r.albedo;
             if let Some(t) = r.tonemap {
                 o.tonemap = Some(parse_tonemap(&t).context("[render]")?);
             }

@@ -15,7 +15,9 @@ use serde::Deserialize;
 use crate::environment::EnvironmentMap;
 use crate::output::{ToneMap, ToneOperator};
 use crate::render::ao::AoOptions;
-use crate::render::{Camera, Light, LightTransport, Model, RenderOptions, SweepOptions};
+use crate::render::{
+    Camera, Light, LightTransport, Model, RenderOptions, ScatterOptions, SweepOptions,
+};
 use crate::transfer::TransferFunctions;
 use crate::volume::formats::DeviceLimits;
 use crate::volume::{procedural, standins, Volume};
@@ -101,6 +103,8 @@ pub struct Scene {
     pub tonemap: ToneOperator,
     /// The ambient-occlusion model's radius and diffuse weight.
     pub ao: AoOptions,
+    /// The scattering models' phase function and albedo.
+    pub scatter: ScatterOptions,
     /// The scene file this came from, if any (the viewer reloads when it changes).
     pub file: Option<PathBuf>,
 }
@@ -129,6 +133,8 @@ pub struct Overrides {
     pub tonemap: Option<ToneOperator>,
     pub ao_radius: Option<u32>,
     pub ao_diffuse: Option<f32>,
+    pub g: Option<f32>,
+    pub albedo: Option<f32>,
     pub azimuth: Option<f32>,
     pub elevation: Option<f32>,
     pub distance: Option<f32>,
@@ -169,6 +175,8 @@ impl Scene {
         set(&mut self.tonemap, o.tonemap);
         set(&mut self.ao.radius, o.ao_radius);
         set(&mut self.ao.diffuse, o.ao_diffuse);
+        set(&mut self.scatter.g, o.g);
+        set(&mut self.scatter.albedo, o.albedo);
         set(&mut self.camera.azimuth, o.azimuth);
         set(&mut self.camera.elevation, o.elevation);
         set(&mut self.camera.distance, o.distance);
@@ -254,6 +262,7 @@ impl Default for Scene {
             exposure: 0.0,
             tonemap: ToneOperator::Aces,
             ao: AoOptions::default(),
+            scatter: ScatterOptions::default(),
             file: None,
         }
     }
@@ -515,6 +524,7 @@ impl Scene {
                 ..Default::default()
             },
             ao: self.ao,
+            scatter: self.scatter,
             ..Default::default()
         };
         opts.validate()?;

@@ -310,7 +310,8 @@ impl App {
                                 *model = match *model {
                                     Model::Refract => Model::Ea,
                                     Model::Ea => Model::Ao,
-                                    Model::Ao => Model::Refract,
+                                    Model::Ao => Model::Single,
+                                    Model::Single => Model::Refract,
                                 };
                                 said = Some(format!("model {}", model.name()));
                             }

@@ -76,22 +76,27 @@ impl AoOptions {
     }
 }
 
-/// The extinction volume of the current transfer functions and its 3D summed-area table:
-/// the input of the ambient models, owned by the renderer.
-pub struct ExtinctionSat {
+/// The extinction volume of the current transfer functions and, for the models that
+/// average it over boxes, its 3D summed-area table: the input of the scattering and
+/// occlusion models, owned by the renderer.
+pub struct Extinction {
     extinction: Image,
     set: DescriptorSet,
     pipeline: ComputePipeline,
-    sat: Sat3d,
+    sat: Option<Sat3d>,
+    /// Builds so far: what the caches made from it (render::single) compare with.
+    builds: u64,
 }
 
-impl ExtinctionSat {
-    /// Bytes it takes for a volume of `extent`: 4 per voxel of extinction, 8 of table.
-    pub fn bytes(extent: [u32; 3]) -> u64 {
-        12 * extent.iter().map(|&e| e as u64).product::<u64>()
+impl Extinction {
+    /// Bytes it takes for a volume of `extent`: 4 per voxel of extinction, 8 more with the
+    /// table.
+    pub fn bytes(extent: [u32; 3], with_sat: bool) -> u64 {
+        let per_voxel = if with_sat { 12 } else { 4 };
+        per_voxel * extent.iter().map(|&e| e as u64).product::<u64>()
     }
 
-    /// Made empty; [`ExtinctionSat::record_build`] fills it.
+    /// Made empty; [`Extinction::record_build`] fills it.
     pub fn new(ctx: &Context, volume: &Image, tf: &Image, sampler: &Sampler) -> Result<Self> {
         let desc = ImageDesc::computed(ImageKind::D3, vk::Format::R32_SFLOAT, volume.extent(), 1);
         let extinction = Image::new(ctx, desc, "extinction volume")?;
@@ -106,16 +111,30 @@ impl ExtinctionSat {
         )?;
         let pipeline =
             ComputePipeline::new(ctx, shaders::EXTINCTION_COMP, &set, 0, "extinction volume")?;
-        let sat = Sat3d::new(ctx, &extinction)?;
         Ok(Self {
             extinction,
             set,
             pipeline,
-            sat,
+            sat: None,
+            builds: 0,
         })
     }
 
-    /// Compute the extinction of `volume` through `tf` and rebuild the table from it.
+    /// Add the summed-area table (empty: the next [`Extinction::record_build`] fills it).
+    pub fn add_sat(&mut self, ctx: &Context) -> Result<()> {
+        if self.sat.is_none() {
+            self.sat = Some(Sat3d::new(ctx, &self.extinction)?);
+        }
+        Ok(())
+    }
+
+    /// The extinction volume (R32F, σ_t per reference step).
+    pub fn image(&self) -> &Image {
+        &self.extinction
+    }
+
+    /// Compute the extinction of `volume` through `tf` and rebuild the table (if any) from
+    /// it.
     pub fn record_build(&mut self, rec: &mut Recorder, volume: &Image, tf: &Image) -> Result<()> {
         let [w, h, d] = self.extinction.extent();
         let uses = [
@@ -131,12 +150,23 @@ impl ExtinctionSat {
                 [w.div_ceil(8), h.div_ceil(8), d],
             )
         })?;
-        self.sat
-            .record_rebuild(rec, &self.extinction, MAX_EXTINCTION)
+        self.builds += 1;
+        match &mut self.sat {
+            Some(sat) => sat.record_rebuild(rec, &self.extinction, MAX_EXTINCTION),
+            None => Ok(()),
+        }
     }
 
-    pub fn sat(&self) -> &Sat3d {
-        &self.sat
+    /// How many times it was built (each transfer-function change adds one).
+    pub fn builds(&self) -> u64 {
+        self.builds
+    }
+
+    /// The summed-area table, if [`Extinction::add_sat`] made one.
+    pub fn sat(&self) -> Result<&Sat3d> {
+        self.sat
+            .as_ref()
+            .ok_or_else(|| anyhow::anyhow!("the extinction volume has no summed-area table"))
     }
 
     /// The ambient occlusion `glsl/ao.glsl` computes at each point (texture coordinates)
@@ -148,7 +178,7 @@ impl ExtinctionSat {
         shells: i32,
     ) -> Result<Vec<f32>> {
         let texels: Vec<[f32; 4]> = points.iter().map(|p| [p[0], p[1], p[2], 0.0]).collect();
-        self.sat.probe(
+        self.sat()?.probe(
             ctx,
             shaders::AO_PROBE_COMP,
             bytemuck::cast_slice(&texels),
@@ -198,7 +228,7 @@ impl AoPass {
                 Binding::Texture(inputs.tf, sampler),
                 Binding::Texture(inputs.preint, sampler),
                 Binding::StorageImage(&output.image),
-                Binding::Texture(ambient.sat().image(), &nearest),
+                Binding::Texture(ambient.sat()?.image(), &nearest),
             ],
             "ao",
         )?;
@@ -237,14 +267,14 @@ impl ModelPass for AoPass {
             light: [towards.x, towards.y, towards.z, opts.ao.diffuse],
             light_colour: [c[0], c[1], c[2], 0.0],
             dims: [x, y, z, opts.ao.shells()],
-            sat: [ambient.sat().inv_scale(), 0.0, 0.0, 0.0],
+            sat: [ambient.sat()?.inv_scale(), 0.0, 0.0, 0.0],
         };
         rec.update_uniform(&self.params, bytemuck::bytes_of(&p))?;
         let uses = [
             Use::all(inputs.volume, Access::Sampled),
             Use::all(inputs.tf, Access::Sampled),
             Use::all(inputs.preint, Access::Sampled),
-            Use::all(ambient.sat().image(), Access::Sampled),
+            Use::all(ambient.sat()?.image(), Access::Sampled),
             Use::all(&self.output.image, Access::ComputeStorage),
         ];
         let groups = [self.width.div_ceil(8), self.height.div_ceil(8), 1];

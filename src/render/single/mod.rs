@@ -1,0 +1,242 @@
+//! Single scattering with shadows (`--model single`, issue 17 item 2): the model Ament et
+//! al. (seed 002) show beside ambient scattering — directional light attenuated on its way
+//! to each sample (hard shadows), scattered once towards the eye by a Henyey–Greenstein
+//! phase function (`glsl/single.comp`).
+//!
+//! The light's attenuation comes from a transmittance cache, a 3D image at the volume's
+//! resolution ([`TransmittanceCache`], `glsl/transmittance.comp`), marched from every voxel
+//! to the box's face through the extinction volume (`glsl/extinction.comp`). It depends
+//! on the transfer functions (through the extinction) and on the light's direction, and is
+//! rebuilt in the frame's recording when either changed (scope [`CACHE_SCOPE`]: what a
+//! transfer-function or light change costs this model). The phase function is evaluated
+//! per sample, so changing g rebuilds nothing.
+
+use anyhow::Result;
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+
+use super::ao::Extinction;
+use super::model::{Inputs, ModelPass, Recorded};
+use super::{FrameTarget, RenderOptions, VolumeInfo};
+use crate::shaders;
+use crate::vk::{
+    self, Access, Binding, Buffer, ComputePipeline, Context, DescriptorSet, Image, ImageDesc,
+    ImageKind, Recorder, Sampler, Use,
+};
+
+/// The timings scope of the transmittance cache's build.
+pub const CACHE_SCOPE: &str = "transmittance cache";
+
+/// `glsl/transmittance.comp`'s push constants.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct CachePush {
+    towards: [f32; 4],
+    half_extent: [f32; 4],
+}
+
+/// The transmittance of the directional light to every voxel centre.
+pub struct TransmittanceCache {
+    image: Image,
+    set: DescriptorSet,
+    pipeline: ComputePipeline,
+    /// The light direction and the extinction build it holds, `None` until built.
+    built_for: Option<(Vec3, u64)>,
+}
+
+impl TransmittanceCache {
+    /// Bytes it takes for a volume of `extent`.
+    pub fn bytes(extent: [u32; 3]) -> u64 {
+        4 * extent.iter().map(|&e| e as u64).product::<u64>()
+    }
+
+    pub fn new(ctx: &Context, extinction: &Extinction, sampler: &Sampler) -> Result<Self> {
+        let extent = extinction.image().extent();
+        let desc = ImageDesc::computed(ImageKind::D3, vk::Format::R32_SFLOAT, extent, 1);
+        let image = Image::new(ctx, desc, "transmittance cache")?;
+        let set = DescriptorSet::new(
+            ctx,
+            &[
+                Binding::Texture(extinction.image(), sampler),
+                Binding::StorageImage(&image),
+            ],
+            "transmittance cache",
+        )?;
+        let pipeline = ComputePipeline::new(
+            ctx,
+            shaders::TRANSMITTANCE_COMP,
+            &set,
+            std::mem::size_of::<CachePush>() as u32,
+            "transmittance cache",
+        )?;
+        Ok(Self {
+            image,
+            set,
+            pipeline,
+            built_for: None,
+        })
+    }
+
+    /// Whether the cache holds the light from `towards` (unit) through `extinction` as it
+    /// is now.
+    pub fn is_current(&self, towards: Vec3, extinction: &Extinction) -> bool {
+        self.built_for == Some((towards, extinction.builds()))
+    }
+
+    /// Rebuild for the light from `towards` (unit, world) through `extinction`.
+    pub(crate) fn record_build(
+        &mut self,
+        rec: &mut Recorder,
+        extinction: &Extinction,
+        info: VolumeInfo,
+        towards: Vec3,
+    ) -> Result<()> {
+        let [w, h, d] = self.image.extent();
+        let push = CachePush {
+            towards: [towards.x, towards.y, towards.z, info.ref_step],
+            half_extent: [
+                info.half_extent.x,
+                info.half_extent.y,
+                info.half_extent.z,
+                0.0,
+            ],
+        };
+        let uses = [
+            Use::all(extinction.image(), Access::Sampled),
+            Use::all(&self.image, Access::ComputeStorage),
+        ];
+        rec.pass(CACHE_SCOPE, &uses, |rec| {
+            rec.dispatch(
+                &self.pipeline,
+                &self.set,
+                bytemuck::bytes_of(&push),
+                [w.div_ceil(8), h.div_ceil(8), d],
+            )
+        })?;
+        self.built_for = Some((towards, extinction.builds()));
+        Ok(())
+    }
+
+    pub fn image(&self) -> &Image {
+        &self.image
+    }
+}
+
+/// The unit light direction the cache is built for, from the frame's options.
+pub(crate) fn light_towards(opts: &RenderOptions) -> Vec3 {
+    opts.sweep.light.towards.normalize()
+}
+
+/// std140 mirror of `Params` in glsl/single.comp (ea.comp's block, then the model's).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct Params {
+    march: super::ea::MarchParams,
+    light: [f32; 4],
+    light_colour: [f32; 4],
+}
+
+pub(super) struct SinglePass {
+    params: Buffer,
+    output: FrameTarget,
+    set: DescriptorSet,
+    pipeline: ComputePipeline,
+    width: u32,
+    height: u32,
+}
+
+impl SinglePass {
+    pub fn new(inputs: &Inputs, width: u32, height: u32) -> Result<Self> {
+        let ctx = inputs.ctx;
+        let cache = inputs.transmittance.ok_or_else(|| {
+            anyhow::anyhow!("the single-scattering model needs the transmittance cache")
+        })?;
+        let sampler = inputs.linear;
+        let params = Buffer::uniform::<Params>(ctx, "single params")?;
+        let output = FrameTarget::new(ctx, width, height, "single frame")?;
+        let set = DescriptorSet::new(
+            ctx,
+            &[
+                Binding::Uniform(&params),
+                Binding::Texture(inputs.volume, sampler),
+                Binding::Texture(inputs.tf, sampler),
+                Binding::Texture(inputs.preint, sampler),
+                Binding::StorageImage(&output.image),
+                Binding::Texture(cache.image(), sampler),
+            ],
+            "single",
+        )?;
+        let pipeline = ComputePipeline::new(ctx, shaders::SINGLE_COMP, &set, 0, "single raymarch")?;
+        Ok(Self {
+            params,
+            output,
+            set,
+            pipeline,
+            width,
+            height,
+        })
+    }
+}
+
+impl ModelPass for SinglePass {
+    fn fits(&self, opts: &RenderOptions) -> bool {
+        (self.width, self.height) == (opts.width, opts.height)
+    }
+
+    fn output(&self) -> &FrameTarget {
+        &self.output
+    }
+
+    fn record(&mut self, rec: &mut Recorder, inputs: &Inputs) -> Result<Recorded> {
+        let (info, opts) = (inputs.info, inputs.opts);
+        let cache = inputs.transmittance.ok_or_else(|| {
+            anyhow::anyhow!("the single-scattering model needs the transmittance cache")
+        })?;
+        let towards = light_towards(opts);
+        let c = opts.sweep.light.colour;
+        let p = Params {
+            march: super::ea::MarchParams::new(inputs, self.width, self.height),
+            light: [towards.x, towards.y, towards.z, opts.scatter.g],
+            light_colour: [c[0], c[1], c[2], opts.scatter.albedo],
+        };
+        rec.update_uniform(&self.params, bytemuck::bytes_of(&p))?;
+        let uses = [
+            Use::all(inputs.volume, Access::Sampled),
+            Use::all(inputs.tf, Access::Sampled),
+            Use::all(inputs.preint, Access::Sampled),
+            Use::all(cache.image(), Access::Sampled),
+            Use::all(&self.output.image, Access::ComputeStorage),
+        ];
+        let groups = [self.width.div_ceil(8), self.height.div_ceil(8), 1];
+        rec.pass("single raymarch", &uses, |rec| {
+            rec.dispatch(&self.pipeline, &self.set, &[], groups)
+        })?;
+        Ok(Recorded {
+            max_steps: super::steps_for(info.half_extent, info.ref_step, opts.sample_distance)
+                as u32,
+            sweep: None,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn params_match_the_shaders_block() {
+        let mut host = crate::render::ea::march_layout();
+        host.extend(crate::host_layout!(Params {
+            light,
+            light_colour
+        }));
+        crate::vk::spirv::check_block(
+            shaders::SINGLE_COMP,
+            "Params",
+            &host,
+            std::mem::size_of::<Params>(),
+            true,
+        )
+        .unwrap();
+    }
+}
