@@ -94,6 +94,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Bench(BenchCommand::Scaling(args)) => cli::bench::bench_scaling(&desc, &args),
         Command::Bench(BenchCommand::Variants(args)) => cli::bench::bench_variants(&desc, &args),
         Command::Bench(BenchCommand::Compare(args)) => cli::bench::bench_compare(&args),
+        Command::Bench(BenchCommand::Models(args)) => cli::bench::bench_models(&desc, &args),
     }
 }
 

@@ -1,7 +1,8 @@
 //! Benchmark mode: the protocol of the thesis' Tables 6.1 and 6.2 on the local device
 //! (`refrakt bench thesis`), how the sweep's cost scales with planes and pixels
 //! (`refrakt bench scaling`), the sweep's levers A/B'd in one process (`refrakt bench
-//! variants`), and two reports compared with a noise-aware verdict (`refrakt bench
+//! variants`), the optical models side by side after the protocol of Ament et al.'s Table 1
+//! (`refrakt bench models`), and two reports compared with a noise-aware verdict (`refrakt bench
 //! compare`). Every time is a GPU timestamp difference; a frame's time is
 //! the `render` scope of `Renderer::record` (all passes and barriers of the frame).
 //! docs/BENCH.md documents the protocol and the CSV/JSON schema.
@@ -343,15 +344,30 @@ fn prepare_row(
     scale: f64,
     data_dir: &Path,
 ) -> Result<(PreparedRow, Renderer)> {
-    let side = scaled_side(scale);
-    let mut scene = Scene::builtin(d.name)?.context("stand-in scene")?;
+    prepare_builtin(ctx, d.name, scale, scaled_side(scale), data_dir)
+}
+
+/// [`prepare_row`] for any built-in scene (a stand-in, its volume shrunk by `scale`, or a
+/// fetched scan, read as it is) at a `side`² viewport. `original` is the file read: the
+/// stand-in's original from `data_dir`, or the scan.
+pub(crate) fn prepare_builtin(
+    ctx: &Context,
+    name: &str,
+    scale: f64,
+    side: u32,
+    data_dir: &Path,
+) -> Result<(PreparedRow, Renderer)> {
+    let mut scene = Scene::builtin(name)?.with_context(|| format!("{name}: no such scene"))?;
     if let VolumeSource::Standin { scale: s, .. } = &mut scene.volume {
         *s = scale;
     }
     scene.width = side;
     scene.height = side;
     scene.sample_distance = THESIS_SAMPLE_DISTANCE;
-    let original = crate::scene::original_in(data_dir, d.name);
+    let original = match &scene.volume {
+        VolumeSource::Fetched { file, .. } => Some(data_dir.join(file)),
+        _ => crate::scene::original_in(data_dir, name),
+    };
     let volume = scene.load_volume(data_dir, Some(upload::device_limits(ctx)))?;
     let tf = scene.transfer_functions()?;
     let mut renderer = Renderer::new(ctx, &volume, &tf)?;
@@ -494,11 +510,13 @@ pub fn thesis(ctx: &Context, s: &ThesisSettings) -> Result<Report> {
 }
 
 mod compare;
+mod models;
 mod scaling;
 mod variants;
 mod writers;
 
 pub use compare::*;
+pub use models::*;
 pub use scaling::*;
 pub use variants::*;
 pub use writers::*;

@@ -291,3 +291,86 @@ pub fn plot_svg(r: &Report, path: &Path) -> Result<()> {
     root.present().map_err(|e| err(&e))?;
     Ok(())
 }
+
+/// One series of [`plot_grouped_bars`]: its legend and one value per group (None: no bar).
+pub(crate) struct BarSeries {
+    pub label: String,
+    pub values: Vec<Option<f64>>,
+}
+
+/// A grouped bar chart on a log scale as SVG: one group per `groups` entry, one bar per
+/// series in each (the series' colours cycle through a fixed palette).
+pub(crate) fn plot_grouped_bars(
+    path: &Path,
+    caption: &str,
+    y_desc: &str,
+    groups: &[String],
+    series: &[BarSeries],
+) -> Result<()> {
+    use plotters::prelude::*;
+    let err = |e: &dyn std::fmt::Display| anyhow::anyhow!("{}: plotting: {e}", path.display());
+    let n = groups.len();
+    ensure!(n > 0 && !series.is_empty(), "nothing to plot");
+    let all: Vec<f64> = series
+        .iter()
+        .flat_map(|s| s.values.iter().flatten().copied())
+        .filter(|v| *v > 0.0 && v.is_finite())
+        .collect();
+    ensure!(!all.is_empty(), "no positive values to plot");
+    let lo = all.iter().cloned().fold(f64::INFINITY, f64::min) / 2.0;
+    let hi = all.iter().cloned().fold(0.0, f64::max) * 2.0;
+    let width = (40 * series.len() as u32 + 40) * n as u32 + 160;
+    let root = SVGBackend::new(path, (width.max(480), 480)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| err(&e))?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(caption, ("sans-serif", 18))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d(0f64..n as f64, (lo..hi).log_scale())
+        .map_err(|e| err(&e))?;
+    chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .x_labels(n)
+        .x_label_formatter(&|x| {
+            let i = x.floor() as usize;
+            groups.get(i).cloned().unwrap_or_default()
+        })
+        .y_desc(y_desc)
+        .draw()
+        .map_err(|e| err(&e))?;
+    const PALETTE: [RGBColor; 6] = [
+        RGBColor(120, 120, 120),
+        RGBColor(200, 80, 40),
+        RGBColor(40, 110, 190),
+        RGBColor(60, 160, 80),
+        RGBColor(150, 80, 170),
+        RGBColor(210, 170, 40),
+    ];
+    let k = series.len() as f64;
+    let bar = 0.7 / k;
+    for (j, s) in series.iter().enumerate() {
+        let colour = PALETTE[j % PALETTE.len()];
+        chart
+            .draw_series(s.values.iter().enumerate().filter_map(|(i, v)| {
+                let v = (*v).filter(|v| *v > 0.0 && v.is_finite())?;
+                let x = i as f64 + 0.15 + bar * j as f64;
+                Some(Rectangle::new(
+                    [(x, lo), (x + bar * 0.9, v)],
+                    colour.filled(),
+                ))
+            }))
+            .map_err(|e| err(&e))?
+            .label(s.label.clone())
+            .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 10, y + 5)], colour.filled()));
+    }
+    chart
+        .configure_series_labels()
+        .border_style(BLACK)
+        .background_style(WHITE)
+        .draw()
+        .map_err(|e| err(&e))?;
+    root.present().map_err(|e| err(&e))?;
+    Ok(())
+}

@@ -71,8 +71,9 @@ pub enum Command {
     /// Generate (and cache) thesis stand-ins ahead of time, printing the time each took;
     /// `render` and `bench` generate missing ones themselves.
     Generate(GenerateArgs),
-    /// Benchmarks: the thesis' timing tables (6.1, 6.2) on this device, and how the
-    /// sweep's cost scales with planes and pixels. GPU timestamps; see docs/BENCH.md.
+    /// Benchmarks: the thesis' timing tables (6.1, 6.2) on this device, how the sweep's
+    /// cost scales with planes and pixels, and the optical models side by side (Table 1 of
+    /// Ament et al.). GPU timestamps; see docs/BENCH.md.
     #[command(subcommand)]
     Bench(BenchCommand),
 }
@@ -94,7 +95,39 @@ pub enum BenchCommand {
     /// mean and median frame time old → new with a noise-aware verdict; with
     /// --fail-on-regression, exit status 1 when any row got slower (for CI).
     Compare(CompareArgs),
+    /// Every optical model (EA, AO, refract, ...) on the same rows after Table 1 of Ament
+    /// et al., "Ambient Volume Scattering": rendering time, its ratio to EA, and what a
+    /// transfer-function, light or phase-function change costs; the paper's figures beside
+    /// ours.
+    #[command(long_about = MODELS_ABOUT)]
+    Models(ModelsArgs),
 }
+
+const MODELS_ABOUT: &str = "\
+Every optical model refrakt has (`render --model`; EA first, the ratios' base) on the same \
+rows, after the protocol of Table 1 of Ament, Sadlo and Weiskopf, \"Ambient Volume \
+Scattering\" (IEEE TVCG 2013):
+
+- Rows: the thesis stand-ins of `bench thesis` (--rows, --data-dir as there), then the real \
+scans lung-ct and mri-head when scripts/fetch-data has put them in the data folder; a \
+selected row whose data is missing is reported as skipped, with the reason.
+- Viewport 512² × --scale (the stand-in volumes shrink by --scale too; the scans are read \
+as they are), sample distance 1, early ray termination at alpha 0.98.
+- Rendering time: GPU timestamps of the frame (the `render` scope), median and mean over \
+--frames frames after --warmup warm-up frames; the models are rendered interleaved (frame k \
+of every model before frame k+1 of any) with the camera orbiting 0.5° per frame. Ratio: a \
+model's median over EA's median on the same row.
+- Change costs, as the paper's TF/PF/LS columns: the GPU time of everything the renderer \
+rebuilds (preintegration table, field texture, extinction volume and its 3D SAT, ...) in \
+the first frame of the model after the change, each model on a renderer of its own (a \
+shared one would rebuild every model's data in whichever frame came first). TF: every opacity × 0.999. LS: the light \
+direction turned by 1° (models that use the light; else n/a). PF: the phase function \
+changed (models with one; none yet, so n/a). \"0\" means the change rebuilt nothing.
+- The paper's Supernova figures (GTX 560) are printed beside ours on the supernova row, \
+and its whole Table 1 as a reference.
+
+Markdown on stdout; --csv, --json (schema refrakt-bench-models/1) and --svg write the \
+details. See docs/BENCH.md (\"bench models\").";
 
 #[derive(Args)]
 pub struct GenerateArgs {
@@ -188,6 +221,41 @@ pub struct VariantsArgs {
     /// Write the whole report as JSON (schema refrakt-bench-variants/1, docs/BENCH.md).
     #[arg(long, value_name = "FILE.json")]
     pub json: Option<PathBuf>,
+    /// No progress bar on stderr.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+#[derive(Args)]
+pub struct ModelsArgs {
+    /// Shrinks viewport and stand-in volumes together, as `bench thesis --scale` (e.g.
+    /// 0.25 on lavapipe).
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
+    pub scale: f64,
+    /// Measured frames per row and model.
+    #[arg(long, default_value_t = 20, allow_negative_numbers = true)]
+    pub frames: u32,
+    /// Warm-up frames per row and model (interleaved like the measured ones), excluded
+    /// from the statistics (reported).
+    #[arg(long, default_value_t = 2, allow_negative_numbers = true)]
+    pub warmup: u32,
+    /// Rows to run, comma-separated (supernova, piggy-bank, glass, hand, head, water, ship,
+    /// kiwi, lung-ct, mri-head). Default: all.
+    #[arg(long, value_delimiter = ',')]
+    pub rows: Vec<String>,
+    /// Folder with the fetched scans (scripts/fetch-data) and the thesis originals that
+    /// replace the stand-ins. Default: $REFRAKT_DATA_DIR or ~/.cache/refrakt/data.
+    #[arg(long, value_name = "DIR")]
+    pub data_dir: Option<PathBuf>,
+    /// Write every frame time and change cost with the full context as CSV.
+    #[arg(long, value_name = "FILE.csv")]
+    pub csv: Option<PathBuf>,
+    /// Write the whole report as JSON (schema refrakt-bench-models/1, docs/BENCH.md).
+    #[arg(long, value_name = "FILE.json")]
+    pub json: Option<PathBuf>,
+    /// Draw the median rendering time per model and row as an SVG bar chart.
+    #[arg(long, value_name = "FILE.svg", visible_alias = "plot")]
+    pub svg: Option<PathBuf>,
     /// No progress bar on stderr.
     #[arg(long)]
     pub quiet: bool,

@@ -112,6 +112,45 @@ pub fn bench_variants(desc: &ContextDesc, args: &VariantsArgs) -> Result<ExitCod
     finish(ctx)
 }
 
+pub fn bench_models(desc: &ContextDesc, args: &ModelsArgs) -> Result<ExitCode> {
+    standins::scaled_dims([1, 1, 1], args.scale).context("--scale")?;
+    ensure!(args.frames >= 1, "--frames must be at least 1");
+    refrakt::bench::select_models_rows(&args.rows).context("--rows")?;
+    if let Some(p) = &args.csv {
+        refrakt::bench::check_output(p, "csv").context("--csv")?;
+    }
+    if let Some(p) = &args.json {
+        refrakt::bench::check_output(p, "json").context("--json")?;
+    }
+    if let Some(p) = &args.svg {
+        refrakt::bench::check_output(p, "svg").context("--svg")?;
+    }
+    let ctx = Context::new(desc)?;
+    let settings = refrakt::bench::ModelsSettings {
+        scale: args.scale,
+        frames: args.frames,
+        warmup: args.warmup,
+        rows: args.rows.clone(),
+        data_dir: args.data_dir.clone().unwrap_or_else(scene::data_dir),
+        progress: !args.quiet,
+    };
+    let report = refrakt::bench::models(&ctx, &settings)?;
+    print!("{}", refrakt::bench::models_markdown(&report));
+    if let Some(p) = &args.csv {
+        refrakt::bench::write_models_csv(&report, p)?;
+        println!("\nwrote {}", p.display());
+    }
+    if let Some(p) = &args.json {
+        refrakt::bench::write_json(&report, p)?;
+        println!("wrote {}", p.display());
+    }
+    if let Some(p) = &args.svg {
+        refrakt::bench::plot_models_svg(&report, p)?;
+        println!("wrote {}", p.display());
+    }
+    finish(ctx)
+}
+
 /// `bench compare`: no device needed. Exit status 1 with --fail-on-regression when a row
 /// got slower.
 pub fn bench_compare(args: &CompareArgs) -> Result<ExitCode> {

@@ -1,0 +1,815 @@
+//! `bench models`: every optical model of [`Model::ALL`] on the same rows, after the
+//! protocol of Table 1 of Ament et al., "Ambient Volume Scattering" (512² viewport, early
+//! ray termination at α = 0.98): per row and model the rendering time, its ratio to EA's,
+//! and what a change of the transfer function (TF), the light source (LS) and the phase
+//! function (PF) costs: the GPU time of everything the renderer rebuilds for it
+//! ([`REBUILD_SCOPES`]) in the first frame after the change, measured per model on a
+//! renderer of its own. The models are rendered
+//! interleaved frame by frame (frame k of every model before frame k+1 of any), as `bench
+//! variants` does, so a change in machine load hits them alike.
+
+use glam::{Quat, Vec3};
+
+use super::*;
+use crate::render::REBUILD_SCOPES;
+use crate::scene::FETCHED;
+use crate::transfer::TransferFunctions;
+
+/// Version of the models report's JSON layout.
+pub const MODELS_SCHEMA: &str = "refrakt-bench-models/1";
+
+/// The paper's viewport side (Table 1: 512² pixels).
+pub const MODELS_VIEWPORT: u32 = 512;
+
+/// The paper's early-ray-termination threshold (Table 1: α = 0.98).
+pub const MODELS_TERMINATION_ALPHA: f32 = 0.98;
+
+/// Every opacity is scaled by this for the TF change (a slightly different transfer
+/// function: everything that depends on it must be rebuilt, the image barely changes).
+pub const TF_CHANGE_OPACITY_SCALE: f32 = 0.999;
+
+/// Degrees the light direction turns for the LS change.
+pub const LS_CHANGE_DEG: f32 = 1.0;
+
+/// The real scans `bench models` times after the thesis rows when their data is present:
+/// name and title (their files and presets are [`FETCHED`]'s).
+pub const SCAN_ROWS: [(&str, &str); 2] = [("lung-ct", "Lung CT"), ("mri-head", "MRI head")];
+
+#[derive(Clone, Debug)]
+pub struct ModelsSettings {
+    pub scale: f64,
+    pub frames: u32,
+    pub warmup: u32,
+    /// Rows by name (thesis stand-ins and [`SCAN_ROWS`]); empty = all.
+    pub rows: Vec<String>,
+    pub data_dir: PathBuf,
+    pub progress: bool,
+}
+
+/// A row `bench models` can time: a thesis stand-in or a fetched scan.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ModelsRowSpec {
+    pub name: &'static str,
+    pub title: &'static str,
+    /// The fetched file (relative to the data directory) of a scan; None for a stand-in.
+    pub scan_file: Option<&'static str>,
+}
+
+/// Every row `bench models` knows, in report order: the thesis rows, then the scans.
+pub fn models_row_specs() -> Vec<ModelsRowSpec> {
+    let mut v: Vec<ModelsRowSpec> = DATASETS
+        .iter()
+        .map(|d| ModelsRowSpec {
+            name: d.name,
+            title: d.title,
+            scan_file: None,
+        })
+        .collect();
+    for (name, title) in SCAN_ROWS {
+        let file = FETCHED
+            .iter()
+            .find(|f| f.0 == name)
+            .map(|f| f.1)
+            .expect("every scan row is a fetched scene");
+        v.push(ModelsRowSpec {
+            name,
+            title,
+            scan_file: Some(file),
+        });
+    }
+    v
+}
+
+/// The rows `--rows` names (all when empty), in report order; an unknown name is an error
+/// that lists the known ones.
+pub fn select_models_rows(names: &[String]) -> Result<Vec<ModelsRowSpec>> {
+    let all = models_row_specs();
+    for n in names {
+        if !all.iter().any(|r| r.name == n) {
+            let known: Vec<&str> = all.iter().map(|r| r.name).collect();
+            bail!("unknown row '{n}'; the rows are {}", known.join(", "));
+        }
+    }
+    Ok(all
+        .into_iter()
+        .filter(|r| names.is_empty() || names.iter().any(|n| n == r.name))
+        .collect())
+}
+
+/// The paper's figures for one of its optical models on one row (Table 1; "-" there is
+/// None here: the change does not apply to that model).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct PaperFigures {
+    /// The paper's name of the model.
+    pub model: String,
+    pub tf_change_ms: Option<f64>,
+    pub pf_change_ms: Option<f64>,
+    pub ls_change_ms: Option<f64>,
+    pub fps: f64,
+    /// 1000 / fps.
+    pub ms: f64,
+    /// The paper's rendering-time ratio to its EA, as the paper states it.
+    pub ratio: f64,
+}
+
+/// The paper's model, our model's name, TF, PF, LS change ms, fps, ratio to EA.
+type PaperEntry = (
+    &'static str,
+    Option<&'static str>,
+    Option<f64>,
+    Option<f64>,
+    Option<f64>,
+    f64,
+    f64,
+);
+
+/// The paper's Supernova row of Table 1 (GTX 560, 432³, 512²), per its model: our model
+/// name it corresponds to (None: we have no such model), TF, PF, LS change ms, fps, and
+/// the ratio to EA it states.
+const PAPER_SUPERNOVA: [PaperEntry; 3] = [
+    (
+        "emission-absorption",
+        Some("ea"),
+        None,
+        None,
+        None,
+        64.0,
+        1.0,
+    ),
+    (
+        "ambient occlusion",
+        Some("ao"),
+        Some(532.0),
+        None,
+        None,
+        27.0,
+        2.4,
+    ),
+    (
+        "ambient scattering",
+        None,
+        Some(490.0),
+        Some(34.0),
+        Some(34.0),
+        20.0,
+        3.2,
+    ),
+];
+
+/// The paper's name of the row whose figures Table 1 gives beside ours.
+pub const PAPER_ROW: &str = "supernova";
+
+fn paper_figures(p: &PaperEntry) -> PaperFigures {
+    PaperFigures {
+        model: p.0.to_string(),
+        tf_change_ms: p.2,
+        pf_change_ms: p.3,
+        ls_change_ms: p.4,
+        fps: p.5,
+        ms: 1000.0 / p.5,
+        ratio: p.6,
+    }
+}
+
+/// The paper's Supernova figures for our `model`, if the paper has that model.
+pub fn paper_supernova(model: Model) -> Option<PaperFigures> {
+    PAPER_SUPERNOVA
+        .iter()
+        .find(|p| p.1 == Some(model.name()))
+        .map(paper_figures)
+}
+
+/// Table 1 of the paper as it is printed (model order per row as its colour code:
+/// emission-absorption, ambient occlusion, single scattering, ambient scattering, for the
+/// models each row shows).
+pub const PAPER_TABLE_1: &str = "\
+| Data set | Volume size | Figures | TF change [ms] | PF change [ms] | LS change [ms] | Rendering [fps] |
+|---|---|---|---|---|---|---|
+| Supernova | 432 × 432 × 432 | 1a/b/c | -/532/490 | -/-/34 | -/-/34 | 64/27/20 |
+| Vis. Human | 202 × 256 × 259 | 6a/b/c/d/e | 1020/126/117/117/158 | -/-/16/16/16 | 1020/-/16/16/16 | 110/105/60/53/50 |
+| Manix (Tiss.) | 256 × 256 × 276 | 7a-e | 182 | 11 | 11 | 38 |
+| Manix (Skel.) | 256 × 256 × 276 | 8a-b/c/d/e | 1190/231/192/180 | -/36/16/10 | 1190/36/16/10 | 60/35/35/35 |
+| Mecanix | 256 × 256 × 302 | 9a/b/c | 1372/206/192 | -/34/20 | 1372/34/20 | 73/48/48 |
+| Buoyancy Flow | 181 × 91 × 181 | 10a/b | -/85 | -/5 | -/5 | 180/63 |
+| Boundary Layer | 538 × 54 × 261 | 11a/b/c | 128/780/112 | -/-/8 | -/780/8 | 105/87/69 |
+";
+
+/// One rebuild scope's GPU time in a change's frame.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ScopeMs {
+    pub scope: String,
+    pub ms: f64,
+}
+
+/// What one change cost: the sum of the [`REBUILD_SCOPES`] in the first frame after it,
+/// and those scopes (empty, and `ms` 0, when the change rebuilt nothing).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Change {
+    pub ms: f64,
+    pub scopes: Vec<ScopeMs>,
+    /// That frame's own rendering time (the `render` scope), for reference.
+    pub frame_ms: f64,
+}
+
+impl Change {
+    fn of(f: &Frame) -> Result<Change> {
+        let scopes: Vec<ScopeMs> = REBUILD_SCOPES
+            .iter()
+            .filter_map(|s| {
+                f.timings.get(s).map(|ms| ScopeMs {
+                    scope: s.to_string(),
+                    ms,
+                })
+            })
+            .collect();
+        Ok(Change {
+            // Not `sum()`: an empty float sum is -0.
+            ms: scopes.iter().fold(0.0, |a, s| a + s.ms),
+            scopes,
+            frame_ms: frame_ms(f)?,
+        })
+    }
+}
+
+/// One model on one row.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ModelRun {
+    /// [`Model::name`].
+    pub model: String,
+    pub warmup_ms: Vec<f64>,
+    pub frames_ms: Vec<f64>,
+    pub stats: Stats,
+    /// 1000 / median.
+    pub fps: f64,
+    /// Median rendering time over EA's median on the same row.
+    pub ratio_to_ea: f64,
+    /// Samples along the longest ray (ray marchers) or sweep planes, of the last frame.
+    pub max_steps: u32,
+    /// Null: the model has no transfer function to change (never today).
+    pub tf_change: Option<Change>,
+    /// Null: the model does not use the light (`Model::uses_light`).
+    pub ls_change: Option<Change>,
+    /// Null: the model has no phase function (`Model::has_phase_function`), or no option
+    /// changes it yet.
+    pub pf_change: Option<Change>,
+    /// The paper's figures for this model on this row (the Supernova row only, and only
+    /// for the models the paper has).
+    pub paper: Option<PaperFigures>,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ModelsRow {
+    pub dataset: String,
+    pub title: String,
+    /// "stand-in", the original's path from --data-dir, or the scan's path.
+    pub source: String,
+    pub resolution: [u32; 3],
+    pub viewport: [u32; 2],
+    /// In [`Model::ALL`] order.
+    pub models: Vec<ModelRun>,
+    /// The paper's figures of every model it has on this row (Supernova only), ours or
+    /// not.
+    pub paper: Vec<PaperFigures>,
+}
+
+/// A selected row that was not timed, and why.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SkippedRow {
+    pub dataset: String,
+    pub reason: String,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ModelsSettingsRecord {
+    pub scale: f64,
+    pub frames: u32,
+    pub warmup: u32,
+    pub viewport: u32,
+    pub sample_distance: f32,
+    pub termination_alpha: f32,
+    pub orbit_deg_per_frame: f32,
+    /// The rows timed.
+    pub rows: Vec<String>,
+    /// The models, in the order each frame renders them ([`Model::ALL`]).
+    pub models: Vec<String>,
+    /// The model the ratios divide by.
+    pub ratio_to: String,
+    /// The scopes a change's cost sums ([`REBUILD_SCOPES`]).
+    pub rebuild_scopes: Vec<String>,
+    pub tf_change: String,
+    pub ls_change: String,
+    pub pf_change: String,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ModelsReport {
+    pub schema: String,
+    pub meta: Meta,
+    pub settings: ModelsSettingsRecord,
+    pub rows: Vec<ModelsRow>,
+    pub skipped: Vec<SkippedRow>,
+}
+
+/// The viewport side at `scale` (at least 8 pixels).
+pub fn models_side(scale: f64) -> u32 {
+    ((MODELS_VIEWPORT as f64 * scale).round() as u32).max(8)
+}
+
+/// `tf` with every opacity scaled by [`TF_CHANGE_OPACITY_SCALE`].
+fn changed_tf(tf: &TransferFunctions) -> TransferFunctions {
+    let mut t = tf.clone();
+    for p in &mut t.opacity.points {
+        p.1[0] *= TF_CHANGE_OPACITY_SCALE;
+    }
+    t
+}
+
+/// `opts` with the light direction turned [`LS_CHANGE_DEG`] (about an axis perpendicular
+/// to it).
+fn changed_light(opts: &RenderOptions) -> RenderOptions {
+    let mut o = opts.clone();
+    let towards: Vec3 = o.sweep.light.towards;
+    let axis = towards.normalize_or_zero().any_orthonormal_vector();
+    o.sweep.light.towards = Quat::from_axis_angle(axis, LS_CHANGE_DEG.to_radians()) * towards;
+    o
+}
+
+/// The phase-function change: `opts` with the phase function of `model` changed slightly,
+/// or None while no option sets a phase function (then the PF change is not applicable
+/// and reported "n/a"). The hook to fill when a model with a phase function arrives (e.g.
+/// its anisotropy g + 0.01).
+pub fn change_phase_function(opts: &RenderOptions, model: Model) -> Option<RenderOptions> {
+    let _ = (opts, model);
+    None
+}
+
+/// Renders `model` once and returns what its rebuild scopes cost.
+fn change_frame(
+    renderer: &mut Renderer,
+    model: Model,
+    camera: &Camera,
+    opts: &RenderOptions,
+) -> Result<Change> {
+    let f = renderer.render(model, camera, opts)?;
+    Change::of(&f)
+}
+
+/// Why a row cannot be timed, if its data is missing.
+fn missing(spec: &ModelsRowSpec, data_dir: &Path) -> Option<String> {
+    let file = spec.scan_file?;
+    let path = data_dir.join(file);
+    (!path.exists()).then(|| {
+        format!(
+            "{} not found (run scripts/fetch-data, or point REFRAKT_DATA_DIR / --data-dir at \
+             where it put the data)",
+            path.display()
+        )
+    })
+}
+
+/// Frames one row renders: the interleaved frames, and per model one first frame and one
+/// per applicable change.
+fn frames_per_row(s: &ModelsSettings) -> u64 {
+    let changes: u64 = Model::ALL
+        .iter()
+        .map(|m| 2 + m.uses_light() as u64 + m.has_phase_function() as u64)
+        .sum();
+    (s.warmup + s.frames) as u64 * Model::ALL.len() as u64 + changes
+}
+
+/// Times every model of [`Model::ALL`] on every selected row.
+pub fn models(ctx: &Context, s: &ModelsSettings) -> Result<ModelsReport> {
+    ensure!(s.frames >= 1, "--frames must be at least 1");
+    standins::scaled_dims([1, 1, 1], s.scale).context("--scale")?;
+    let specs = select_models_rows(&s.rows)?;
+    let ea = Model::ALL.iter().position(|m| *m == Model::Ea).unwrap_or(0);
+    let side = models_side(s.scale);
+    let mut skipped = Vec::new();
+    let mut timed = Vec::new();
+    for spec in specs {
+        match missing(&spec, &s.data_dir) {
+            Some(reason) => skipped.push(SkippedRow {
+                dataset: spec.name.to_string(),
+                reason,
+            }),
+            None => timed.push(spec),
+        }
+    }
+    let pb = progress_bar(timed.len() as u64 * frames_per_row(s), s.progress);
+    for k in &skipped {
+        pb.println(format!("skipping {}: {}", k.dataset, k.reason));
+    }
+    let nm = Model::ALL.len();
+    let mut out = Vec::new();
+    for spec in timed {
+        pb.set_message(format!("{}: preparing the volume", spec.name));
+        let (row, mut renderer) = prepare_builtin(ctx, spec.name, s.scale, side, &s.data_dir)?;
+        let mut opts = row.opts.clone();
+        opts.termination_alpha = MODELS_TERMINATION_ALPHA;
+        let mut times = vec![(Vec::new(), Vec::new()); nm];
+        let mut steps = vec![0u32; nm];
+        for k in 0..s.warmup + s.frames {
+            let warm = k < s.warmup;
+            pb.set_message(format!(
+                "{}: {} {}/{}",
+                spec.name,
+                if warm { "warm-up" } else { "frame" },
+                if warm { k + 1 } else { k - s.warmup + 1 },
+                if warm { s.warmup } else { s.frames }
+            ));
+            let camera = orbit(&row.scene.camera, k);
+            for (i, m) in Model::ALL.iter().enumerate() {
+                let f = renderer.render(*m, &camera, &opts)?;
+                let ms = frame_ms(&f)?;
+                steps[i] = f.max_steps;
+                if warm {
+                    times[i].0.push(ms);
+                } else {
+                    times[i].1.push(ms);
+                }
+                pb.inc(1);
+            }
+        }
+        // The changes, one model at a time, each on a renderer of its own (as an
+        // application showing that model alone would have): a shared renderer rebuilds
+        // every model's data in whichever frame comes first after a change.
+        drop(renderer);
+        let camera = orbit(&row.scene.camera, s.warmup + s.frames);
+        let mut changes = Vec::new();
+        for m in Model::ALL {
+            pb.set_message(format!("{}: {} changes", spec.name, m.name()));
+            let (_, mut renderer) = prepare_builtin(ctx, spec.name, s.scale, side, &s.data_dir)?;
+            // The model's first frame makes what it needs.
+            renderer.render(m, &camera, &opts)?;
+            pb.inc(1);
+            let tf = changed_tf(renderer.transfer_functions());
+            renderer.set_transfer_functions(&tf)?;
+            let tf_change = Some(change_frame(&mut renderer, m, &camera, &opts)?);
+            pb.inc(1);
+            let ls_change = if m.uses_light() {
+                let c = change_frame(&mut renderer, m, &camera, &changed_light(&opts))?;
+                pb.inc(1);
+                Some(c)
+            } else {
+                None
+            };
+            let pf_change = if m.has_phase_function() {
+                let c = match change_phase_function(&opts, m) {
+                    Some(o) => Some(change_frame(&mut renderer, m, &camera, &o)?),
+                    None => None,
+                };
+                pb.inc(1);
+                c
+            } else {
+                None
+            };
+            changes.push((tf_change, ls_change, pf_change));
+        }
+        let is_paper_row = spec.name == PAPER_ROW;
+        let mut runs = Vec::new();
+        for (i, ((warmup_ms, frames_ms), (tf_change, ls_change, pf_change))) in
+            times.into_iter().zip(changes).enumerate()
+        {
+            let m = Model::ALL[i];
+            let stats = Stats::of(&frames_ms)?;
+            runs.push(ModelRun {
+                model: m.name().to_string(),
+                warmup_ms,
+                frames_ms,
+                fps: 1000.0 / stats.median,
+                stats,
+                ratio_to_ea: 0.0,
+                max_steps: steps[i],
+                tf_change,
+                ls_change,
+                pf_change,
+                paper: if is_paper_row {
+                    paper_supernova(m)
+                } else {
+                    None
+                },
+            });
+        }
+        let base = runs[ea].stats.median;
+        for r in &mut runs {
+            r.ratio_to_ea = r.stats.median / base;
+        }
+        out.push(ModelsRow {
+            dataset: spec.name.to_string(),
+            title: spec.title.to_string(),
+            source: match (spec.scan_file, row.original) {
+                (None, None) => "stand-in".into(),
+                (_, Some(p)) => p.display().to_string(),
+                (Some(f), None) => f.to_string(),
+            },
+            resolution: row.resolution,
+            viewport: [side, side],
+            models: runs,
+            paper: if is_paper_row {
+                PAPER_SUPERNOVA.iter().map(paper_figures).collect()
+            } else {
+                Vec::new()
+            },
+        });
+    }
+    pb.finish_and_clear();
+    Ok(ModelsReport {
+        schema: MODELS_SCHEMA.into(),
+        meta: meta(ctx),
+        settings: ModelsSettingsRecord {
+            scale: s.scale,
+            frames: s.frames,
+            warmup: s.warmup,
+            viewport: side,
+            sample_distance: THESIS_SAMPLE_DISTANCE,
+            termination_alpha: MODELS_TERMINATION_ALPHA,
+            orbit_deg_per_frame: ORBIT_DEG_PER_FRAME,
+            rows: out.iter().map(|r| r.dataset.clone()).collect(),
+            models: Model::ALL.iter().map(|m| m.name().to_string()).collect(),
+            ratio_to: Model::ALL[ea].name().to_string(),
+            rebuild_scopes: REBUILD_SCOPES.iter().map(|s| s.to_string()).collect(),
+            tf_change: format!("every opacity × {TF_CHANGE_OPACITY_SCALE}"),
+            ls_change: format!("light direction turned by {LS_CHANGE_DEG}°"),
+            pf_change: "no option changes a phase function yet: n/a for every model".into(),
+        },
+        rows: out,
+        skipped,
+    })
+}
+
+/// A change's cost for the table: "n/a" when not applicable, "0" when nothing was rebuilt.
+fn change_text(c: &Option<Change>) -> String {
+    match c {
+        None => "n/a".into(),
+        Some(c) if c.ms == 0.0 => "0".into(),
+        Some(c) => format!("{:.2}", c.ms),
+    }
+}
+
+/// A paper figure for the table: "—" when the paper has no such model, "-" (as the paper
+/// prints it) when the change does not apply.
+fn paper_text(p: &Option<PaperFigures>, f: impl Fn(&PaperFigures) -> Option<f64>) -> String {
+    match p {
+        None => "—".into(),
+        Some(p) => f(p)
+            .map(|v| format!("{v:.1}"))
+            .unwrap_or_else(|| "-".into()),
+    }
+}
+
+/// The report as Markdown: the protocol, one table of every row and model with the
+/// paper's Supernova figures beside ours, the skipped rows, and the paper's Table 1.
+pub fn models_markdown(r: &ModelsReport) -> String {
+    let st = &r.settings;
+    let mut s = device_line(&r.meta);
+    s += &format!(
+        "Protocol (Ament et al., Table 1): viewport {}² × scale {} = {}², volumes × scale, \
+         sample distance {}, early ray termination at α = {}; {} frames after {} warm-up per \
+         model, models interleaved (frame k of every model before frame k+1 of any), camera \
+         orbiting {}°/frame; rendering time = GPU timestamps of the frame (`render` scope). \
+         Change = the rebuild scopes ({}) in the first frame after it; TF: {}; LS: {}; PF: \
+         {}. Ratio: median over {}'s median on the same row.\n\n",
+        MODELS_VIEWPORT,
+        st.scale,
+        st.viewport,
+        st.sample_distance,
+        st.termination_alpha,
+        st.frames,
+        st.warmup,
+        st.orbit_deg_per_frame,
+        st.rebuild_scopes.join(", "),
+        st.tf_change,
+        st.ls_change,
+        st.pf_change,
+        st.ratio_to
+    );
+    s += &format!(
+        "| Dataset | Resolution | Model | Median ms | Mean ms | Min | Max | FPS | Ratio to {} | TF change ms | LS change ms | PF change ms | Paper ms | Paper ratio | Paper TF ms | Paper LS ms | Paper PF ms |\n",
+        st.ratio_to
+    );
+    s += "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    for row in &r.rows {
+        let res = format!(
+            "{}{}",
+            dims(row.resolution),
+            match row.source.as_str() {
+                "stand-in" => " (stand-in)",
+                _ => "",
+            }
+        );
+        for m in &row.models {
+            let t = &m.stats;
+            s += &format!(
+                "| {} | {} | {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {} | {} | {} | {} | {} | {} | {} | {} |\n",
+                row.title,
+                res,
+                m.model,
+                t.median,
+                t.mean,
+                t.min,
+                t.max,
+                m.fps,
+                m.ratio_to_ea,
+                change_text(&m.tf_change),
+                change_text(&m.ls_change),
+                change_text(&m.pf_change),
+                paper_text(&m.paper, |p| Some(p.ms)),
+                paper_text(&m.paper, |p| Some(p.ratio)),
+                paper_text(&m.paper, |p| p.tf_change_ms),
+                paper_text(&m.paper, |p| p.ls_change_ms),
+                paper_text(&m.paper, |p| p.pf_change_ms),
+            );
+        }
+        let unmatched: Vec<&PaperFigures> = row
+            .paper
+            .iter()
+            .filter(|p| !row.models.iter().any(|m| m.paper.as_ref() == Some(p)))
+            .collect();
+        for p in unmatched {
+            let p = Some(p.clone());
+            s += &format!(
+                "| {} | | {} (paper only) | | | | | | | | | | {} | {} | {} | {} | {} |\n",
+                row.title,
+                p.as_ref().map(|p| p.model.as_str()).unwrap_or_default(),
+                paper_text(&p, |p| Some(p.ms)),
+                paper_text(&p, |p| Some(p.ratio)),
+                paper_text(&p, |p| p.tf_change_ms),
+                paper_text(&p, |p| p.ls_change_ms),
+                paper_text(&p, |p| p.pf_change_ms),
+            );
+        }
+    }
+    if !r.skipped.is_empty() {
+        s += "\nSkipped rows:\n\n";
+        for k in &r.skipped {
+            s += &format!("- {}: {}\n", k.dataset, k.reason);
+        }
+    }
+    s += "\nChange costs: \"n/a\" = the change does not apply to the model; \"0\" = it \
+          rebuilt nothing. Paper columns: the Supernova row of Table 1 (NVIDIA GTX 560, 432³, \
+          512²; ms = 1000 / fps); \"—\" = the paper has no such model, \"-\" = as the paper \
+          prints it (not applicable).\n";
+    s += "\nReference: Table 1 of Ament, Sadlo, Weiskopf, \"Ambient Volume Scattering\" (IEEE \
+          TVCG 19(12), 2013), as printed (models per row in its colour-code order: \
+          emission-absorption, ambient occlusion, single scattering, ambient scattering, \
+          those the row shows; GTX 560, 512², α = 0.98):\n\n";
+    s += PAPER_TABLE_1;
+    s
+}
+
+/// One CSV record per warm-up and measured frame of every row and model, and one per
+/// applicable change (kind `tf-change`, `ls-change`, `pf-change`: ms is the rebuild
+/// scopes' sum), each with its whole context, as `bench thesis --csv`.
+pub fn write_models_csv(r: &ModelsReport, path: &Path) -> Result<()> {
+    let mut w = csv::Writer::from_path(path)
+        .with_context(|| format!("{}: cannot create the CSV file", path.display()))?;
+    w.write_record([
+        "schema",
+        "dataset",
+        "model",
+        "kind",
+        "frame",
+        "ms",
+        "res_x",
+        "res_y",
+        "res_z",
+        "viewport",
+        "planes",
+        "scale",
+        "sample_distance",
+        "termination_alpha",
+        "device",
+        "driver",
+        "vulkan",
+        "refrakt_version",
+        "git_commit",
+        "date",
+    ])?;
+    for row in &r.rows {
+        for m in &row.models {
+            let frames = m
+                .warmup_ms
+                .iter()
+                .map(|t| ("warmup", Some(*t)))
+                .chain(m.frames_ms.iter().map(|t| ("frame", Some(*t))));
+            let changes = [
+                ("tf-change", &m.tf_change),
+                ("ls-change", &m.ls_change),
+                ("pf-change", &m.pf_change),
+            ]
+            .into_iter()
+            .filter_map(|(k, c)| c.as_ref().map(|c| (k, Some(c.ms))));
+            for (k, (kind, ms)) in frames.chain(changes).enumerate() {
+                let mut record = vec![
+                    MODELS_SCHEMA.to_string(),
+                    row.dataset.clone(),
+                    m.model.clone(),
+                    kind.to_string(),
+                    k.to_string(),
+                    ms.map(|t| format!("{t:.6}")).unwrap_or_default(),
+                ];
+                record.extend(size_columns(
+                    row.resolution,
+                    row.viewport,
+                    m.max_steps,
+                    r.settings.scale,
+                    r.settings.sample_distance,
+                ));
+                record.push(r.settings.termination_alpha.to_string());
+                record.extend(meta_columns(&r.meta));
+                w.write_record(&record)?;
+            }
+        }
+    }
+    w.flush()
+        .with_context(|| format!("{}: writing the CSV file", path.display()))?;
+    Ok(())
+}
+
+/// Median rendering ms per model per row as an SVG bar chart (log scale).
+pub fn plot_models_svg(r: &ModelsReport, path: &Path) -> Result<()> {
+    let groups: Vec<String> = r.rows.iter().map(|row| row.title.clone()).collect();
+    let series: Vec<BarSeries> = r
+        .settings
+        .models
+        .iter()
+        .map(|name| BarSeries {
+            label: name.clone(),
+            values: r
+                .rows
+                .iter()
+                .map(|row| {
+                    row.models
+                        .iter()
+                        .find(|m| &m.model == name)
+                        .map(|m| m.stats.median)
+                })
+                .collect(),
+        })
+        .collect();
+    let caption = format!(
+        "Median rendering time per model, {} (scale {})",
+        r.meta.device, r.settings.scale
+    );
+    plot_grouped_bars(path, &caption, "ms per frame (log)", &groups, &series)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rows_are_the_thesis_rows_then_the_scans() {
+        let all = select_models_rows(&[]).unwrap();
+        let names: Vec<&str> = all.iter().map(|r| r.name).collect();
+        assert_eq!(names.len(), DATASETS.len() + SCAN_ROWS.len());
+        assert_eq!(&names[DATASETS.len()..], ["lung-ct", "mri-head"]);
+        let r = select_models_rows(&["mri-head".into(), "kiwi".into()]).unwrap();
+        assert_eq!(
+            r.iter().map(|r| r.name).collect::<Vec<_>>(),
+            ["kiwi", "mri-head"]
+        );
+        assert_eq!(r[1].scan_file, Some("mri/ch2.nii.gz"));
+        let e = select_models_rows(&["teapot".into()])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("teapot") && e.contains("lung-ct"), "{e}");
+    }
+
+    #[test]
+    fn the_paper_supernova_figures_are_table_1s() {
+        let ea = paper_supernova(Model::Ea).unwrap();
+        assert_eq!((ea.fps, ea.ratio, ea.tf_change_ms), (64.0, 1.0, None));
+        let ao = paper_supernova(Model::Ao).unwrap();
+        assert_eq!((ao.tf_change_ms, ao.ls_change_ms), (Some(532.0), None));
+        assert!((ao.ms - 1000.0 / 27.0).abs() < 1e-12);
+        // The stated ratios are the fps ratios, rounded.
+        for p in PAPER_SUPERNOVA.iter().map(paper_figures) {
+            assert!((64.0 / p.fps - p.ratio).abs() < 0.05, "{}", p.model);
+        }
+        assert!(paper_supernova(Model::Refract).is_none());
+    }
+
+    #[test]
+    fn the_changes_differ_from_the_original() {
+        let tf = TransferFunctions::load("supernova").unwrap();
+        assert_ne!(changed_tf(&tf), tf);
+        let o = RenderOptions::default();
+        let c = changed_light(&o);
+        let cos = c
+            .sweep
+            .light
+            .towards
+            .normalize()
+            .dot(o.sweep.light.towards.normalize());
+        assert!(cos < 1.0 && cos > 0.999, "{cos}");
+    }
+}
