@@ -177,6 +177,18 @@ fn every_model_is_timed_with_its_ratio_to_ea_and_its_change_costs() {
         "{tf:?}"
     );
     assert!(ea.ls_change.is_none(), "EA does not use the light");
+    // Single scattering caches the light's transmittance: a light change rebuilds it; its
+    // phase function is evaluated per sample, so a phase change rebuilds nothing.
+    let single = row.models.iter().find(|m| m.model == "single").unwrap();
+    let ls = single.ls_change.as_ref().unwrap();
+    assert!(
+        ls.scopes
+            .iter()
+            .any(|s| s.scope == "transmittance cache" && s.ms > 0.0),
+        "{ls:?}"
+    );
+    let pf = single.pf_change.as_ref().unwrap();
+    assert_eq!(pf.ms, 0.0, "{pf:?}");
     assert!(stdout.contains("n/a"), "{stdout}");
 
     // CSV: a header, then per model every frame and one record per applicable change.

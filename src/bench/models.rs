@@ -342,13 +342,17 @@ fn changed_light(opts: &RenderOptions) -> RenderOptions {
     o
 }
 
-/// The phase-function change: `opts` with the phase function of `model` changed slightly,
-/// or None while no option sets a phase function (then the PF change is not applicable
-/// and reported "n/a"). The hook to fill when a model with a phase function arrives (e.g.
-/// its anisotropy g + 0.01).
+/// The phase-function change: `opts` with the anisotropy g of `model`'s phase function
+/// moved by 0.01 (towards 0, so it stays valid), or None for a model without a phase
+/// function (reported "n/a").
 pub fn change_phase_function(opts: &RenderOptions, model: Model) -> Option<RenderOptions> {
-    let _ = (opts, model);
-    None
+    if !model.has_phase_function() {
+        return None;
+    }
+    let mut changed = opts.clone();
+    let g = opts.scatter.g;
+    changed.scatter.g = if g > 0.0 { g - 0.01 } else { g + 0.01 };
+    Some(changed)
 }
 
 /// Renders `model` once and returns what its rebuild scopes cost.
@@ -461,8 +465,15 @@ pub fn models(ctx: &Context, s: &ModelsSettings) -> Result<ModelsReport> {
             } else {
                 None
             };
+            // From the options the renderer last saw (the moved light), so that only the
+            // phase function differs.
+            let last = if m.uses_light() {
+                changed_light(&opts)
+            } else {
+                opts.clone()
+            };
             let pf_change = if m.has_phase_function() {
-                let c = match change_phase_function(&opts, m) {
+                let c = match change_phase_function(&last, m) {
                     Some(o) => Some(change_frame(&mut renderer, m, &camera, &o)?),
                     None => None,
                 };
