@@ -1,7 +1,8 @@
 #version 460
 // Volumetric ambient occlusion (`--model ao`; render/ao): the emission-absorption march of
 // ea.comp with each segment's emission lit by the ambient light that reaches it (ao.glsl:
-// transmittance over nested cubes of the extinction volume's summed-area table) and,
+// transmittance over nested cubes of the extinction volume's summed-area table, cached per
+// voxel by ao_cache.comp and interpolated trilinearly) and,
 // weighted by `diffuse`, by a directional light through the gradient's normal:
 //
 //   shade(x) = light colour * AO(x) * ((1 - diffuse) + diffuse * |n(x) . l|),
@@ -28,26 +29,19 @@ layout(set = 0, binding = 0) uniform Params {
     // As ea.comp up to here.
     vec4 light;        // xyz = unit direction towards the light (world), w = diffuse weight
     vec4 light_colour; // rgb, linear
-    ivec4 dims;        // xyz = volume size in voxels, w = shells (ao.glsl)
-    vec4 sat;          // x = SAT3D_INV_SCALE
+    ivec4 dims;        // xyz = volume size in voxels
 } P;
 layout(set = 0, binding = 1) uniform sampler3D volume;
 layout(set = 0, binding = 2) uniform sampler1DArray tf;
 layout(set = 0, binding = 3) uniform sampler2DArray preint;
 layout(set = 0, binding = 4, rgba32f) uniform writeonly image2D frame;
-layout(set = 0, binding = 5) uniform usampler3D sat_table;
-
-#define SAT3D_LOAD(p) texelFetch(sat_table, p, 0).xy
-#define SAT3D_DIMS P.dims.xyz
-#define SAT3D_INV_SCALE P.sat.x
-#include "sat3d.glsl"
-#include "ao.glsl"
+layout(set = 0, binding = 5) uniform sampler3D occlusion;   // ao_cache.comp
 
 vec3 to_tex(vec3 p) { return p / (2.0 * P.box_half.xyz) + 0.5; }
 
 vec3 sample_shade(vec3 p, vec3 dir) {
     vec3 tex = to_tex(p);
-    float ao = ao_transmittance(tex, P.dims.w);
+    float ao = texture(occlusion, tex).r;
     vec3 h = 1.0 / vec3(P.dims.xyz);
     vec3 g = vec3(
         texture(volume, tex + vec3(h.x, 0, 0)).r - texture(volume, tex - vec3(h.x, 0, 0)).r,

@@ -549,7 +549,7 @@ pub fn models(ctx: &Context, s: &ModelsSettings) -> Result<ModelsReport> {
             rebuild_scopes: REBUILD_SCOPES.iter().map(|s| s.to_string()).collect(),
             tf_change: format!("every opacity × {TF_CHANGE_OPACITY_SCALE}"),
             ls_change: format!("light direction turned by {LS_CHANGE_DEG}°"),
-            pf_change: "no option changes a phase function yet: n/a for every model".into(),
+            pf_change: "the phase function's anisotropy g moved by 0.01 (models with one)".into(),
         },
         rows: out,
         skipped,

@@ -51,7 +51,7 @@ pub use tonemap::ToneMapPass;
 /// (volume, transfer functions, environment, light), outside a frame's "render" scope:
 /// what a transfer-function or light change costs is the sum of these in the first frame
 /// after it (nested scopes, like the SAT's per-axis ones, are not listed).
-pub const REBUILD_SCOPES: [&str; 7] = [
+pub const REBUILD_SCOPES: [&str; 8] = [
     "gradient volume",
     "environment SAT",
     "preintegration",
@@ -59,6 +59,7 @@ pub const REBUILD_SCOPES: [&str; 7] = [
     ao::EXTINCTION_SCOPE,
     sat3d::SCOPE,
     single::CACHE_SCOPE,
+    ao::CACHE_SCOPE,
 ];
 
 /// GPU state for one volume and its transfer functions.

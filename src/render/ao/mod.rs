@@ -196,16 +196,33 @@ struct Params {
     light: [f32; 4],
     light_colour: [f32; 4],
     dims: [i32; 4],
-    sat: [f32; 4],
 }
+
+/// `glsl/ao_cache.comp`'s push constants.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct CachePush {
+    dims: [i32; 4],
+    inv_scale: f32,
+    pad: [f32; 3],
+}
+
+/// The timings scope of the occlusion cache's build.
+pub const CACHE_SCOPE: &str = "occlusion cache";
 
 pub(super) struct AoPass {
     params: Buffer,
     output: FrameTarget,
-    /// Kept for the set (the table is read with texelFetch through it).
+    /// Kept for the cache's set (the table is read with texelFetch through it).
     _nearest: Sampler,
     set: DescriptorSet,
     pipeline: ComputePipeline,
+    /// The occlusion at every voxel centre (`glsl/ao_cache.comp`), with the extinction
+    /// build and shell count it holds.
+    cache: Image,
+    cache_set: DescriptorSet,
+    cache_pipeline: ComputePipeline,
+    cache_for: Option<(u64, i32)>,
     width: u32,
     height: u32,
 }
@@ -220,6 +237,28 @@ impl AoPass {
         let nearest = Sampler::new(ctx, Filter::Nearest, "ao table")?;
         let params = Buffer::uniform::<Params>(ctx, "ao params")?;
         let output = FrameTarget::new(ctx, width, height, "ao frame")?;
+        let desc = ImageDesc::computed(
+            ImageKind::D3,
+            vk::Format::R32_SFLOAT,
+            inputs.volume.extent(),
+            1,
+        );
+        let cache = Image::new(ctx, desc, "occlusion cache")?;
+        let cache_set = DescriptorSet::new(
+            ctx,
+            &[
+                Binding::Texture(ambient.sat()?.image(), &nearest),
+                Binding::StorageImage(&cache),
+            ],
+            "occlusion cache",
+        )?;
+        let cache_pipeline = ComputePipeline::new(
+            ctx,
+            shaders::AO_CACHE_COMP,
+            &cache_set,
+            std::mem::size_of::<CachePush>() as u32,
+            "occlusion cache",
+        )?;
         let set = DescriptorSet::new(
             ctx,
             &[
@@ -228,7 +267,7 @@ impl AoPass {
                 Binding::Texture(inputs.tf, sampler),
                 Binding::Texture(inputs.preint, sampler),
                 Binding::StorageImage(&output.image),
-                Binding::Texture(ambient.sat()?.image(), &nearest),
+                Binding::Texture(&cache, sampler),
             ],
             "ao",
         )?;
@@ -239,6 +278,10 @@ impl AoPass {
             _nearest: nearest,
             set,
             pipeline,
+            cache,
+            cache_set,
+            cache_pipeline,
+            cache_for: None,
             width,
             height,
         })
@@ -266,15 +309,37 @@ impl ModelPass for AoPass {
             march: super::ea::MarchParams::new(inputs, self.width, self.height),
             light: [towards.x, towards.y, towards.z, opts.ao.diffuse],
             light_colour: [c[0], c[1], c[2], 0.0],
-            dims: [x, y, z, opts.ao.shells()],
-            sat: [ambient.sat()?.inv_scale(), 0.0, 0.0, 0.0],
+            dims: [x, y, z, 0],
         };
         rec.update_uniform(&self.params, bytemuck::bytes_of(&p))?;
+        let key = (ambient.builds(), opts.ao.shells());
+        if self.cache_for != Some(key) {
+            let sat = ambient.sat()?;
+            let push = CachePush {
+                dims: [x, y, z, key.1],
+                inv_scale: sat.inv_scale(),
+                pad: [0.0; 3],
+            };
+            let uses = [
+                Use::all(sat.image(), Access::Sampled),
+                Use::all(&self.cache, Access::ComputeStorage),
+            ];
+            let [w, h, d] = info.dims;
+            rec.pass(CACHE_SCOPE, &uses, |rec| {
+                rec.dispatch(
+                    &self.cache_pipeline,
+                    &self.cache_set,
+                    bytemuck::bytes_of(&push),
+                    [w.div_ceil(8), h.div_ceil(8), d],
+                )
+            })?;
+            self.cache_for = Some(key);
+        }
         let uses = [
             Use::all(inputs.volume, Access::Sampled),
             Use::all(inputs.tf, Access::Sampled),
             Use::all(inputs.preint, Access::Sampled),
-            Use::all(ambient.sat()?.image(), Access::Sampled),
+            Use::all(&self.cache, Access::Sampled),
             Use::all(&self.output.image, Access::ComputeStorage),
         ];
         let groups = [self.width.div_ceil(8), self.height.div_ceil(8), 1];
@@ -300,7 +365,6 @@ mod tests {
             light,
             light_colour,
             dims,
-            sat,
         }) {
             host.push((name, offset, size));
         }
