@@ -16,13 +16,14 @@
 use anyhow::{ensure, Result};
 use bytemuck::{Pod, Zeroable};
 
+use super::ea::RayMarchPass;
 use super::model::{Inputs, ModelPass, Recorded};
 use super::sat3d::Sat3d;
 use super::{FrameTarget, RenderOptions};
 use crate::shaders;
 use crate::vk::{
-    self, Access, Binding, Buffer, ComputePipeline, Context, DescriptorSet, Filter, Image,
-    ImageDesc, ImageKind, Recorder, Sampler, Use,
+    self, Access, Binding, ComputePipeline, Context, DescriptorSet, Filter, Image, ImageDesc,
+    ImageKind, Recorder, Sampler, Use,
 };
 
 /// The timings scope of the extinction volume's build.
@@ -211,32 +212,28 @@ struct CachePush {
 pub const CACHE_SCOPE: &str = "occlusion cache";
 
 pub(super) struct AoPass {
-    params: Buffer,
-    output: FrameTarget,
+    march: RayMarchPass,
     /// Kept for the cache's set (the table is read with texelFetch through it).
     _nearest: Sampler,
-    set: DescriptorSet,
-    pipeline: ComputePipeline,
     /// The occlusion at every voxel centre (`glsl/ao_cache.comp`), with the extinction
     /// build and shell count it holds.
     cache: Image,
     cache_set: DescriptorSet,
     cache_pipeline: ComputePipeline,
     cache_for: Option<(u64, i32)>,
-    width: u32,
-    height: u32,
+}
+
+fn extinction<'a>(inputs: &Inputs<'a>) -> Result<&'a Extinction> {
+    inputs
+        .extinction
+        .ok_or_else(|| anyhow::anyhow!("the AO model needs the extinction volume"))
 }
 
 impl AoPass {
     pub fn new(inputs: &Inputs, width: u32, height: u32) -> Result<Self> {
         let ctx = inputs.ctx;
-        let ambient = inputs
-            .extinction
-            .ok_or_else(|| anyhow::anyhow!("the AO model needs the extinction volume"))?;
-        let sampler = inputs.linear;
+        let sat = extinction(inputs)?.sat()?;
         let nearest = Sampler::new(ctx, Filter::Nearest, "ao table")?;
-        let params = Buffer::uniform::<Params>(ctx, "ao params")?;
-        let output = FrameTarget::new(ctx, width, height, "ao frame")?;
         let desc = ImageDesc::computed(
             ImageKind::D3,
             vk::Format::R32_SFLOAT,
@@ -247,7 +244,7 @@ impl AoPass {
         let cache_set = DescriptorSet::new(
             ctx,
             &[
-                Binding::Texture(ambient.sat()?.image(), &nearest),
+                Binding::Texture(sat.image(), &nearest),
                 Binding::StorageImage(&cache),
             ],
             "occlusion cache",
@@ -259,59 +256,38 @@ impl AoPass {
             std::mem::size_of::<CachePush>() as u32,
             "occlusion cache",
         )?;
-        let set = DescriptorSet::new(
-            ctx,
-            &[
-                Binding::Uniform(&params),
-                Binding::Texture(inputs.volume, sampler),
-                Binding::Texture(inputs.tf, sampler),
-                Binding::Texture(inputs.preint, sampler),
-                Binding::StorageImage(&output.image),
-                Binding::Texture(&cache, sampler),
-            ],
+        let march = RayMarchPass::new::<Params>(
+            inputs,
+            width,
+            height,
+            shaders::AO_COMP,
             "ao",
+            &[Binding::Texture(&cache, inputs.linear)],
         )?;
-        let pipeline = ComputePipeline::new(ctx, shaders::AO_COMP, &set, 0, "ao raymarch")?;
         Ok(Self {
-            params,
-            output,
+            march,
             _nearest: nearest,
-            set,
-            pipeline,
             cache,
             cache_set,
             cache_pipeline,
             cache_for: None,
-            width,
-            height,
         })
     }
 }
 
 impl ModelPass for AoPass {
     fn fits(&self, opts: &RenderOptions) -> bool {
-        (self.width, self.height) == (opts.width, opts.height)
+        self.march.fits(opts)
     }
 
     fn output(&self) -> &FrameTarget {
-        &self.output
+        self.march.output()
     }
 
     fn record(&mut self, rec: &mut Recorder, inputs: &Inputs) -> Result<Recorded> {
         let (info, opts) = (inputs.info, inputs.opts);
-        let ambient = inputs
-            .extinction
-            .ok_or_else(|| anyhow::anyhow!("the AO model needs the extinction volume"))?;
-        let towards = opts.sweep.light.towards.normalize();
-        let c = opts.sweep.light.colour;
+        let ambient = extinction(inputs)?;
         let [x, y, z] = info.dims.map(|d| d as i32);
-        let p = Params {
-            march: super::ea::MarchParams::new(inputs, self.width, self.height),
-            light: [towards.x, towards.y, towards.z, opts.ao.diffuse],
-            light_colour: [c[0], c[1], c[2], 0.0],
-            dims: [x, y, z, 0],
-        };
-        rec.update_uniform(&self.params, bytemuck::bytes_of(&p))?;
         let key = (ambient.builds(), opts.ao.shells());
         if self.cache_for != Some(key) {
             let sat = ambient.sat()?;
@@ -335,22 +311,17 @@ impl ModelPass for AoPass {
             })?;
             self.cache_for = Some(key);
         }
-        let uses = [
-            Use::all(inputs.volume, Access::Sampled),
-            Use::all(inputs.tf, Access::Sampled),
-            Use::all(inputs.preint, Access::Sampled),
-            Use::all(&self.cache, Access::Sampled),
-            Use::all(&self.output.image, Access::ComputeStorage),
-        ];
-        let groups = [self.width.div_ceil(8), self.height.div_ceil(8), 1];
-        rec.pass("ao raymarch", &uses, |rec| {
-            rec.dispatch(&self.pipeline, &self.set, &[], groups)
-        })?;
-        Ok(Recorded {
-            max_steps: super::steps_for(info.half_extent, info.ref_step, opts.sample_distance)
-                as u32,
-            sweep: None,
-        })
+        let towards = opts.sweep.light.towards.normalize();
+        let c = opts.sweep.light.colour;
+        let (width, height) = self.march.size();
+        let p = Params {
+            march: super::ea::MarchParams::new(inputs, width, height),
+            light: [towards.x, towards.y, towards.z, opts.ao.diffuse],
+            light_colour: [c[0], c[1], c[2], 0.0],
+            dims: [x, y, z, 0],
+        };
+        self.march
+            .record(rec, inputs, bytemuck::bytes_of(&p), &[&self.cache])
     }
 }
 

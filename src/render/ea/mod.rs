@@ -7,7 +7,7 @@ use bytemuck::{Pod, Zeroable};
 use super::model::{Inputs, ModelPass, Recorded};
 use super::{FrameTarget, RenderOptions};
 use crate::shaders;
-use crate::vk::{Access, Binding, Buffer, ComputePipeline, DescriptorSet, Recorder, Use};
+use crate::vk::{Access, Binding, Buffer, ComputePipeline, DescriptorSet, Image, Recorder, Use};
 
 /// std140 mirror of `Params` in glsl/ea.comp: what the shared march (glsl/march.glsl)
 /// reads, also the head of the AO model's block.
@@ -83,33 +83,45 @@ pub(super) fn check(model: super::Model, opts: &RenderOptions) -> Result<()> {
     Ok(())
 }
 
-pub(super) struct EaPass {
+/// What every ray-marched model's pass has: its parameter block, frame, descriptor set
+/// (bindings 0–4 as glsl/march.glsl's users declare them: params, volume, transfer
+/// functions, preintegration table, frame; then the model's own) and compute pipeline.
+pub(super) struct RayMarchPass {
     params: Buffer,
     output: FrameTarget,
     set: DescriptorSet,
     pipeline: ComputePipeline,
     width: u32,
     height: u32,
+    /// The timings scope of the march ("ea raymarch", ...).
+    scope: String,
 }
 
-impl EaPass {
-    pub fn new(inputs: &Inputs, width: u32, height: u32) -> Result<Self> {
+impl RayMarchPass {
+    /// `P` is the shader's `Params` block; `extra` are the bindings from 5 on.
+    pub(super) fn new<P: Pod>(
+        inputs: &Inputs,
+        width: u32,
+        height: u32,
+        spirv: &[u8],
+        name: &str,
+        extra: &[Binding<'_>],
+    ) -> Result<Self> {
         let ctx = inputs.ctx;
         let sampler = inputs.linear;
-        let params = Buffer::uniform::<MarchParams>(ctx, "ea params")?;
-        let output = FrameTarget::new(ctx, width, height, "ea frame")?;
-        let set = DescriptorSet::new(
-            ctx,
-            &[
-                Binding::Uniform(&params),
-                Binding::Texture(inputs.volume, sampler),
-                Binding::Texture(inputs.tf, sampler),
-                Binding::Texture(inputs.preint, sampler),
-                Binding::StorageImage(&output.image),
-            ],
-            "ea",
-        )?;
-        let pipeline = ComputePipeline::new(ctx, shaders::EA_COMP, &set, 0, "ea raymarch")?;
+        let params = Buffer::uniform::<P>(ctx, &format!("{name} params"))?;
+        let output = FrameTarget::new(ctx, width, height, &format!("{name} frame"))?;
+        let mut bindings = vec![
+            Binding::Uniform(&params),
+            Binding::Texture(inputs.volume, sampler),
+            Binding::Texture(inputs.tf, sampler),
+            Binding::Texture(inputs.preint, sampler),
+            Binding::StorageImage(&output.image),
+        ];
+        bindings.extend_from_slice(extra);
+        let set = DescriptorSet::new(ctx, &bindings, name)?;
+        let scope = format!("{name} raymarch");
+        let pipeline = ComputePipeline::new(ctx, spirv, &set, 0, &scope)?;
         Ok(Self {
             params,
             output,
@@ -117,32 +129,42 @@ impl EaPass {
             pipeline,
             width,
             height,
+            scope,
         })
     }
-}
 
-impl ModelPass for EaPass {
-    fn fits(&self, opts: &RenderOptions) -> bool {
+    pub(super) fn fits(&self, opts: &RenderOptions) -> bool {
         (self.width, self.height) == (opts.width, opts.height)
     }
 
-    fn output(&self) -> &FrameTarget {
+    pub(super) fn output(&self) -> &FrameTarget {
         &self.output
     }
 
-    /// The ray march; the most steps a ray takes is the box diagonal's.
-    fn record(&mut self, rec: &mut Recorder, inputs: &Inputs) -> Result<Recorded> {
+    pub(super) fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// Record the march with `params` (the shader's block); `extra` are the model's own
+    /// images it reads. The most steps a ray takes is the box diagonal's.
+    pub(super) fn record(
+        &self,
+        rec: &mut Recorder,
+        inputs: &Inputs,
+        params: &[u8],
+        extra: &[&Image],
+    ) -> Result<Recorded> {
         let (info, opts) = (inputs.info, inputs.opts);
-        let p = MarchParams::new(inputs, self.width, self.height);
-        rec.update_uniform(&self.params, bytemuck::bytes_of(&p))?;
-        let uses = [
+        rec.update_uniform(&self.params, params)?;
+        let mut uses = vec![
             Use::all(inputs.volume, Access::Sampled),
             Use::all(inputs.tf, Access::Sampled),
             Use::all(inputs.preint, Access::Sampled),
             Use::all(&self.output.image, Access::ComputeStorage),
         ];
+        uses.extend(extra.iter().map(|i| Use::all(i, Access::Sampled)));
         let groups = [self.width.div_ceil(8), self.height.div_ceil(8), 1];
-        rec.pass("ea raymarch", &uses, |rec| {
+        rec.pass(&self.scope, &uses, |rec| {
             rec.dispatch(&self.pipeline, &self.set, &[], groups)
         })?;
         Ok(Recorded {
@@ -150,6 +172,41 @@ impl ModelPass for EaPass {
                 as u32,
             sweep: None,
         })
+    }
+}
+
+pub(super) struct EaPass {
+    march: RayMarchPass,
+}
+
+impl EaPass {
+    pub fn new(inputs: &Inputs, width: u32, height: u32) -> Result<Self> {
+        Ok(Self {
+            march: RayMarchPass::new::<MarchParams>(
+                inputs,
+                width,
+                height,
+                shaders::EA_COMP,
+                "ea",
+                &[],
+            )?,
+        })
+    }
+}
+
+impl ModelPass for EaPass {
+    fn fits(&self, opts: &RenderOptions) -> bool {
+        self.march.fits(opts)
+    }
+
+    fn output(&self) -> &FrameTarget {
+        self.march.output()
+    }
+
+    fn record(&mut self, rec: &mut Recorder, inputs: &Inputs) -> Result<Recorded> {
+        let (width, height) = self.march.size();
+        let p = MarchParams::new(inputs, width, height);
+        self.march.record(rec, inputs, bytemuck::bytes_of(&p), &[])
     }
 }
 

@@ -16,12 +16,13 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
 use super::ao::Extinction;
+use super::ea::RayMarchPass;
 use super::model::{Inputs, ModelPass, Recorded};
 use super::{FrameTarget, RenderOptions, VolumeInfo};
 use crate::shaders;
 use crate::vk::{
-    self, Access, Binding, Buffer, ComputePipeline, Context, DescriptorSet, Image, ImageDesc,
-    ImageKind, Recorder, Sampler, Use,
+    self, Access, Binding, ComputePipeline, Context, DescriptorSet, Image, ImageDesc, ImageKind,
+    Recorder, Sampler, Use,
 };
 
 /// The timings scope of the transmittance cache's build.
@@ -137,85 +138,53 @@ struct Params {
 }
 
 pub(super) struct SinglePass {
-    params: Buffer,
-    output: FrameTarget,
-    set: DescriptorSet,
-    pipeline: ComputePipeline,
-    width: u32,
-    height: u32,
+    march: RayMarchPass,
 }
 
 impl SinglePass {
     pub fn new(inputs: &Inputs, width: u32, height: u32) -> Result<Self> {
-        let ctx = inputs.ctx;
-        let cache = inputs.transmittance.ok_or_else(|| {
-            anyhow::anyhow!("the single-scattering model needs the transmittance cache")
-        })?;
-        let sampler = inputs.linear;
-        let params = Buffer::uniform::<Params>(ctx, "single params")?;
-        let output = FrameTarget::new(ctx, width, height, "single frame")?;
-        let set = DescriptorSet::new(
-            ctx,
-            &[
-                Binding::Uniform(&params),
-                Binding::Texture(inputs.volume, sampler),
-                Binding::Texture(inputs.tf, sampler),
-                Binding::Texture(inputs.preint, sampler),
-                Binding::StorageImage(&output.image),
-                Binding::Texture(cache.image(), sampler),
-            ],
-            "single",
-        )?;
-        let pipeline = ComputePipeline::new(ctx, shaders::SINGLE_COMP, &set, 0, "single raymarch")?;
+        let cache = transmittance(inputs)?;
         Ok(Self {
-            params,
-            output,
-            set,
-            pipeline,
-            width,
-            height,
+            march: RayMarchPass::new::<Params>(
+                inputs,
+                width,
+                height,
+                shaders::SINGLE_COMP,
+                "single",
+                &[Binding::Texture(cache.image(), inputs.linear)],
+            )?,
         })
     }
 }
 
+fn transmittance<'a>(inputs: &Inputs<'a>) -> Result<&'a TransmittanceCache> {
+    inputs
+        .transmittance
+        .ok_or_else(|| anyhow::anyhow!("the single-scattering model needs the transmittance cache"))
+}
+
 impl ModelPass for SinglePass {
     fn fits(&self, opts: &RenderOptions) -> bool {
-        (self.width, self.height) == (opts.width, opts.height)
+        self.march.fits(opts)
     }
 
     fn output(&self) -> &FrameTarget {
-        &self.output
+        self.march.output()
     }
 
     fn record(&mut self, rec: &mut Recorder, inputs: &Inputs) -> Result<Recorded> {
-        let (info, opts) = (inputs.info, inputs.opts);
-        let cache = inputs.transmittance.ok_or_else(|| {
-            anyhow::anyhow!("the single-scattering model needs the transmittance cache")
-        })?;
+        let opts = inputs.opts;
+        let cache = transmittance(inputs)?;
         let towards = light_towards(opts);
         let c = opts.sweep.light.colour;
+        let (width, height) = self.march.size();
         let p = Params {
-            march: super::ea::MarchParams::new(inputs, self.width, self.height),
+            march: super::ea::MarchParams::new(inputs, width, height),
             light: [towards.x, towards.y, towards.z, opts.scatter.g],
             light_colour: [c[0], c[1], c[2], opts.scatter.albedo],
         };
-        rec.update_uniform(&self.params, bytemuck::bytes_of(&p))?;
-        let uses = [
-            Use::all(inputs.volume, Access::Sampled),
-            Use::all(inputs.tf, Access::Sampled),
-            Use::all(inputs.preint, Access::Sampled),
-            Use::all(cache.image(), Access::Sampled),
-            Use::all(&self.output.image, Access::ComputeStorage),
-        ];
-        let groups = [self.width.div_ceil(8), self.height.div_ceil(8), 1];
-        rec.pass("single raymarch", &uses, |rec| {
-            rec.dispatch(&self.pipeline, &self.set, &[], groups)
-        })?;
-        Ok(Recorded {
-            max_steps: super::steps_for(info.half_extent, info.ref_step, opts.sample_distance)
-                as u32,
-            sweep: None,
-        })
+        self.march
+            .record(rec, inputs, bytemuck::bytes_of(&p), &[cache.image()])
     }
 }
 
