@@ -34,6 +34,86 @@ impl Light {
     }
 }
 
+/// Where a light of the ambient-scattering model shines from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightSource {
+    /// Parallel light from the world-space direction `towards` (need not be unit).
+    Directional { towards: Vec3 },
+    /// Light from a point in world space (the volume's box is centred at the origin).
+    Point { position: Vec3 },
+}
+
+/// A light beside the main one ([`Light`]), for the models that take several (ambient
+/// scattering): its source and linear RGB colour (a point light's: the irradiance at unit
+/// distance; it falls off with the squared distance).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ExtraLight {
+    pub source: LightSource,
+    pub colour: [f32; 3],
+}
+
+impl ExtraLight {
+    pub fn validate(&self) -> anyhow::Result<()> {
+        let v = match self.source {
+            LightSource::Directional { towards } => {
+                anyhow::ensure!(
+                    towards.is_finite() && towards.length() > 1e-6,
+                    "a directional light needs a finite, non-zero direction, got {towards}"
+                );
+                towards
+            }
+            LightSource::Point { position } => position,
+        };
+        anyhow::ensure!(v.is_finite(), "light position {v} is not finite");
+        anyhow::ensure!(
+            self.colour.iter().all(|c| c.is_finite() && *c >= 0.0),
+            "light colour {:?} must be finite and non-negative",
+            self.colour
+        );
+        Ok(())
+    }
+}
+
+impl std::str::FromStr for ExtraLight {
+    type Err = anyhow::Error;
+
+    /// `dir:X,Y,Z` (towards the light) or `point:X,Y,Z` (world position), optionally
+    /// followed by `@R,G,B` (linear colour; white without it).
+    fn from_str(text: &str) -> anyhow::Result<Self> {
+        let triple = |t: &str, what: &str| -> anyhow::Result<Vec3> {
+            let v: Vec<f32> = t
+                .split(',')
+                .map(|c| c.trim().parse::<f32>())
+                .collect::<Result<_, _>>()
+                .map_err(|e| anyhow::anyhow!("light '{text}': {what} '{t}': {e}"))?;
+            anyhow::ensure!(
+                v.len() == 3,
+                "light '{text}': {what} needs three comma-separated numbers, got '{t}'"
+            );
+            Ok(Vec3::new(v[0], v[1], v[2]))
+        };
+        let (kind, rest) = text.split_once(':').ok_or_else(|| {
+            anyhow::anyhow!("light '{text}' must be dir:X,Y,Z or point:X,Y,Z (then @R,G,B)")
+        })?;
+        let (at, colour) = match rest.split_once('@') {
+            Some((a, c)) => (a, triple(c, "colour")?.to_array()),
+            None => (rest, [1.0; 3]),
+        };
+        let source = match kind.trim() {
+            "dir" | "directional" => LightSource::Directional {
+                towards: triple(at, "direction")?,
+            },
+            "point" => LightSource::Point {
+                position: triple(at, "position")?,
+            },
+            other => anyhow::bail!("light '{text}': unknown kind '{other}' (dir or point)"),
+        };
+        let l = Self { source, colour };
+        l.validate()?;
+        Ok(l)
+    }
+}
+
 /// Light from above, tilted towards the camera so the front-to-back sweep can carry it;
 /// when the camera looks up too steeply for that, a key light from its upper left.
 pub fn default_light(camera: &Camera) -> Vec3 {
@@ -101,6 +181,23 @@ mod tests {
             MAX_LIGHT_ANGLE_DEG < limit - 1.0,
             "{MAX_LIGHT_ANGLE_DEG} vs {limit}"
         );
+    }
+
+    #[test]
+    fn extra_lights_parse_and_refuse_nonsense() {
+        let l: ExtraLight = "point:0.5,1,-2@2,1,0.5".parse().unwrap();
+        assert_eq!(
+            l.source,
+            LightSource::Point {
+                position: Vec3::new(0.5, 1.0, -2.0)
+            }
+        );
+        assert_eq!(l.colour, [2.0, 1.0, 0.5]);
+        let d: ExtraLight = "dir:0,1,0".parse().unwrap();
+        assert_eq!(d.colour, [1.0; 3]);
+        for bad in ["0,1,0", "dir:0,0,0", "spot:0,1,0", "dir:0,1", "point:0,1,x", "dir:0,1,0@-1,0,0"] {
+            assert!(bad.parse::<ExtraLight>().is_err(), "{bad} accepted");
+        }
     }
 
     #[test]

@@ -336,6 +336,10 @@ pub enum ModelArg {
     /// Single scattering with hard shadows from a transmittance cache, Henyey-Greenstein
     /// phase function (--light, --g, --albedo).
     Single,
+    /// Ambient scattering (Ament et al.): multiple scattering in a sphere around each
+    /// sample from a preintegrated Monte-Carlo table, soft shadows and translucency by tube
+    /// marching; several lights (--light, --add-light, --g, --albedo, --ambient-radius).
+    Ambient,
 }
 
 /// Scene options shared by `render` and `view`.
@@ -449,14 +453,25 @@ pub struct SceneArgs {
     /// normal, unshadowed) against the ambient term, 0-1 [default: 0.5].
     #[arg(long, value_name = "W", allow_negative_numbers = true)]
     pub ao_diffuse: Option<f32>,
-    /// Scattering models (--model single): Henyey-Greenstein anisotropy of the phase
+    /// Scattering models (--model single, ambient): Henyey-Greenstein anisotropy of the phase
     /// function, -0.99 to 0.99; 0 isotropic, positive forward scattering [default: 0].
     #[arg(long, value_name = "G", allow_negative_numbers = true)]
     pub g: Option<f32>,
-    /// Scattering models (--model single): albedo, the fraction of the extinguished light
+    /// Scattering models (--model single, ambient): albedo, the fraction of the extinguished light
     /// that is scattered, 0-1 [default: 0.9].
     #[arg(long, allow_negative_numbers = true)]
     pub albedo: Option<f32>,
+    /// Ambient scattering (--model ambient): radius r of the sphere around each sample in
+    /// which light scatters, in voxels, 0.5-64: the size of the soft shadows and of the
+    /// translucency [default: 6].
+    #[arg(long, value_name = "VOXELS", allow_negative_numbers = true)]
+    pub ambient_radius: Option<f32>,
+    /// Ambient scattering (--model ambient): another light beside --light, repeatable (up
+    /// to 3): "dir:X,Y,Z" (direction towards the light) or "point:X,Y,Z" (world position;
+    /// the volume's box is centred at 0 with its longest half side 1), optionally
+    /// "@R,G,B" (linear colour; a point light's is the irradiance at distance 1).
+    #[arg(long, value_name = "LIGHT", allow_hyphen_values = true)]
+    pub add_light: Vec<String>,
     /// Light softness: radius, in voxels, of the elliptical filter applied to the light at
     /// every plane; 0 = hard shadows and sharp caustics (refract) [default: 0.5].
     #[arg(long, allow_negative_numbers = true)]

@@ -144,6 +144,7 @@ pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Resu
         ModelArg::Refract => Model::Refract,
         ModelArg::Ao => Model::Ao,
         ModelArg::Single => Model::Single,
+        ModelArg::Ambient => Model::Ambient,
     });
     if args.no_preintegration {
         o.preintegrated = Some(false);
@@ -211,6 +212,16 @@ pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Resu
     o.ao_diffuse = args.ao_diffuse;
     o.g = args.g;
     o.albedo = args.albedo;
+    o.ambient_radius = args.ambient_radius;
+    if !args.add_light.is_empty() {
+        o.extra_lights = Some(
+            args.add_light
+                .iter()
+                .map(|l| l.parse())
+                .collect::<Result<_>>()
+                .context("--add-light")?,
+        );
+    }
     s.apply(o);
     if !s.model.has_phase_function() {
         let given: Vec<&str> = [
@@ -222,7 +233,7 @@ pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Resu
         .collect();
         ensure!(
             given.is_empty(),
-            "{} only appl{} to the scattering models (--model single), not {}",
+            "{} only appl{} to the scattering models (--model single, ambient), not {}",
             given.join(", "),
             if given.len() == 1 { "ies" } else { "y" },
             s.model.name()
@@ -239,6 +250,22 @@ pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Resu
         ensure!(
             given.is_empty(),
             "{} only appl{} to the ambient-occlusion model (--model ao), not {}",
+            given.join(", "),
+            if given.len() == 1 { "ies" } else { "y" },
+            s.model.name()
+        );
+    }
+    if s.model != Model::Ambient {
+        let given: Vec<&str> = [
+            ("--ambient-radius", args.ambient_radius.is_some()),
+            ("--add-light", !args.add_light.is_empty()),
+        ]
+        .into_iter()
+        .filter_map(|(flag, given)| given.then_some(flag))
+        .collect();
+        ensure!(
+            given.is_empty(),
+            "{} only appl{} to the ambient-scattering model (--model ambient), not {}",
             given.join(", "),
             if given.len() == 1 { "ies" } else { "y" },
             s.model.name()

@@ -7,6 +7,7 @@
 //! environment SAT) are files here; each optical model is a folder (`ea/`, `refract/`)
 //! behind the interface in `model.rs`.
 
+pub mod ambient;
 pub mod ao;
 mod ea;
 pub mod field;
@@ -51,7 +52,7 @@ pub use tonemap::ToneMapPass;
 /// (volume, transfer functions, environment, light), outside a frame's "render" scope:
 /// what a transfer-function or light change costs is the sum of these in the first frame
 /// after it (nested scopes, like the SAT's per-axis ones, are not listed).
-pub const REBUILD_SCOPES: [&str; 8] = [
+pub const REBUILD_SCOPES: [&str; 10] = [
     "gradient volume",
     "environment SAT",
     "preintegration",
@@ -60,6 +61,8 @@ pub const REBUILD_SCOPES: [&str; 8] = [
     sat3d::SCOPE,
     single::CACHE_SCOPE,
     ao::CACHE_SCOPE,
+    ambient::EXTINCTION_SCOPE,
+    ambient::CACHE_SCOPE,
 ];
 
 /// GPU state for one volume and its transfer functions.
@@ -84,6 +87,9 @@ pub struct Renderer {
     /// The single-scattering model's transmittance cache: made on its first frame,
     /// rebuilt when the extinction or the light's direction changed.
     transmittance: Option<single::TransmittanceCache>,
+    /// The ambient-scattering model's tables: set by [`Renderer::set_ambient_table`], or
+    /// loaded (built on first use, then cached on disk) for the frame's albedo.
+    ambient_table: Option<ambient::TableTextures>,
     tf: TransferFunctions,
     tf_image: Image,
     tf_dirty: bool,
@@ -188,6 +194,7 @@ impl Renderer {
             extinction: None,
             extinction_dirty: false,
             transmittance: None,
+            ambient_table: None,
             tf: tf.clone(),
             tf_image,
             tf_dirty: true,
@@ -353,6 +360,7 @@ impl Renderer {
         self.ensure_gradient(model)?;
         self.ensure_field(model, opts)?;
         self.ensure_extinction(model)?;
+        self.ensure_ambient_table(model, opts)?;
         let ctx = self.ctx.clone();
         let mut recorded = None;
         let timings = ctx.execute(|rec| {
@@ -405,6 +413,7 @@ impl Renderer {
         self.ensure_gradient(model)?;
         self.ensure_field(model, opts)?;
         self.ensure_extinction(model)?;
+        self.ensure_ambient_table(model, opts)?;
         let r = self.record_inner(rec, model, camera, opts, false)?;
         Ok(RecordedFrame {
             image: &self.target(model)?.image,
@@ -538,6 +547,52 @@ impl Renderer {
         Ok(())
     }
 
+    /// Use `table` for the ambient-scattering model's frames from now on (instead of the
+    /// default table for the frame's albedo, built or loaded from the disk cache): frames
+    /// whose albedo differs from the table's are refused.
+    pub fn set_ambient_table(&mut self, table: &ambient::table::AmbientTable) -> Result<()> {
+        table.params.validate()?;
+        self.passes.remove(&Model::Ambient);
+        self.ambient_table = Some(ambient::TableTextures::new(&self.ctx, table, true)?);
+        Ok(())
+    }
+
+    /// The parameters of the ambient-scattering table in use, if one is loaded.
+    pub fn ambient_table_params(&self) -> Option<ambient::table::TableParams> {
+        self.ambient_table.as_ref().map(|t| *t.params())
+    }
+
+    /// Load the ambient-scattering table for the frame's albedo if the model needs it
+    /// and the one loaded is not for that albedo (the default parameters; built on first
+    /// use, then read from the disk cache: see [`ambient::table::load_or_build`]).
+    fn ensure_ambient_table(&mut self, model: Model, opts: &RenderOptions) -> Result<()> {
+        if model != Model::Ambient {
+            return Ok(());
+        }
+        let albedo = opts.scatter.albedo;
+        if let Some(t) = &self.ambient_table {
+            if t.params().albedo == albedo {
+                return Ok(());
+            }
+            ensure!(
+                !t.is_explicit(),
+                "the ambient-scattering table in use was built for albedo {}, the frame asks \
+                 for {albedo}: build one for it (refrakt precompute ambient --albedo {albedo}) \
+                 or leave the albedo at the table's",
+                t.params().albedo
+            );
+        }
+        let params = ambient::table::TableParams {
+            albedo,
+            ..Default::default()
+        };
+        log::info!("ambient-scattering table for albedo {albedo}: loading or building");
+        let (table, _) = ambient::table::load_or_build(params, None, 0, &|_, _| {})?;
+        self.passes.remove(&Model::Ambient);
+        self.ambient_table = Some(ambient::TableTextures::new(&self.ctx, &table, false)?);
+        Ok(())
+    }
+
     /// The recording shared by `render` and `record`; arguments already checked.
     fn record_inner(
         &mut self,
@@ -579,6 +634,7 @@ impl Renderer {
             field: self.field.as_ref().map(|f| f.image()),
             extinction: self.extinction.as_ref(),
             transmittance: self.transmittance.as_ref(),
+            ambient_table: self.ambient_table.as_ref(),
             tf: &self.tf_image,
             preint: self.preint.image(),
             linear: &self.linear,

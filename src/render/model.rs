@@ -14,10 +14,10 @@
 //! in each function here; the CLI, viewer and benchmark go on calling
 //! [`super::Renderer::render`] / [`super::Renderer::record`] with the variant.
 
-use anyhow::Result;
+use anyhow::{ensure, Result};
 
 use super::refract::{EnvInputs, SweepRecording};
-use super::{ao, ea, refract, single, Camera, FrameTarget, Model, RenderOptions, VolumeInfo};
+use super::{ambient, ao, ea, refract, single, Camera, FrameTarget, Model, RenderOptions, VolumeInfo};
 use crate::vk::{Context, Image, Recorder, Sampler};
 
 /// The renderer's GPU resources, as every model sees them, and the frame asked for.
@@ -40,6 +40,8 @@ pub(crate) struct Inputs<'a> {
     pub extinction: Option<&'a super::ao::Extinction>,
     /// The single-scattering model's transmittance cache, if it needs it.
     pub transmittance: Option<&'a super::single::TransmittanceCache>,
+    /// The ambient-scattering model's preintegrated tables, if it needs them.
+    pub ambient_table: Option<&'a ambient::TableTextures>,
     /// The transfer functions as a 1D-per-row image.
     pub tf: &'a Image,
     pub preint: &'a Image,
@@ -75,8 +77,14 @@ pub(crate) fn check(
     camera: &Camera,
     opts: &RenderOptions,
 ) -> Result<()> {
+    ensure!(
+        model == Model::Ambient || opts.extra_lights.is_empty(),
+        "the {} model takes one light; several lights are the ambient-scattering model's \
+         (--model ambient)",
+        model.name()
+    );
     match model {
-        Model::Ea | Model::Ao | Model::Single => ea::check(model, opts),
+        Model::Ea | Model::Ao | Model::Single | Model::Ambient => ea::check(model, opts),
         Model::Refract => refract::check_model(info, camera, opts),
     }
 }
@@ -84,7 +92,7 @@ pub(crate) fn check(
 /// Whether `model` reads the gradient volume (built on its first frame).
 pub(crate) fn needs_gradient(model: Model) -> bool {
     match model {
-        Model::Ea | Model::Ao | Model::Single => false,
+        Model::Ea | Model::Ao | Model::Single | Model::Ambient => false,
         Model::Refract => true,
     }
 }
@@ -93,7 +101,7 @@ pub(crate) fn needs_gradient(model: Model) -> bool {
 /// the transfer functions), and whether it needs its 3D SAT too.
 pub(crate) fn needs_extinction(model: Model) -> Option<bool> {
     match model {
-        Model::Ao => Some(true),
+        Model::Ao | Model::Ambient => Some(true),
         Model::Single => Some(false),
         Model::Ea | Model::Refract => None,
     }
@@ -106,6 +114,11 @@ pub(crate) fn make_pass(model: Model, inputs: &Inputs) -> Result<Box<dyn ModelPa
         Model::Ea => Box::new(ea::EaPass::new(inputs, opts.width, opts.height)?),
         Model::Ao => Box::new(ao::AoPass::new(inputs, opts.width, opts.height)?),
         Model::Single => Box::new(single::SinglePass::new(inputs, opts.width, opts.height)?),
+        Model::Ambient => Box::new(ambient::AmbientPass::new(
+            inputs,
+            opts.width,
+            opts.height,
+        )?),
         Model::Refract => Box::new(refract::SweepPass::new(
             inputs,
             opts.width,

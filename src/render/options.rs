@@ -17,26 +17,35 @@ pub enum Model {
     Ao,
     /// Single scattering with shadows from a transmittance cache (render::single).
     Single,
+    /// Ambient scattering: multiple scattering in a sphere around each sample from a
+    /// preintegrated Monte-Carlo table, soft shadows by tube marching (render::ambient).
+    Ambient,
 }
 
 impl Model {
     /// Every model, in the order `bench models` compares them (EA first: the ratios'
     /// base).
-    pub const ALL: [Model; 4] = [Model::Ea, Model::Ao, Model::Single, Model::Refract];
+    pub const ALL: [Model; 5] = [
+        Model::Ea,
+        Model::Ao,
+        Model::Single,
+        Model::Ambient,
+        Model::Refract,
+    ];
 
     /// Whether the model lights the volume with [`SweepOptions::light`] (direction and
     /// colour): a light change can cost it a rebuild.
     pub fn uses_light(self) -> bool {
         match self {
             Model::Ea => false,
-            Model::Ao | Model::Single | Model::Refract => true,
+            Model::Ao | Model::Single | Model::Ambient | Model::Refract => true,
         }
     }
 
     /// Whether the model has a phase function (a phase-function change applies).
     pub fn has_phase_function(self) -> bool {
         match self {
-            Model::Single => true,
+            Model::Single | Model::Ambient => true,
             Model::Ea | Model::Ao | Model::Refract => false,
         }
     }
@@ -47,6 +56,7 @@ impl Model {
             Model::Refract => "refract",
             Model::Ao => "ao",
             Model::Single => "single",
+            Model::Ambient => "ambient",
         }
     }
 }
@@ -81,6 +91,11 @@ pub struct RenderOptions {
     pub ao: super::ao::AoOptions,
     /// Phase function and albedo of the scattering models.
     pub scatter: ScatterOptions,
+    /// Radius of the ambient-scattering model.
+    pub ambient: super::ambient::AmbientOptions,
+    /// Lights beside `sweep.light`, for the models that take several (ambient
+    /// scattering: up to [`super::ambient::MAX_LIGHTS`] in all); the others refuse them.
+    pub extra_lights: Vec<crate::light::ExtraLight>,
 }
 
 /// How the scattering models' media scatter light.
@@ -135,6 +150,8 @@ impl Default for RenderOptions {
             sweep: SweepOptions::default(),
             ao: Default::default(),
             scatter: Default::default(),
+            ambient: Default::default(),
+            extra_lights: Vec::new(),
         }
     }
 }
@@ -165,6 +182,18 @@ impl RenderOptions {
         );
         self.ao.validate()?;
         self.scatter.validate()?;
+        self.ambient.validate()?;
+        ensure!(
+            self.extra_lights.len() < super::ambient::MAX_LIGHTS,
+            "{} lights given; the ambient-scattering model takes at most {} (the main light \
+             and {} more)",
+            self.extra_lights.len() + 1,
+            super::ambient::MAX_LIGHTS,
+            super::ambient::MAX_LIGHTS - 1
+        );
+        for l in &self.extra_lights {
+            l.validate()?;
+        }
         self.sweep.validate()
     }
 }

@@ -100,6 +100,9 @@ struct RenderTable {
     ao_diffuse: Option<f32>,
     g: Option<f32>,
     albedo: Option<f32>,
+    ambient_radius: Option<f32>,
+    /// Lights beside the main one: "dir:X,Y,Z@R,G,B" or "point:X,Y,Z@R,G,B".
+    lights: Option<Vec<String>>,
 }
 
 /// "x", "xy", "xyz", ... (or "none") to the axes to mirror.
@@ -131,7 +134,8 @@ pub fn parse_model(s: &str) -> Result<Model> {
         "ea" => Ok(Model::Ea),
         "ao" => Ok(Model::Ao),
         "single" => Ok(Model::Single),
-        _ => bail!("model '{s}' is not one of refract, ea, ao, single"),
+        "ambient" => Ok(Model::Ambient),
+        _ => bail!("model '{s}' is not one of refract, ea, ao, single, ambient"),
     }
 }
 
@@ -349,6 +353,16 @@ impl SceneFile {
             o.ao_diffuse = r.ao_diffuse;
             o.g = r.g;
             o.albedo = r.albedo;
+            o.ambient_radius = r.ambient_radius;
+            if let Some(lights) = &r.lights {
+                o.extra_lights = Some(
+                    lights
+                        .iter()
+                        .map(|l| l.parse())
+                        .collect::<Result<_>>()
+                        .context("[render] lights")?,
+                );
+            }
             if let Some(t) = r.tonemap {
                 o.tonemap = Some(parse_tonemap(&t).context("[render]")?);
             }

@@ -105,6 +105,10 @@ pub struct Scene {
     pub ao: AoOptions,
     /// The scattering models' phase function and albedo.
     pub scatter: ScatterOptions,
+    /// The ambient-scattering model's radius.
+    pub ambient: crate::render::ambient::AmbientOptions,
+    /// Lights beside the main one (the ambient-scattering model's).
+    pub extra_lights: Vec<crate::light::ExtraLight>,
     /// The scene file this came from, if any (the viewer reloads when it changes).
     pub file: Option<PathBuf>,
 }
@@ -135,6 +139,8 @@ pub struct Overrides {
     pub ao_diffuse: Option<f32>,
     pub g: Option<f32>,
     pub albedo: Option<f32>,
+    pub ambient_radius: Option<f32>,
+    pub extra_lights: Option<Vec<crate::light::ExtraLight>>,
     pub azimuth: Option<f32>,
     pub elevation: Option<f32>,
     pub distance: Option<f32>,
@@ -177,6 +183,8 @@ impl Scene {
         set(&mut self.ao.diffuse, o.ao_diffuse);
         set(&mut self.scatter.g, o.g);
         set(&mut self.scatter.albedo, o.albedo);
+        set(&mut self.ambient.radius, o.ambient_radius);
+        set(&mut self.extra_lights, o.extra_lights);
         set(&mut self.camera.azimuth, o.azimuth);
         set(&mut self.camera.elevation, o.elevation);
         set(&mut self.camera.distance, o.distance);
@@ -263,6 +271,8 @@ impl Default for Scene {
             tonemap: ToneOperator::Aces,
             ao: AoOptions::default(),
             scatter: ScatterOptions::default(),
+            ambient: Default::default(),
+            extra_lights: Vec::new(),
             file: None,
         }
     }
@@ -525,6 +535,8 @@ impl Scene {
             },
             ao: self.ao,
             scatter: self.scatter,
+            ambient: self.ambient,
+            extra_lights: self.extra_lights.clone(),
             ..Default::default()
         };
         opts.validate()?;

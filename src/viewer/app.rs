@@ -311,7 +311,8 @@ impl App {
                                     Model::Refract => Model::Ea,
                                     Model::Ea => Model::Ao,
                                     Model::Ao => Model::Single,
-                                    Model::Single => Model::Refract,
+                                    Model::Single => Model::Ambient,
+                                    Model::Ambient => Model::Refract,
                                 };
                                 said = Some(format!("model {}", model.name()));
                             }

@@ -1,0 +1,459 @@
+//! Ambient scattering (`--model ambient`, issue 17 item 3): Ament et al.'s model (seed
+//! 002) of multiple scattering on a mesoscopic scale. Three steps, each cached and rebuilt
+//! only when what it depends on changes:
+//!
+//! 1. the **ambient extinction volume** σ̃_t (sect. 4.2.1, eq. 13): the mean extinction over
+//!    a cube with the volume of the ambient sphere S_r around every voxel, from the
+//!    extinction volume's 3D summed-area table (`glsl/ambient_extinction.comp`, scope
+//!    [`EXTINCTION_SCOPE`]; depends on the transfer functions and the radius);
+//! 2. the **radiance cache** (sect. 3.2.2, 4.2.2): the light front of every light at every
+//!    cache voxel (half the volume's resolution, as the paper's), marched from the light in
+//!    tubes of radius r with steps of 2r (`glsl/radiance_cache.comp`, scope
+//!    [`CACHE_SCOPE`]; depends on σ̃_t, the lights and g);
+//! 3. **ambient ray casting** (sect. 4.2.3, Algorithm 1, `glsl/ambient.comp`): the
+//!    emission–absorption march of the other ray marchers, each sample lit through the
+//!    preintegrated tables ([`table`]) with the view-dependent angle, per light.
+//!
+//! Where we depart from the paper, and why (physics, not taste): the table is the
+//! in-scattered radiance at the ambient sphere's *centre* under a collimated unit front,
+//! with the front scattered once at the centre left out of it and added analytically
+//! (exact at every anisotropy, where a table of a peaked phase function would blur it);
+//! the tube-marching factor is the sphere's own transmission of a front (1 in empty space),
+//! not the radial table entry at θ = 0 the paper multiplies by (eq. 16), which is
+//! p_HG(0; g)/(4π) in empty space. [`table`] defines both quantities.
+//!
+//! Radii are in reference steps (smallest voxel sides), like the AO model's; the ambient
+//! extinction, like the extinction volume, per reference step, so s = r·σ̃_t.
+
+pub mod table;
+
+use anyhow::{ensure, Result};
+use bytemuck::{Pod, Zeroable};
+
+use super::ea::RayMarchPass;
+use super::model::{Inputs, ModelPass, Recorded};
+use super::{FrameTarget, RenderOptions};
+use crate::light::{ExtraLight, LightSource};
+use crate::shaders;
+use crate::vk::{
+    self, Access, Binding, ComputePipeline, Context, DescriptorSet, Filter, Image, ImageDesc,
+    ImageKind, Recorder, Sampler, Use,
+};
+use table::{AmbientTable, TableParams};
+
+/// The timings scope of the ambient extinction volume's build.
+pub const EXTINCTION_SCOPE: &str = "ambient extinction";
+/// The timings scope of the radiance cache's build.
+pub const CACHE_SCOPE: &str = "radiance cache";
+
+/// Most lights the model takes (the main light and three more: one cache channel each).
+pub const MAX_LIGHTS: usize = 4;
+/// Smallest and largest ambient radius, in reference steps.
+pub const MIN_RADIUS: f32 = 0.5;
+pub const MAX_RADIUS: f32 = 64.0;
+
+/// `(4π/3)^(1/3)`: the side of the cube with the volume of the unit sphere (eq. 13).
+const CUBE_PER_RADIUS: f32 = 1.611_991_9;
+
+/// Options of the ambient-scattering model (its phase function and albedo are
+/// [`super::ScatterOptions`], its lights the main light and [`RenderOptions::extra_lights`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AmbientOptions {
+    /// Radius r of the ambient sphere, in reference steps: the scale of the soft shadows
+    /// and the translucency (the paper shows 2 to 14 voxels).
+    pub radius: f32,
+}
+
+impl Default for AmbientOptions {
+    fn default() -> Self {
+        Self { radius: 6.0 }
+    }
+}
+
+impl AmbientOptions {
+    pub fn validate(&self) -> Result<()> {
+        ensure!(
+            self.radius.is_finite() && (MIN_RADIUS..=MAX_RADIUS).contains(&self.radius),
+            "ambient radius {} must be in [{MIN_RADIUS}, {MAX_RADIUS}] voxels",
+            self.radius
+        );
+        Ok(())
+    }
+}
+
+/// The preintegrated tables on the GPU: the scattered radiance as a 3D image
+/// [θ, s, g] and the scattered part of the sphere's transmission (the table's minus the
+/// direct e^(−2s), which `glsl/radiance_cache.comp` adds exactly) as a 2D image [s, g],
+/// both R32F.
+pub struct TableTextures {
+    params: TableParams,
+    scattered: Image,
+    transmission: Image,
+    /// Set by the caller ([`super::Renderer::set_ambient_table`]) rather than chosen for
+    /// the frame's albedo.
+    explicit: bool,
+}
+
+impl TableTextures {
+    pub fn new(ctx: &Context, table: &AmbientTable, explicit: bool) -> Result<Self> {
+        let p = table.params;
+        let scattered_transmission: Vec<f32> = table
+            .transmission
+            .iter()
+            .enumerate()
+            .map(|(i, &t)| {
+                let s = table.s_at(i as u32 % p.s_bins) as f64;
+                (t as f64 - (-2.0 * s).exp()) as f32
+            })
+            .collect();
+        let upload = |extent: [u32; 3], kind, data: &[f32], name| -> Result<Image> {
+            let image = Image::new(
+                ctx,
+                ImageDesc {
+                    kind,
+                    format: vk::Format::R32_SFLOAT,
+                    extent,
+                    layers: 1,
+                    usage: vk::usage::SAMPLED | vk::usage::TRANSFER_DST,
+                },
+                name,
+            )?;
+            ctx.upload_image(&image, 0, bytemuck::cast_slice(data))?;
+            Ok(image)
+        };
+        Ok(Self {
+            params: p,
+            scattered: upload(
+                [p.theta_bins, p.s_bins, p.g_bins],
+                ImageKind::D3,
+                &table.scattered,
+                "ambient table",
+            )?,
+            transmission: upload(
+                [p.s_bins, p.g_bins, 1],
+                ImageKind::D2,
+                &scattered_transmission,
+                "ambient transmission",
+            )?,
+            explicit,
+        })
+    }
+
+    pub fn params(&self) -> &TableParams {
+        &self.params
+    }
+
+    pub fn is_explicit(&self) -> bool {
+        self.explicit
+    }
+
+    fn dims(&self) -> [f32; 4] {
+        let p = &self.params;
+        [
+            p.theta_bins as f32,
+            p.s_bins as f32,
+            p.g_bins as f32,
+            p.s_max,
+        ]
+    }
+}
+
+/// The lights of a frame as the shaders take them: xyz towards the light (unit) or its
+/// position, w = 1 for a point light; and their colours.
+pub(crate) fn lights(opts: &RenderOptions) -> (usize, [[f32; 4]; MAX_LIGHTS], [[f32; 4]; MAX_LIGHTS]) {
+    let main = ExtraLight {
+        source: LightSource::Directional {
+            towards: opts.sweep.light.towards,
+        },
+        colour: opts.sweep.light.colour,
+    };
+    let mut at = [[0.0; 4]; MAX_LIGHTS];
+    let mut colours = [[0.0; 4]; MAX_LIGHTS];
+    let all = std::iter::once(&main).chain(opts.extra_lights.iter());
+    let mut n = 0;
+    for (j, l) in all.take(MAX_LIGHTS).enumerate() {
+        at[j] = match l.source {
+            LightSource::Directional { towards } => {
+                let t = towards.normalize();
+                [t.x, t.y, t.z, 0.0]
+            }
+            LightSource::Point { position: p } => [p.x, p.y, p.z, 1.0],
+        };
+        colours[j] = [l.colour[0], l.colour[1], l.colour[2], 0.0];
+        n = j + 1;
+    }
+    (n, at, colours)
+}
+
+/// `glsl/ambient_extinction.comp`'s push constants.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct ExtinctionPush {
+    dims: [i32; 4],
+    inv_scale: f32,
+    side: f32,
+    pad: [f32; 2],
+}
+
+/// `glsl/radiance_cache.comp`'s push constants.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct CachePush {
+    lights: [[f32; 4]; MAX_LIGHTS],
+    half_extent: [f32; 4],
+    table: [f32; 4],
+    misc: [f32; 4],
+}
+
+/// std140 mirror of `Params` in glsl/ambient.comp (ea.comp's block, then the model's).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct Params {
+    march: super::ea::MarchParams,
+    lights: [[f32; 4]; MAX_LIGHTS],
+    colours: [[f32; 4]; MAX_LIGHTS],
+    ambient: [f32; 4],
+    table: [f32; 4],
+    counts: [u32; 4],
+}
+
+/// A compute step that writes one image from its inputs, remembering what it was last
+/// built from so it is rebuilt only when that changes.
+struct CachedImage {
+    image: Image,
+    set: DescriptorSet,
+    pipeline: ComputePipeline,
+    built_for: Option<Vec<u32>>,
+}
+
+impl CachedImage {
+    fn new(
+        ctx: &Context,
+        desc: ImageDesc,
+        inputs: &[Binding<'_>],
+        spirv: &[u8],
+        push_size: usize,
+        name: &str,
+    ) -> Result<Self> {
+        let image = Image::new(ctx, desc, name)?;
+        let mut bindings = inputs.to_vec();
+        bindings.push(Binding::StorageImage(&image));
+        let set = DescriptorSet::new(ctx, &bindings, name)?;
+        let pipeline = ComputePipeline::new(ctx, spirv, &set, push_size as u32, name)?;
+        Ok(Self {
+            image,
+            set,
+            pipeline,
+            built_for: None,
+        })
+    }
+
+    /// Record the build under `scope` if `key` differs from the last build's.
+    fn record(
+        &mut self,
+        rec: &mut Recorder,
+        scope: &str,
+        key: Vec<u32>,
+        reads: &[&Image],
+        push: &[u8],
+    ) -> Result<bool> {
+        if self.built_for.as_ref() == Some(&key) {
+            return Ok(false);
+        }
+        let mut uses: Vec<Use> = reads.iter().map(|i| Use::all(i, Access::Sampled)).collect();
+        uses.push(Use::all(&self.image, Access::ComputeStorage));
+        let [w, h, d] = self.image.extent();
+        rec.pass(scope, &uses, |rec| {
+            rec.dispatch(
+                &self.pipeline,
+                &self.set,
+                push,
+                [w.div_ceil(8), h.div_ceil(8), d],
+            )
+        })?;
+        self.built_for = Some(key);
+        Ok(true)
+    }
+}
+
+pub(super) struct AmbientPass {
+    march: RayMarchPass,
+    /// Kept for the ambient extinction's set (the SAT is read with texelFetch through it).
+    _nearest: Sampler,
+    /// σ̃_t per reference step at every voxel centre (R32F, the volume's resolution).
+    extinction: CachedImage,
+    /// The light fronts, one channel per light (RGBA32F, half the volume's resolution).
+    radiance: CachedImage,
+}
+
+fn inputs_of<'a>(
+    inputs: &Inputs<'a>,
+) -> Result<(&'a super::ao::Extinction, &'a TableTextures)> {
+    let e = inputs
+        .extinction
+        .ok_or_else(|| anyhow::anyhow!("the ambient-scattering model needs the extinction volume"))?;
+    let t = inputs
+        .ambient_table
+        .ok_or_else(|| anyhow::anyhow!("the ambient-scattering model needs its table"))?;
+    Ok((e, t))
+}
+
+/// The radiance cache's size: half the volume's per axis, rounded up.
+pub fn cache_extent(dims: [u32; 3]) -> [u32; 3] {
+    dims.map(|d| d.div_ceil(2).max(1))
+}
+
+impl AmbientPass {
+    pub fn new(inputs: &Inputs, width: u32, height: u32) -> Result<Self> {
+        let ctx = inputs.ctx;
+        let (ext, table) = inputs_of(inputs)?;
+        let nearest = Sampler::new(ctx, Filter::Nearest, "ambient SAT")?;
+        let extent = inputs.volume.extent();
+        let extinction = CachedImage::new(
+            ctx,
+            ImageDesc::computed(ImageKind::D3, vk::Format::R32_SFLOAT, extent, 1),
+            &[Binding::Texture(ext.sat()?.image(), &nearest)],
+            shaders::AMBIENT_EXTINCTION_COMP,
+            std::mem::size_of::<ExtinctionPush>(),
+            EXTINCTION_SCOPE,
+        )?;
+        let radiance = CachedImage::new(
+            ctx,
+            ImageDesc::computed(
+                ImageKind::D3,
+                vk::Format::R32G32B32A32_SFLOAT,
+                cache_extent(extent),
+                1,
+            ),
+            &[
+                Binding::Texture(&extinction.image, inputs.linear),
+                Binding::Texture(&table.transmission, inputs.linear),
+            ],
+            shaders::RADIANCE_CACHE_COMP,
+            std::mem::size_of::<CachePush>(),
+            CACHE_SCOPE,
+        )?;
+        let march = RayMarchPass::new::<Params>(
+            inputs,
+            width,
+            height,
+            shaders::AMBIENT_COMP,
+            "ambient",
+            &[
+                Binding::Texture(&extinction.image, inputs.linear),
+                Binding::Texture(&radiance.image, inputs.linear),
+                Binding::Texture(&table.scattered, inputs.linear),
+            ],
+        )?;
+        Ok(Self {
+            march,
+            _nearest: nearest,
+            extinction,
+            radiance,
+        })
+    }
+}
+
+impl ModelPass for AmbientPass {
+    fn fits(&self, opts: &RenderOptions) -> bool {
+        self.march.fits(opts)
+    }
+
+    fn output(&self) -> &FrameTarget {
+        self.march.output()
+    }
+
+    fn record(&mut self, rec: &mut Recorder, inputs: &Inputs) -> Result<Recorded> {
+        let (info, opts) = (inputs.info, inputs.opts);
+        let (ext, table) = inputs_of(inputs)?;
+        let sat = ext.sat()?;
+        let radius = opts.ambient.radius;
+        let [x, y, z] = info.dims.map(|d| d as i32);
+        let push = ExtinctionPush {
+            dims: [x, y, z, 0],
+            inv_scale: sat.inv_scale(),
+            side: radius * CUBE_PER_RADIUS,
+            pad: [0.0; 2],
+        };
+        // What each cache was built from: the extinction's build count and the radius; then
+        // that, the lights, g and the table.
+        let ext_key = vec![ext.builds() as u32, (ext.builds() >> 32) as u32, radius.to_bits()];
+        self.extinction.record(
+            rec,
+            EXTINCTION_SCOPE,
+            ext_key.clone(),
+            &[sat.image()],
+            bytemuck::bytes_of(&push),
+        )?;
+        let (n, at, colours) = lights(opts);
+        let r_world = radius * info.ref_step;
+        let g = opts.scatter.g;
+        let h = info.half_extent;
+        let cache_push = CachePush {
+            lights: at,
+            half_extent: [h.x, h.y, h.z, r_world],
+            table: table.dims(),
+            misc: [g, radius, n as f32, 0.0],
+        };
+        let mut cache_key = ext_key;
+        cache_key.extend(bytemuck::cast_slice::<_, u32>(&[cache_push]).iter().copied());
+        cache_key.push(table.scattered.id() as u32);
+        self.radiance.record(
+            rec,
+            CACHE_SCOPE,
+            cache_key,
+            &[&self.extinction.image, &table.transmission],
+            bytemuck::bytes_of(&cache_push),
+        )?;
+        let (width, height) = self.march.size();
+        let p = Params {
+            march: super::ea::MarchParams::new(inputs, width, height),
+            lights: at,
+            colours,
+            ambient: [r_world, radius, g, opts.scatter.albedo],
+            table: table.dims(),
+            counts: [n as u32, 0, 0, 0],
+        };
+        self.march.record(
+            rec,
+            inputs,
+            bytemuck::bytes_of(&p),
+            &[&self.extinction.image, &self.radiance.image, &table.scattered],
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn params_match_the_shaders_block() {
+        let mut host = crate::render::ea::march_layout();
+        host.extend(crate::host_layout!(Params {
+            lights,
+            colours,
+            ambient,
+            table,
+            counts
+        }));
+        crate::vk::spirv::check_block(
+            shaders::AMBIENT_COMP,
+            "Params",
+            &host,
+            std::mem::size_of::<Params>(),
+            true,
+        )
+        .unwrap();
+    }
+
+    #[test]
+    fn radius_limits_are_refused_by_name() {
+        for r in [0.0, 0.4, 65.0, f32::NAN] {
+            let e = AmbientOptions { radius: r }.validate().unwrap_err().to_string();
+            assert!(e.contains("ambient radius"), "{e}");
+        }
+        AmbientOptions { radius: 0.5 }.validate().unwrap();
+        AmbientOptions { radius: 64.0 }.validate().unwrap();
+    }
+}
