@@ -11,9 +11,17 @@
 // (table.rs). The paper multiplies by its radial table entry at theta = 0 instead
 // (eq. 16), which in empty space is p_HG(0; g) / (4 pi), not 1, per step; t is 1 in empty
 // space, e^(-2s) without scattering, and never above 1. The sphere a step crosses is the
-// one centred between its ends (the paper samples at the step's start). The voxel lies
-// between the fronts x_k and x_k+1: linear interpolation (eq. 17). A point light's front
-// also falls off as 1 / distance^2 (its colour is the irradiance at unit distance).
+// one centred between its ends (the paper samples at the step's start).
+//
+// The paper marches from the light in a grid of steps fixed at the light and interpolates
+// the two fronts around the voxel (eq. 17). At a sharp interface that modulates the light
+// with period 2r: a voxel just under a lit surface gets the front from a step that ends
+// above the surface or one that crossed a whole sphere straddling it, depending on where
+// the grid falls (measured: stripes across a lit floor). Here each voxel lays its own
+// steps, from itself towards the light, so the last sphere always ends at the voxel and
+// the partial step lies at the far end, where the light enters the box.
+// A point light's front also falls off as 1 / distance^2 (its colour is the irradiance at
+// unit distance).
 #extension GL_GOOGLE_include_directive : require
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
@@ -70,17 +78,21 @@ void main() {
             vec3 t1 = max((h - x) * inv, (-h - x) * inv);
             reach = max(min(min(t1.x, t1.y), t1.z), 0.0);
         }
-        vec3 start = x + reach * u;
+        // The tube's spheres are laid from the voxel towards the light, so the last one
+        // ends at the voxel: the partial step is at the far end, where the light enters.
         float steps = reach / (2.0 * r);
         int k = int(floor(steps));
         float eta = steps - float(k);
-        // Fronts at x_0 (the start) ... x_k (before x) and x_k+1 (past x).
         float f = 1.0;
-        for (int i = 1; i <= k; ++i) {
-            f *= sphere_transmission(start - (float(i) - 0.5) * 2.0 * r * u);
+        for (int i = 0; i < k; ++i) {
+            f *= sphere_transmission(x + (float(i) + 0.5) * 2.0 * r * u);
         }
-        float f_next = f * sphere_transmission(start - (float(k) + 0.5) * 2.0 * r * u);
-        front[j] = falloff * mix(f, f_next, eta);
+        // The partial step: the fraction eta of a sphere's transmission, geometrically
+        // (exact without scattering: e^(-2 s eta)).
+        if (eta > 0.0) {
+            f *= pow(sphere_transmission(x + (float(k) + 0.5 * eta) * 2.0 * r * u), eta);
+        }
+        front[j] = falloff * f;
     }
     imageStore(radiance, v, front);
 }

@@ -195,7 +195,14 @@ mod tests {
         assert_eq!(l.colour, [2.0, 1.0, 0.5]);
         let d: ExtraLight = "dir:0,1,0".parse().unwrap();
         assert_eq!(d.colour, [1.0; 3]);
-        for bad in ["0,1,0", "dir:0,0,0", "spot:0,1,0", "dir:0,1", "point:0,1,x", "dir:0,1,0@-1,0,0"] {
+        for bad in [
+            "0,1,0",
+            "dir:0,0,0",
+            "spot:0,1,0",
+            "dir:0,1",
+            "point:0,1,x",
+            "dir:0,1,0@-1,0,0",
+        ] {
             assert!(bad.parse::<ExtraLight>().is_err(), "{bad} accepted");
         }
     }

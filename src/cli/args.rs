@@ -256,6 +256,11 @@ pub struct ModelsArgs {
     /// Draw the median rendering time per model and row as an SVG bar chart.
     #[arg(long, value_name = "FILE.svg", visible_alias = "plot")]
     pub svg: Option<PathBuf>,
+    /// The ambient-scattering model's preintegrated table, a file written by `refrakt
+    /// precompute ambient --out` (albedo 0.9, the paper's). Default: the cached table,
+    /// built on first use.
+    #[arg(long, value_name = "FILE")]
+    pub ambient_table: Option<PathBuf>,
     /// No progress bar on stderr.
     #[arg(long)]
     pub quiet: bool,
@@ -472,6 +477,11 @@ pub struct SceneArgs {
     /// "@R,G,B" (linear colour; a point light's is the irradiance at distance 1).
     #[arg(long, value_name = "LIGHT", allow_hyphen_values = true)]
     pub add_light: Vec<String>,
+    /// Ambient scattering (--model ambient): the preintegrated table to use, a file written
+    /// by `refrakt precompute ambient --out` (its albedo must be the scene's). Default: the
+    /// cached table for --albedo, built on first use (about a minute on 2 cores).
+    #[arg(long, value_name = "FILE")]
+    pub ambient_table: Option<PathBuf>,
     /// Light softness: radius, in voxels, of the elliptical filter applied to the light at
     /// every plane; 0 = hard shadows and sharp caustics (refract) [default: 0.5].
     #[arg(long, allow_negative_numbers = true)]

@@ -133,6 +133,13 @@ pub fn bench_models(desc: &ContextDesc, args: &ModelsArgs) -> Result<ExitCode> {
         rows: args.rows.clone(),
         data_dir: args.data_dir.clone().unwrap_or_else(scene::data_dir),
         progress: !args.quiet,
+        ambient_table: {
+            let albedo = refrakt::render::ScatterOptions::default().albedo;
+            let (t, line) =
+                super::ambient::table_for(args.ambient_table.as_deref(), albedo, args.quiet)?;
+            println!("{line}");
+            Some(t)
+        },
     };
     let report = refrakt::bench::models(&ctx, &settings)?;
     print!("{}", refrakt::bench::models_markdown(&report));

@@ -1,6 +1,7 @@
 //! The command line, split by job: the syntax (`args`), the scene a command draws
 //! (`scene_args`), and one module per subcommand.
 
+pub mod ambient;
 pub mod args;
 pub mod bench;
 pub mod info;

@@ -111,6 +111,18 @@ pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
         volume.dims[0], volume.dims[1], volume.dims[2]
     ));
     let mut renderer = Renderer::new(&ctx, &volume, &tf)?;
+    if model == Model::Ambient {
+        progress.set_message("the ambient-scattering table");
+        let (table, line) = progress.suspend(|| {
+            super::ambient::table_for(
+                args.scene.ambient_table.as_deref(),
+                opts.scatter.albedo,
+                false,
+            )
+        })?;
+        progress.suspend(|| println!("{line}"));
+        renderer.set_ambient_table(&table)?;
+    }
     let env_timings = if model == Model::Refract {
         renderer.set_environment(env.as_ref())?
     } else {

@@ -259,6 +259,7 @@ pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Resu
         let given: Vec<&str> = [
             ("--ambient-radius", args.ambient_radius.is_some()),
             ("--add-light", !args.add_light.is_empty()),
+            ("--ambient-table", args.ambient_table.is_some()),
         ]
         .into_iter()
         .filter_map(|(flag, given)| given.then_some(flag))

@@ -587,7 +587,7 @@ impl Renderer {
             ..Default::default()
         };
         log::info!("ambient-scattering table for albedo {albedo}: loading or building");
-        let (table, _) = ambient::table::load_or_build(params, None, 0, &|_, _| {})?;
+        let (table, _) = ambient::table::load_or_build(&params, None, 0, &|_, _| {})?;
         self.passes.remove(&Model::Ambient);
         self.ambient_table = Some(ambient::TableTextures::new(&self.ctx, &table, false)?);
         Ok(())

@@ -17,7 +17,9 @@
 use anyhow::{ensure, Result};
 
 use super::refract::{EnvInputs, SweepRecording};
-use super::{ambient, ao, ea, refract, single, Camera, FrameTarget, Model, RenderOptions, VolumeInfo};
+use super::{
+    ambient, ao, ea, refract, single, Camera, FrameTarget, Model, RenderOptions, VolumeInfo,
+};
 use crate::vk::{Context, Image, Recorder, Sampler};
 
 /// The renderer's GPU resources, as every model sees them, and the frame asked for.
@@ -114,11 +116,7 @@ pub(crate) fn make_pass(model: Model, inputs: &Inputs) -> Result<Box<dyn ModelPa
         Model::Ea => Box::new(ea::EaPass::new(inputs, opts.width, opts.height)?),
         Model::Ao => Box::new(ao::AoPass::new(inputs, opts.width, opts.height)?),
         Model::Single => Box::new(single::SinglePass::new(inputs, opts.width, opts.height)?),
-        Model::Ambient => Box::new(ambient::AmbientPass::new(
-            inputs,
-            opts.width,
-            opts.height,
-        )?),
+        Model::Ambient => Box::new(ambient::AmbientPass::new(inputs, opts.width, opts.height)?),
         Model::Refract => Box::new(refract::SweepPass::new(
             inputs,
             opts.width,

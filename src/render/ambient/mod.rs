@@ -102,7 +102,7 @@ impl TableTextures {
             .iter()
             .enumerate()
             .map(|(i, &t)| {
-                let s = table.s_at(i as u32 % p.s_bins) as f64;
+                let s = p.s(i as u32 % p.s_bins);
                 (t as f64 - (-2.0 * s).exp()) as f32
             })
             .collect();
@@ -160,7 +160,9 @@ impl TableTextures {
 
 /// The lights of a frame as the shaders take them: xyz towards the light (unit) or its
 /// position, w = 1 for a point light; and their colours.
-pub(crate) fn lights(opts: &RenderOptions) -> (usize, [[f32; 4]; MAX_LIGHTS], [[f32; 4]; MAX_LIGHTS]) {
+pub(crate) fn lights(
+    opts: &RenderOptions,
+) -> (usize, [[f32; 4]; MAX_LIGHTS], [[f32; 4]; MAX_LIGHTS]) {
     let main = ExtraLight {
         source: LightSource::Directional {
             towards: opts.sweep.light.towards,
@@ -286,12 +288,10 @@ pub(super) struct AmbientPass {
     radiance: CachedImage,
 }
 
-fn inputs_of<'a>(
-    inputs: &Inputs<'a>,
-) -> Result<(&'a super::ao::Extinction, &'a TableTextures)> {
-    let e = inputs
-        .extinction
-        .ok_or_else(|| anyhow::anyhow!("the ambient-scattering model needs the extinction volume"))?;
+fn inputs_of<'a>(inputs: &Inputs<'a>) -> Result<(&'a super::ao::Extinction, &'a TableTextures)> {
+    let e = inputs.extinction.ok_or_else(|| {
+        anyhow::anyhow!("the ambient-scattering model needs the extinction volume")
+    })?;
     let t = inputs
         .ambient_table
         .ok_or_else(|| anyhow::anyhow!("the ambient-scattering model needs its table"))?;
@@ -377,7 +377,11 @@ impl ModelPass for AmbientPass {
         };
         // What each cache was built from: the extinction's build count and the radius; then
         // that, the lights, g and the table.
-        let ext_key = vec![ext.builds() as u32, (ext.builds() >> 32) as u32, radius.to_bits()];
+        let ext_key = vec![
+            ext.builds() as u32,
+            (ext.builds() >> 32) as u32,
+            radius.to_bits(),
+        ];
         self.extinction.record(
             rec,
             EXTINCTION_SCOPE,
@@ -396,7 +400,11 @@ impl ModelPass for AmbientPass {
             misc: [g, radius, n as f32, 0.0],
         };
         let mut cache_key = ext_key;
-        cache_key.extend(bytemuck::cast_slice::<_, u32>(&[cache_push]).iter().copied());
+        cache_key.extend(
+            bytemuck::cast_slice::<_, u32>(&[cache_push])
+                .iter()
+                .copied(),
+        );
         cache_key.push(table.scattered.id() as u32);
         self.radiance.record(
             rec,
@@ -418,7 +426,11 @@ impl ModelPass for AmbientPass {
             rec,
             inputs,
             bytemuck::bytes_of(&p),
-            &[&self.extinction.image, &self.radiance.image, &table.scattered],
+            &[
+                &self.extinction.image,
+                &self.radiance.image,
+                &table.scattered,
+            ],
         )
     }
 }
@@ -450,7 +462,10 @@ mod tests {
     #[test]
     fn radius_limits_are_refused_by_name() {
         for r in [0.0, 0.4, 65.0, f32::NAN] {
-            let e = AmbientOptions { radius: r }.validate().unwrap_err().to_string();
+            let e = AmbientOptions { radius: r }
+                .validate()
+                .unwrap_err()
+                .to_string();
             assert!(e.contains("ambient radius"), "{e}");
         }
         AmbientOptions { radius: 0.5 }.validate().unwrap();

@@ -33,6 +33,10 @@ impl TableParams {
     pub fn validate(&self) -> Result<()> {
         Ok(())
     }
+    pub fn s(&self, k: u32) -> f64 {
+        let u = k as f64 / (self.s_bins - 1) as f64;
+        (1.0 + self.s_max as f64).powf(u) - 1.0
+    }
 }
 
 pub const G_MAX: f32 = 0.99;
@@ -47,19 +51,37 @@ pub struct AmbientTable {
 
 pub enum Source {
     Cached(std::path::PathBuf),
-    Built { seconds: f64 },
+    Built {
+        seconds: f64,
+        written: Option<std::path::PathBuf>,
+    },
 }
 
 impl AmbientTable {
+    pub fn load(_p: &Path) -> Result<Self> {
+        anyhow::bail!("stub")
+    }
     pub fn s_at(&self, k: u32) -> f32 {
+        self.params.s(k) as f32
+    }
+    pub fn s_old(&self, k: u32) -> f32 {
         let u = k as f32 / (self.params.s_bins - 1) as f32;
         (1.0 + self.params.s_max).powf(u) - 1.0
     }
-    pub fn build(params: TableParams, _threads: usize, _p: &(dyn Fn(u64, u64) + Sync)) -> Result<Self> {
-        let p = params;
+    pub fn build(
+        params: &TableParams,
+        _threads: usize,
+        _p: &(dyn Fn(u64, u64) + Sync),
+    ) -> Result<Self> {
+        let p = *params;
         let mut scattered = vec![0.0; (p.theta_bins * p.s_bins * p.g_bins) as usize];
         let mut transmission = vec![0.0; (p.s_bins * p.g_bins) as usize];
-        let t = Self { params, scattered: vec![], transmission: vec![], seconds: 0.0 };
+        let t = Self {
+            params: p,
+            scattered: vec![],
+            transmission: vec![],
+            seconds: 0.0,
+        };
         for m in 0..p.g_bins {
             for k in 0..p.s_bins {
                 let s = t.s_at(k);
@@ -69,15 +91,26 @@ impl AmbientTable {
                 }
             }
         }
-        Ok(Self { params, scattered, transmission, seconds: 0.0 })
+        Ok(Self {
+            params: p,
+            scattered,
+            transmission,
+            seconds: 0.0,
+        })
     }
 }
 
 pub fn load_or_build(
-    params: TableParams,
+    params: &TableParams,
     _cache_dir: Option<&Path>,
     threads: usize,
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<(AmbientTable, Source)> {
-    Ok((AmbientTable::build(params, threads, progress)?, Source::Built { seconds: 0.0 }))
+    Ok((
+        AmbientTable::build(params, threads, progress)?,
+        Source::Built {
+            seconds: 0.0,
+            written: None,
+        },
+    ))
 }
