@@ -1,7 +1,7 @@
 //! `refrakt` command line: `info` (devices), `render` (one frame to an image, with GPU
 //! timings), `view` (the interactive viewer), `photons` (the CPU photon tracer's reference),
-//! `generate` (write a stand-in volume) and `bench` (the timing tables, lever A/B and
-//! report comparison). The commands live
+//! `generate` (write a stand-in volume), `bench` (the timing tables, lever A/B and
+//! report comparison) and `precompute` (the ambient-scattering table). The commands live
 //! in `src/cli/`, one module each.
 
 mod cli;
@@ -11,7 +11,7 @@ use std::process::ExitCode;
 use anyhow::Result;
 use clap::Parser;
 
-use cli::args::{BenchCommand, Cli, Command};
+use cli::args::{BenchCommand, Cli, Command, PrecomputeCommand};
 use refrakt::vk::ContextDesc;
 
 fn main() -> ExitCode {
@@ -95,6 +95,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Bench(BenchCommand::Variants(args)) => cli::bench::bench_variants(&desc, &args),
         Command::Bench(BenchCommand::Compare(args)) => cli::bench::bench_compare(&args),
         Command::Bench(BenchCommand::Models(args)) => cli::bench::bench_models(&desc, &args),
+        Command::Precompute(PrecomputeCommand::Ambient(args)) => cli::precompute::ambient(&args),
     }
 }
 

@@ -76,6 +76,69 @@ pub enum Command {
     /// Ament et al.). GPU timestamps; see docs/BENCH.md.
     #[command(subcommand)]
     Bench(BenchCommand),
+    /// Precompute (and cache) tables the renderer reads; `precompute ambient` builds the
+    /// light-transport table of Ament et al.'s ambient volume scattering.
+    #[command(subcommand)]
+    Precompute(PrecomputeCommand),
+}
+
+#[derive(Subcommand)]
+pub enum PrecomputeCommand {
+    /// The preintegrated light-transport table of Ament et al., "Ambient Volume
+    /// Scattering" (sections 3.2 and 4.1), on the CPU by Monte Carlo, written to the
+    /// cache (or --out) and reused when it is there.
+    ///
+    /// For a homogeneous sphere of radius 1 (extinction s per radius, albedo Λ,
+    /// Henyey-Greenstein anisotropy g) lit by a collimated beam of unit irradiance along +z,
+    /// the table holds (a) 4π × the radiance scattered at the centre toward angle θ to the
+    /// beam from light already scattered at least once (the beam's single scattering is
+    /// added analytically), over θ × s × g (a 3D texture), and
+    /// (b) the irradiance at the far pole per unit incident irradiance, the direct beam
+    /// e^-2s included, over s × g (a 2D texture), each with its Monte-Carlo standard
+    /// error. Every entry uses the same random walks, so the table's noise is smooth and
+    /// the file is bit-identical for any thread count. Prints where the table is, whether
+    /// it was built or found, the build time and the largest standard errors.
+    Ambient(AmbientArgs),
+}
+
+#[derive(Args)]
+pub struct AmbientArgs {
+    /// Single-scattering albedo Λ of the medium, in [0, 1].
+    #[arg(long, default_value_t = 0.9, allow_negative_numbers = true)]
+    pub albedo: f32,
+    /// Nodes of the scattering angle θ over [0, π].
+    #[arg(long, default_value_t = 33)]
+    pub theta_bins: u32,
+    /// Nodes of the extinction s over [0, --s-max] (quadratic spacing).
+    #[arg(long, default_value_t = 48)]
+    pub extinction_bins: u32,
+    /// Nodes of the anisotropy g over [-0.99, 0.99].
+    #[arg(long, default_value_t = 23)]
+    pub g_bins: u32,
+    /// The largest extinction (per sphere radius); beyond it the table's last column is
+    /// used.
+    #[arg(long, default_value_t = 64.0, allow_negative_numbers = true)]
+    pub s_max: f32,
+    /// Random walks per entry.
+    #[arg(long, default_value_t = refrakt::render::ambient::table::TableParams::default().paths)]
+    pub paths: u32,
+    /// Seed of the random walks.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Worker threads [default: all cores].
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Cache folder. Default: $REFRAKT_CACHE_DIR, else $XDG_CACHE_HOME/refrakt, else
+    /// ~/.cache/refrakt.
+    #[arg(long, value_name = "DIR")]
+    pub cache_dir: Option<PathBuf>,
+    /// Write the table to FILE instead of the cache (and reuse FILE if it already holds
+    /// this table).
+    #[arg(long, value_name = "FILE")]
+    pub out: Option<PathBuf>,
+    /// Rebuild the table even if it is cached.
+    #[arg(long)]
+    pub force: bool,
 }
 
 #[derive(Subcommand)]

@@ -6,6 +6,7 @@ pub mod args;
 pub mod bench;
 pub mod info;
 pub mod photons;
+pub mod precompute;
 pub mod render;
 pub mod scene_args;
 pub mod view;

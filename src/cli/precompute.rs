@@ -1,0 +1,89 @@
+//! `refrakt precompute ambient`: build (or find) the ambient-scattering light-transport
+//! table and report its build time and Monte-Carlo errors.
+
+use std::io::IsTerminal;
+use std::process::ExitCode;
+
+use anyhow::Result;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+
+use refrakt::render::ambient::table::{self, Source, TableParams};
+
+use super::args::AmbientArgs;
+
+pub fn ambient(args: &AmbientArgs) -> Result<ExitCode> {
+    let params = TableParams {
+        albedo: args.albedo,
+        theta_bins: args.theta_bins,
+        s_bins: args.extinction_bins,
+        g_bins: args.g_bins,
+        s_max: args.s_max,
+        paths: args.paths,
+        seed: args.seed,
+    };
+    params.validate()?;
+    let threads = match args.threads {
+        Some(0) | None => std::thread::available_parallelism()
+            .map(|n| n.get())
+            .unwrap_or(1),
+        Some(n) => n,
+    };
+    let path = match &args.out {
+        Some(p) => p.clone(),
+        None => table::cache_dir(args.cache_dir.as_deref())?.join(params.file_name()),
+    };
+    let pb = if std::io::stderr().is_terminal() {
+        let pb = ProgressBar::with_draw_target(Some(0), ProgressDrawTarget::stderr());
+        pb.set_style(
+            ProgressStyle::with_template(
+                "{elapsed_precise} [{bar:30}] {pos}/{len} columns, ETA {eta}",
+            )
+            .expect("static template")
+            .progress_chars("=> "),
+        );
+        pb
+    } else {
+        ProgressBar::hidden()
+    };
+    let progress = |done: u64, total: u64| {
+        pb.set_length(total);
+        pb.set_position(done);
+    };
+    let (t, source) = table::load_or_build_file(&params, &path, args.force, threads, &progress)?;
+    pb.finish_and_clear();
+    let p = &t.params;
+    println!(
+        "ambient table: albedo {}, {} θ × {} s × {} g nodes, s_max {}, {} paths per entry, seed {}",
+        p.albedo, p.theta_bins, p.s_bins, p.g_bins, p.s_max, p.paths, p.seed
+    );
+    match &source {
+        Source::Cached(file) => {
+            println!("found cached: {}", file.display());
+            println!(
+                "(built earlier in {:.1} s; --force rebuilds it)",
+                t.build_seconds
+            );
+        }
+        Source::Built { seconds, written } => {
+            println!("built in {seconds:.1} s with {threads} threads");
+            match written {
+                Some(file) => println!("written: {}", file.display()),
+                None => println!("not written (see the warning above)"),
+            }
+        }
+    }
+    let e = t.errors();
+    println!(
+        "scattered: max {:.4e}; largest relative std error {:.2} % (entries above 1e-3 of \
+         the max), largest absolute std error {:.3e}",
+        e.scattered_max,
+        100.0 * e.scattered_rel,
+        e.scattered_abs
+    );
+    println!(
+        "transmission: largest relative std error {:.2} %, largest absolute std error {:.3e}",
+        100.0 * e.transmission_rel,
+        e.transmission_abs
+    );
+    Ok(ExitCode::SUCCESS)
+}
