@@ -1,7 +1,7 @@
 //! The ambient-scattering model (`--model ambient`, src/render/ambient) rendered on the GPU
 //! against what physics says it must do: where nothing scatters twice (albedo → 0) and the
 //! ambient sphere is small, it is single scattering (the closed-form integral of
-//! tests/single.rs, and the single model itself); light crossing empty space arrives
+//! tests/common, and the single model itself); light crossing empty space arrives
 //! undimmed whatever the radius (the tube's transmission is 1 there: the paper's eq. 16
 //! would dim it by p_HG(0)/4π per step); several lights add up (the model is linear in
 //! its lights: one radiance-cache channel each, point and directional); and a change
@@ -9,7 +9,7 @@
 
 mod common;
 
-use common::{constant_tf, f32_volume, face_on, with_context};
+use common::{constant_tf, f32_volume, face_on, single_scattering_block, with_context};
 use glam::Vec3;
 use refrakt::light::{ExtraLight, LightSource};
 use refrakt::render::ambient::table::{AmbientTable, TableParams};
@@ -48,32 +48,6 @@ fn options(towards: Vec3, g: f32, albedo: f32, radius: f32, size: u32) -> Render
     }
 }
 
-/// L / (light colour · albedo · colour) along the ray through the centre of the cube
-/// [-h, h]³ from +z, light from `towards` (unit, y, z ≥ 0), extinction `k` per world unit,
-/// phase 4π·p_HG: the single-scattering integral (as tests/single.rs).
-fn single_scattering(k: f64, h: f64, towards: [f64; 3], g: f64) -> f64 {
-    let exit = |t: f64| -> f64 {
-        let mut l = f64::INFINITY;
-        if towards[1] > 0.0 {
-            l = l.min(h / towards[1]);
-        }
-        if towards[2] > 0.0 {
-            l = l.min(t / towards[2]);
-        }
-        l
-    };
-    let n = 100_000;
-    let dt = 2.0 * h / n as f64;
-    let integral: f64 = (0..n)
-        .map(|i| {
-            let t = (i as f64 + 0.5) * dt;
-            k * (-k * t).exp() * (-k * exit(t)).exp() * dt
-        })
-        .sum();
-    let d = 1.0 + g * g + 2.0 * g * towards[2];
-    integral * (1.0 - g * g) / (d * d.sqrt())
-}
-
 #[test]
 fn without_multiple_scattering_a_small_sphere_is_single_scattering() {
     with_context(|ctx| {
@@ -91,7 +65,8 @@ fn without_multiple_scattering_a_small_sphere_is_single_scattering() {
                 .unwrap()
                 .pixel(16, 16)[1] as f64;
             let k = -(0.9f64).ln() * n as f64;
-            let want = albedo as f64 * single_scattering(k, 0.5, [0.0, t.y as f64, t.z as f64], g);
+            let want =
+                albedo as f64 * single_scattering_block(k, 0.5, [0.0, t.y as f64, t.z as f64], g);
             eprintln!(
                 "towards {towards:?} g {g}: ambient {got:.6}, single-scattering integral {want:.6} ({:+.2} %)",
                 100.0 * (got / want - 1.0)

@@ -172,3 +172,32 @@ pub fn environment_from(
     }
     EnvironmentMap::new(width, height, px, "test map").unwrap()
 }
+
+/// L / (light colour · albedo · colour) along the ray through the centre of the cube
+/// [-h, h]³ from +z (direction -z), light from `towards` (unit, y and z ≥ 0), extinction
+/// `k` per world unit, phase 4π·p_HG(cos θ; g): ∫₀^{2h} k e^{-k t} T_light(t) dt with
+/// T_light = e^{-k ℓ(t)}, ℓ the distance from (0, 0, h − t) along `towards` to the
+/// cube's face.
+pub fn single_scattering_block(k: f64, h: f64, towards: [f64; 3], g: f64) -> f64 {
+    let exit = |t: f64| -> f64 {
+        let mut l = f64::INFINITY;
+        if towards[1] > 0.0 {
+            l = l.min(h / towards[1]);
+        }
+        if towards[2] > 0.0 {
+            l = l.min(t / towards[2]);
+        }
+        l
+    };
+    let n = 200_000;
+    let dt = 2.0 * h / n as f64;
+    let integral: f64 = (0..n)
+        .map(|i| {
+            let t = (i as f64 + 0.5) * dt;
+            k * (-k * t).exp() * (-k * exit(t)).exp() * dt
+        })
+        .sum();
+    let cos = -towards[2]; // towards · (0, 0, -1)
+    let d = 1.0 + g * g - 2.0 * g * cos;
+    integral * (1.0 - g * g) / (d * d.sqrt())
+}

@@ -30,9 +30,9 @@ pub mod table;
 use anyhow::{ensure, Result};
 use bytemuck::{Pod, Zeroable};
 
-use super::ea::RayMarchPass;
+use super::ea::{delegate_to_march, RayMarchPass};
 use super::model::{Inputs, ModelPass, Recorded};
-use super::{FrameTarget, RenderOptions};
+use super::RenderOptions;
 use crate::light::{ExtraLight, LightSource};
 use crate::shaders;
 use crate::vk::{
@@ -355,13 +355,7 @@ impl AmbientPass {
 }
 
 impl ModelPass for AmbientPass {
-    fn fits(&self, opts: &RenderOptions) -> bool {
-        self.march.fits(opts)
-    }
-
-    fn output(&self) -> &FrameTarget {
-        self.march.output()
-    }
+    delegate_to_march!();
 
     fn record(&mut self, rec: &mut Recorder, inputs: &Inputs) -> Result<Recorded> {
         let (info, opts) = (inputs.info, inputs.opts);

@@ -16,10 +16,10 @@
 use anyhow::{ensure, Result};
 use bytemuck::{Pod, Zeroable};
 
-use super::ea::RayMarchPass;
+use super::ea::{delegate_to_march, RayMarchPass};
 use super::model::{Inputs, ModelPass, Recorded};
 use super::sat3d::Sat3d;
-use super::{FrameTarget, RenderOptions};
+
 use crate::shaders;
 use crate::vk::{
     self, Access, Binding, ComputePipeline, Context, DescriptorSet, Filter, Image, ImageDesc,
@@ -276,13 +276,7 @@ impl AoPass {
 }
 
 impl ModelPass for AoPass {
-    fn fits(&self, opts: &RenderOptions) -> bool {
-        self.march.fits(opts)
-    }
-
-    fn output(&self) -> &FrameTarget {
-        self.march.output()
-    }
+    delegate_to_march!();
 
     fn record(&mut self, rec: &mut Recorder, inputs: &Inputs) -> Result<Recorded> {
         let (info, opts) = (inputs.info, inputs.opts);

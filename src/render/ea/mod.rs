@@ -86,6 +86,22 @@ pub(super) fn check(model: super::Model, opts: &RenderOptions) -> Result<()> {
 /// What every ray-marched model's pass has: its parameter block, frame, descriptor set
 /// (bindings 0–4 as glsl/march.glsl's users declare them: params, volume, transfer
 /// functions, preintegration table, frame; then the model's own) and compute pipeline.
+/// `ModelPass::fits` and `ModelPass::output` of a pass that renders through its `march`
+/// field (a [`RayMarchPass`]): such a pass is remade exactly when its march must be, and
+/// its frame is the march's.
+macro_rules! delegate_to_march {
+    () => {
+        fn fits(&self, opts: &$crate::render::RenderOptions) -> bool {
+            self.march.fits(opts)
+        }
+
+        fn output(&self) -> &$crate::render::FrameTarget {
+            self.march.output()
+        }
+    };
+}
+pub(super) use delegate_to_march;
+
 pub(super) struct RayMarchPass {
     params: Buffer,
     output: FrameTarget,
@@ -195,13 +211,7 @@ impl EaPass {
 }
 
 impl ModelPass for EaPass {
-    fn fits(&self, opts: &RenderOptions) -> bool {
-        self.march.fits(opts)
-    }
-
-    fn output(&self) -> &FrameTarget {
-        self.march.output()
-    }
+    delegate_to_march!();
 
     fn record(&mut self, rec: &mut Recorder, inputs: &Inputs) -> Result<Recorded> {
         let (width, height) = self.march.size();

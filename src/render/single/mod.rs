@@ -16,9 +16,9 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
 use super::ao::Extinction;
-use super::ea::RayMarchPass;
+use super::ea::{delegate_to_march, RayMarchPass};
 use super::model::{Inputs, ModelPass, Recorded};
-use super::{FrameTarget, RenderOptions, VolumeInfo};
+use super::{RenderOptions, VolumeInfo};
 use crate::shaders;
 use crate::vk::{
     self, Access, Binding, ComputePipeline, Context, DescriptorSet, Image, ImageDesc, ImageKind,
@@ -164,13 +164,7 @@ fn transmittance<'a>(inputs: &Inputs<'a>) -> Result<&'a TransmittanceCache> {
 }
 
 impl ModelPass for SinglePass {
-    fn fits(&self, opts: &RenderOptions) -> bool {
-        self.march.fits(opts)
-    }
-
-    fn output(&self) -> &FrameTarget {
-        self.march.output()
-    }
+    delegate_to_march!();
 
     fn record(&mut self, rec: &mut Recorder, inputs: &Inputs) -> Result<Recorded> {
         let opts = inputs.opts;
