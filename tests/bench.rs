@@ -73,6 +73,8 @@ fn tiny_thesis_bench_has_the_documented_structure() {
         r.settings.variant,
         Some(refrakt::render::Levers::default().to_string())
     );
+    // No --light-transport: the scenes' own, forward.
+    assert_eq!(r.settings.light_transport.as_deref(), Some("forward"));
     let names: Vec<&str> = r.rows.iter().map(|r| r.dataset.as_str()).collect();
     assert_eq!(names, ["supernova", "kiwi"]);
     // Scale 0.05 of the thesis' resolutions (Table 6.1: supernova 432³, kiwi 256×256×128)
@@ -126,6 +128,39 @@ fn tiny_thesis_bench_has_the_documented_structure() {
         assert!(header.split(',').any(|c| c == col), "no {col} in {header}");
     }
     assert_eq!(lines.count(), 2 * 3 * 3);
+
+    // --light-transport backward reaches the sweep: the thesis' transport has no light
+    // rays and fetches other state, so its bytes per plane-pixel (counted from what the
+    // sweep ran) differ.
+    let back = dir.path().join("b.json");
+    let o = refrakt(&[
+        "bench",
+        "thesis",
+        "--scale",
+        "0.05",
+        "--frames",
+        "1",
+        "--warmup",
+        "0",
+        "--rows",
+        "kiwi",
+        "--light-transport",
+        "backward",
+        "--quiet",
+        "--json",
+        back.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("Light transport: backward."));
+    let b: Report = serde_json::from_str(&std::fs::read_to_string(&back).unwrap()).unwrap();
+    assert_eq!(b.settings.light_transport.as_deref(), Some("backward"));
+    let forward_kiwi = &r.rows[1];
+    assert!(
+        b.rows[0].bytes_per_plane_pixel != forward_kiwi.bytes_per_plane_pixel,
+        "backward {} B, forward {} B per plane-pixel",
+        b.rows[0].bytes_per_plane_pixel,
+        forward_kiwi.bytes_per_plane_pixel
+    );
 }
 
 #[test]
@@ -136,6 +171,7 @@ fn bad_bench_arguments_fail_before_any_work() {
         (vec!["--frames", "0"], "frames"),
         (vec!["--csv", "/no/such/folder/x.csv"], "does not exist"),
         (vec!["--json", "x.txt"], ".json"),
+        (vec!["--light-transport", "sideways"], "sideways"),
     ] {
         let mut a = vec!["bench", "thesis"];
         a.extend(&args);

@@ -418,6 +418,7 @@ fn thesis_report(scale: f64, rows: &[(&str, &str, Vec<f64>)]) -> Report {
             orbit_deg_per_frame: 0.5,
             rows: rows.iter().map(|r| r.0.to_string()).collect(),
             variant: Some(Levers::default().to_string()),
+            light_transport: Some("forward".into()),
         },
         rows: rows
             .iter()
@@ -625,6 +626,7 @@ fn variants_report(default: &[f64], reference: &[f64]) -> VariantsReport {
             ratio_to: "default".into(),
             image_reference: "reference".into(),
             image_reference_timed: true,
+            light_transport: Some("forward".into()),
         },
         rows: vec![VariantsRow {
             dataset: "kiwi".into(),
@@ -704,6 +706,39 @@ fn compare_refuses_reports_not_measured_alike() {
         "{out}"
     );
     assert!(line(&out, "Supernova", "refract").ends_with("| within noise |"));
+}
+
+#[test]
+fn compare_refuses_reports_of_different_light_transports() {
+    let dir = tempfile::tempdir().unwrap();
+    let rows = [("supernova", "Supernova", vec![100.0, 101.0, 99.0])];
+    let old = thesis_report(0.25, &rows);
+    let mut new = old.clone();
+    new.settings.light_transport = Some("backward".into());
+    let mut unrecorded = old.clone();
+    unrecorded.settings.light_transport = None;
+    let old = write(dir.path(), "old.json", &old);
+    let new = write(dir.path(), "new.json", &new);
+    let unrecorded = write(dir.path(), "unrecorded.json", &unrecorded);
+    let (op, np) = (old.to_str().unwrap(), new.to_str().unwrap());
+    let o = refrakt(&["bench", "compare", op, np]);
+    let (_, err) = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains(&format!(
+            "light transport forward in {op}, backward in {np}"
+        )),
+        "{err}"
+    );
+    // A report from before the transport was recorded compares, with a note.
+    let up = unrecorded.to_str().unwrap();
+    let o = refrakt(&["bench", "compare", up, op]);
+    let (out, err) = text(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        out.contains(&format!("{up} does not record its light transport")),
+        "{out}"
+    );
 }
 
 #[test]

@@ -197,6 +197,8 @@ struct Flat<'a> {
     warmup: u32,
     /// Variant names and their levers.
     levers: Vec<(String, String)>,
+    /// The sweep's light transport; None in reports from before it was recorded.
+    transport: Option<&'a str>,
     rows: Vec<FlatRow<'a>>,
 }
 
@@ -228,6 +230,7 @@ fn flatten(r: &AnyReport) -> Flat<'_> {
                     .clone()
                     .unwrap_or_else(|| "not recorded".into()),
             )],
+            transport: t.settings.light_transport.as_deref(),
             rows: t
                 .rows
                 .iter()
@@ -260,6 +263,7 @@ fn flatten(r: &AnyReport) -> Flat<'_> {
                 .iter()
                 .map(|s| (s.name.clone(), s.levers.clone()))
                 .collect(),
+            transport: v.settings.light_transport.as_deref(),
             rows: v
                 .rows
                 .iter()
@@ -344,6 +348,11 @@ pub fn compare(
         o.orbit.to_string(),
         n.orbit.to_string(),
     );
+    // The two transports are different algorithms (light rays and their splat, or the
+    // thesis' backward step): their times are not one figure's noise.
+    if let (Some(a), Some(b)) = (o.transport, n.transport) {
+        differ("light transport".into(), a.to_string(), b.to_string());
+    }
     for ro in &o.rows {
         let Some(rn) = n.rows.iter().find(|r| r.dataset == ro.dataset) else {
             continue;
@@ -392,6 +401,12 @@ pub fn compare(
         }
     }
     for (file, f) in [(&of, &o), (&nf, &n)] {
+        if f.transport.is_none() {
+            notes.push(format!(
+                "{file} does not record its light transport (a report from before \
+                 --light-transport): it ran the scenes' own"
+            ));
+        }
         if f.frames < 2 {
             notes.push(format!(
                 "{file} has one frame per figure: its spread is unknown (taken as 0), so \

@@ -14,7 +14,9 @@ use anyhow::{bail, ensure, Context as _, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::{Deserialize, Serialize};
 
-use crate::render::{upload, Camera, Frame, Levers, Model, RenderOptions, Renderer};
+use crate::render::{
+    upload, Camera, Frame, Levers, LightTransport, Model, RenderOptions, Renderer,
+};
 use crate::scene::{Scene, VolumeSource};
 use crate::vk::{self, Context};
 use crate::volume::standins::{self, Dataset, DATASETS};
@@ -41,6 +43,10 @@ pub struct ThesisSettings {
     pub progress: bool,
     /// The sweep's levers every row uses (the floor baseline too).
     pub levers: Levers,
+    /// The sweep's light transport for every row, replacing the scenes' own (`forward`,
+    /// the photon-faithful one); `backward` is the thesis' Algorithm 1, the method its
+    /// Tables 6.1 and 6.2 time.
+    pub light_transport: Option<LightTransport>,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -173,6 +179,11 @@ pub struct SettingsRecord {
     /// before `--variant` existed (they rendered that version's default).
     #[serde(default)]
     pub variant: Option<String>,
+    /// The light transport every row's sweep ran (`forward` | `backward`); absent in
+    /// reports from before `--light-transport` existed (they ran the scenes' own,
+    /// `forward`).
+    #[serde(default)]
+    pub light_transport: Option<String>,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -242,6 +253,10 @@ fn orbit(camera: &Camera, k: u32) -> Camera {
     }
 }
 
+/// A timed variant with the sweep's plane count and bytes per plane (of its last frame;
+/// None for a model without a sweep).
+type Timed = (Variant, Option<u32>, Option<u64>);
+
 /// One variant's frames as they come (warm-up apart), summarised by [`Collector::finish`].
 #[derive(Default)]
 struct Collector {
@@ -275,7 +290,7 @@ impl Collector {
     }
 
     /// The variant, with the sweep's plane count and bytes per plane (of the last frame).
-    fn finish(self, name: &str) -> Result<(Variant, Option<u32>, Option<u64>)> {
+    fn finish(self, name: &str) -> Result<Timed> {
         let mut passes = self.passes;
         let n = self.times.len().max(1) as f64;
         passes.setup_ms /= n;
@@ -299,25 +314,34 @@ impl Collector {
     }
 }
 
-/// Renders warm-up and measured frames of one variant, orbiting the camera.
-#[allow(clippy::too_many_arguments)]
-fn run_variant(
+/// Renders warm-up and measured frames of the variants `(name, model, options)`,
+/// interleaved (frame k of every variant before frame k + 1 of any, all at the same
+/// orbited camera), so that a swing in machine load hits them alike and their ratios
+/// stay fair: on lavapipe a short EA frame has read 4–5× its time while something else
+/// ran, for a whole sequential run of it. Returns each variant with the sweep's plane
+/// count and bytes per plane (of its last frame), in the given order.
+fn run_interleaved(
     renderer: &mut Renderer,
-    name: &str,
-    model: Model,
+    variants: &[(&str, Model, &RenderOptions)],
     camera: &Camera,
-    opts: &RenderOptions,
     warmup: u32,
     frames: u32,
     pb: &ProgressBar,
-) -> Result<(Variant, Option<u32>, Option<u64>)> {
-    let mut c = Collector::default();
+) -> Result<Vec<Timed>> {
+    let mut collectors: Vec<Collector> = variants.iter().map(|_| Collector::default()).collect();
     for k in 0..warmup + frames {
-        let f = renderer.render(model, &orbit(camera, k), opts)?;
-        pb.inc(1);
-        c.add(&f, k < warmup)?;
+        let cam = orbit(camera, k);
+        for ((_, model, opts), c) in variants.iter().zip(&mut collectors) {
+            let f = renderer.render(*model, &cam, opts)?;
+            pb.inc(1);
+            c.add(&f, k < warmup)?;
+        }
     }
-    c.finish(name)
+    collectors
+        .into_iter()
+        .zip(variants)
+        .map(|(c, (name, _, _))| c.finish(name))
+        .collect()
 }
 
 /// A thesis stand-in row's scene at `scale` (volume and viewport) and the thesis' sample
@@ -390,6 +414,16 @@ pub(crate) fn prepare_builtin(
     ))
 }
 
+/// What a report records as the rows' light transport: its name when every row ran the
+/// same, else "per scene".
+fn transport_record(t: &[LightTransport]) -> String {
+    match t.first() {
+        Some(f) if t.iter().all(|x| x == f) => f.name().to_string(),
+        Some(_) => "per scene".into(),
+        None => "none".into(),
+    }
+}
+
 /// Runs the thesis protocol on every selected row.
 pub fn thesis(ctx: &Context, s: &ThesisSettings) -> Result<Report> {
     ensure!(s.frames >= 1, "--frames must be at least 1");
@@ -399,6 +433,7 @@ pub fn thesis(ctx: &Context, s: &ThesisSettings) -> Result<Report> {
     let pb = progress_bar(total, s.progress);
     let side = scaled_side(s.scale);
     let mut out = Vec::new();
+    let mut transports = Vec::new();
     for d in rows {
         pb.set_message(format!("{}: preparing the volume", d.name));
         let (row, mut renderer) = prepare_row(ctx, d, s.scale, &s.data_dir)?;
@@ -411,50 +446,32 @@ pub fn thesis(ctx: &Context, s: &ThesisSettings) -> Result<Report> {
             ..
         } = row;
         opts.sweep.levers = s.levers;
+        if let Some(t) = s.light_transport {
+            opts.sweep.light_transport = t;
+        }
+        transports.push(opts.sweep.light_transport);
         pb.set_message(d.name.to_string());
-        let (refract, planes, bytes) = run_variant(
+        let mut floor_opts = opts.clone();
+        floor_opts.sweep.floor = true;
+        let mut variants = vec![("refract", Model::Refract, &opts)];
+        if s.baselines {
+            variants.push(("ea", Model::Ea, &opts));
+            variants.push(("floor", Model::Refract, &floor_opts));
+        }
+        let mut runs = run_interleaved(
             &mut renderer,
-            "refract",
-            Model::Refract,
+            &variants,
             &scene.camera,
-            &opts,
             s.warmup,
             s.frames,
             &pb,
-        )?;
+        )?
+        .into_iter();
+        let (refract, planes, bytes) = runs.next().context("the sweep was not timed")?;
         let planes = planes.context("the sweep reported no planes")?;
         let bytes = bytes.unwrap_or(0);
-        let (ea, floor) = if s.baselines {
-            pb.set_message(format!("{}: EA baseline", d.name));
-            let ea = run_variant(
-                &mut renderer,
-                "ea",
-                Model::Ea,
-                &scene.camera,
-                &opts,
-                s.warmup,
-                s.frames,
-                &pb,
-            )?
-            .0;
-            pb.set_message(format!("{}: floor baseline", d.name));
-            let mut fo = opts.clone();
-            fo.sweep.floor = true;
-            let floor = run_variant(
-                &mut renderer,
-                "floor",
-                Model::Refract,
-                &scene.camera,
-                &fo,
-                s.warmup,
-                s.frames,
-                &pb,
-            )?
-            .0;
-            (Some(ea), Some(floor))
-        } else {
-            (None, None)
-        };
+        let ea = runs.next().map(|r| r.0);
+        let floor = runs.next().map(|r| r.0);
         let pixels = side as f64 * side as f64;
         let sweep_s = refract.passes.sweep_ms / 1000.0;
         let plane_pixels_per_s = if sweep_s > 0.0 {
@@ -504,6 +521,7 @@ pub fn thesis(ctx: &Context, s: &ThesisSettings) -> Result<Report> {
             orbit_deg_per_frame: ORBIT_DEG_PER_FRAME,
             rows: out.iter().map(|r| r.dataset.clone()).collect(),
             variant: Some(s.levers.to_string()),
+            light_transport: Some(transport_record(&transports)),
         },
         rows: out,
     })

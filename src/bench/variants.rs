@@ -19,6 +19,8 @@ pub struct VariantsSettings {
     pub variants: Vec<Levers>,
     pub data_dir: PathBuf,
     pub progress: bool,
+    /// As [`ThesisSettings::light_transport`].
+    pub light_transport: Option<LightTransport>,
 }
 
 /// What `bench variants` times when no `--variant` is given: the reference, the default,
@@ -86,6 +88,9 @@ pub struct VariantsSettingsRecord {
     /// False when the reference was not among the variants and was rendered for the image
     /// comparison only.
     pub image_reference_timed: bool,
+    /// As the thesis report's: the light transport every row's sweep ran.
+    #[serde(default)]
+    pub light_transport: Option<String>,
 }
 
 /// A variant's image against the reference's, both tone mapped to display values in
@@ -216,9 +221,14 @@ pub fn variants(ctx: &Context, s: &VariantsSettings) -> Result<VariantsReport> {
     let pb = progress_bar(rows.len() as u64 * per_row, s.progress);
     let mut order = 0u64;
     let mut out = Vec::new();
+    let mut transports = Vec::new();
     for d in rows {
         pb.set_message(format!("{}: preparing the volume", d.name));
-        let (row, mut renderer) = prepare_row(ctx, d, s.scale, &s.data_dir)?;
+        let (mut row, mut renderer) = prepare_row(ctx, d, s.scale, &s.data_dir)?;
+        if let Some(t) = s.light_transport {
+            row.opts.sweep.light_transport = t;
+        }
+        transports.push(row.opts.sweep.light_transport);
         let tone = row.scene.tone_map()?;
         let opts: Vec<RenderOptions> = list
             .iter()
@@ -346,6 +356,7 @@ pub fn variants(ctx: &Context, s: &VariantsSettings) -> Result<VariantsReport> {
                 .map(|r| names[r].clone())
                 .unwrap_or_else(|| variant_name(Levers::REFERENCE)),
             image_reference_timed: reference.is_some(),
+            light_transport: Some(transport_record(&transports)),
         },
         rows: out,
     })
@@ -372,8 +383,14 @@ pub fn variants_markdown(r: &VariantsReport) -> String {
     s += &format!(
         "Protocol: viewport {}² × scale {}, sample distance {}, {} frames after {} warm-up per \
          variant, interleaved (frame k of every variant before frame k+1 of any), camera \
-         orbiting {}°/frame; GPU timestamps of the whole frame.\n\n",
-        THESIS_VIEWPORT, st.scale, st.sample_distance, st.frames, st.warmup, st.orbit_deg_per_frame
+         orbiting {}°/frame; GPU timestamps of the whole frame. Light transport: {}.\n\n",
+        THESIS_VIEWPORT,
+        st.scale,
+        st.sample_distance,
+        st.frames,
+        st.warmup,
+        st.orbit_deg_per_frame,
+        st.light_transport.as_deref().unwrap_or("not recorded")
     );
     s += "Variants (in the order each frame renders them):\n\n";
     for v in &st.variants {

@@ -28,14 +28,15 @@ pub fn markdown(r: &Report) -> String {
     let mut s = device_line(&r.meta);
     s += &format!(
         "Protocol: viewport {}² × scale {} , sample distance {}, {} frames after {} warm-up, camera orbiting {}°/frame; GPU timestamps of the whole frame.\n\
-         Sweep variant: {}.\n\n",
+         Sweep variant: {}. Light transport: {}.\n\n",
         THESIS_VIEWPORT,
         r.settings.scale,
         r.settings.sample_distance,
         r.settings.frames,
         r.settings.warmup,
         r.settings.orbit_deg_per_frame,
-        r.settings.variant.as_deref().unwrap_or("not recorded")
+        r.settings.variant.as_deref().unwrap_or("not recorded"),
+        r.settings.light_transport.as_deref().unwrap_or("not recorded")
     );
     s += "| Dataset | Thesis resolution | Ours | Viewport | Planes | Thesis ms | Thesis FPS | Thesis GPU | Mean ms | FPS | Median | Min | Max | Std-dev |\n";
     s += "|---|---|---|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|\n";

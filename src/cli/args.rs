@@ -4,11 +4,15 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
-use refrakt::render::Levers;
+use refrakt::render::{Levers, LightTransport};
 
 /// `--variant`'s value: the sweep's levers (`Levers::parse`).
 fn parse_variant(s: &str) -> Result<Levers, String> {
     Levers::parse(s).map_err(|e| format!("{e:#}"))
+}
+
+fn parse_transport(s: &str) -> Result<LightTransport, String> {
+    LightTransport::parse(s).map_err(|e| format!("{e:#}"))
 }
 
 /// `--variant`'s help, with the syntax `Levers` accepts.
@@ -244,6 +248,13 @@ pub struct ThesisArgs {
             recorded in the report [default: default].")
     )]
     pub variant: Option<Levers>,
+    /// The sweep's light transport on every row, instead of the scenes' own (forward):
+    /// "backward" is the thesis' Algorithm 1, the method its Tables 6.1 and 6.2 time;
+    /// "forward" traces light rays and splats their flux (caustics where geometric optics
+    /// puts them), a different algorithm at several times the cost. Recorded in the
+    /// report; `bench compare` refuses to compare reports of different transports.
+    #[arg(long, value_name = "forward|backward", value_parser = parse_transport)]
+    pub light_transport: Option<LightTransport>,
     /// No progress bar on stderr.
     #[arg(long)]
     pub quiet: bool,
@@ -284,6 +295,13 @@ pub struct VariantsArgs {
     /// Write the whole report as JSON (schema refrakt-bench-variants/1, docs/BENCH.md).
     #[arg(long, value_name = "FILE.json")]
     pub json: Option<PathBuf>,
+    /// The sweep's light transport on every row, instead of the scenes' own (forward):
+    /// "backward" is the thesis' Algorithm 1, the method its Tables 6.1 and 6.2 time;
+    /// "forward" traces light rays and splats their flux (caustics where geometric optics
+    /// puts them), a different algorithm at several times the cost. Recorded in the
+    /// report; `bench compare` refuses to compare reports of different transports.
+    #[arg(long, value_name = "forward|backward", value_parser = parse_transport)]
+    pub light_transport: Option<LightTransport>,
     /// No progress bar on stderr.
     #[arg(long)]
     pub quiet: bool,

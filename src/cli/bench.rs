@@ -60,6 +60,7 @@ pub fn bench_thesis(desc: &ContextDesc, args: &ThesisArgs) -> Result<ExitCode> {
         data_dir: args.data_dir.clone().unwrap_or_else(scene::data_dir),
         progress: !args.quiet,
         levers: args.variant.unwrap_or_default(),
+        light_transport: args.light_transport,
     };
     let report = refrakt::bench::thesis(&ctx, &settings)?;
     print!("{}", refrakt::bench::markdown(&report));
@@ -98,6 +99,7 @@ pub fn bench_variants(desc: &ContextDesc, args: &VariantsArgs) -> Result<ExitCod
         variants: args.variant.clone(),
         data_dir: args.data_dir.clone().unwrap_or_else(scene::data_dir),
         progress: !args.quiet,
+        light_transport: args.light_transport,
     };
     let report = refrakt::bench::variants(&ctx, &settings)?;
     print!("{}", refrakt::bench::variants_markdown(&report));
