@@ -114,7 +114,7 @@ refrakt view keys:
   - / =             refractive-index scale - / +
   , / .             sample distance - / + (finer / coarser)
   ; / '             specular roughness - / +
-  M                 model: refract / ea
+  M                 model: refract > ea > ao > single > ambient (cycles)
   C                 clipping plane on / off
   R                 reload the scene and transfer-function files (also automatic on change)
   P                 screenshot (PNG as shown + linear EXR)
