@@ -226,71 +226,26 @@ pub fn check_output(path: &Path, ext: &str) -> Result<()> {
 /// Bar chart of the thesis' mean frame time beside ours per row (log scale: on lavapipe
 /// the two differ by orders of magnitude), as SVG.
 pub fn plot_svg(r: &Report, path: &Path) -> Result<()> {
-    use plotters::prelude::*;
-    let err = |e: &dyn std::fmt::Display| anyhow::anyhow!("{}: plotting: {e}", path.display());
-    let n = r.rows.len();
-    ensure!(n > 0, "no rows to plot");
-    let all: Vec<f64> = r
-        .rows
-        .iter()
-        .flat_map(|row| [row.thesis.ms, row.refract.stats.mean])
-        .collect();
-    let lo = all.iter().cloned().fold(f64::INFINITY, f64::min) / 2.0;
-    let hi = all.iter().cloned().fold(0.0, f64::max) * 2.0;
-    let root = SVGBackend::new(path, (120 * n as u32 + 160, 480)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| err(&e))?;
+    let groups: Vec<String> = r.rows.iter().map(|row| row.title.clone()).collect();
+    let series = [
+        BarSeries {
+            label: "thesis (GTX 1070 / 980)".into(),
+            values: r.rows.iter().map(|row| Some(row.thesis.ms)).collect(),
+        },
+        BarSeries {
+            label: "ours".into(),
+            values: r
+                .rows
+                .iter()
+                .map(|row| Some(row.refract.stats.mean))
+                .collect(),
+        },
+    ];
     let caption = format!(
         "Mean frame time, thesis GPU vs {} (scale {})",
         r.meta.device, r.settings.scale
     );
-    let mut chart = ChartBuilder::on(&root)
-        .caption(caption, ("sans-serif", 18))
-        .margin(12)
-        .x_label_area_size(40)
-        .y_label_area_size(70)
-        .build_cartesian_2d(0f64..n as f64, (lo..hi).log_scale())
-        .map_err(|e| err(&e))?;
-    let names: Vec<String> = r.rows.iter().map(|row| row.title.clone()).collect();
-    chart
-        .configure_mesh()
-        .disable_x_mesh()
-        .x_labels(n)
-        .x_label_formatter(&|x| {
-            let i = x.floor() as usize;
-            names.get(i).cloned().unwrap_or_default()
-        })
-        .y_desc("ms per frame (log)")
-        .draw()
-        .map_err(|e| err(&e))?;
-    let thesis = RGBColor(120, 120, 120);
-    let ours = RGBColor(200, 80, 40);
-    chart
-        .draw_series(r.rows.iter().enumerate().map(|(i, row)| {
-            let x = i as f64;
-            Rectangle::new([(x + 0.15, lo), (x + 0.48, row.thesis.ms)], thesis.filled())
-        }))
-        .map_err(|e| err(&e))?
-        .label("thesis (GTX 1070 / 980)")
-        .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 10, y + 5)], thesis.filled()));
-    chart
-        .draw_series(r.rows.iter().enumerate().map(|(i, row)| {
-            let x = i as f64;
-            Rectangle::new(
-                [(x + 0.52, lo), (x + 0.85, row.refract.stats.mean)],
-                ours.filled(),
-            )
-        }))
-        .map_err(|e| err(&e))?
-        .label("ours")
-        .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 10, y + 5)], ours.filled()));
-    chart
-        .configure_series_labels()
-        .border_style(BLACK)
-        .background_style(WHITE)
-        .draw()
-        .map_err(|e| err(&e))?;
-    root.present().map_err(|e| err(&e))?;
-    Ok(())
+    plot_grouped_bars(path, &caption, "ms per frame (log)", &groups, &series)
 }
 
 /// One series of [`plot_grouped_bars`]: its legend and one value per group (None: no bar).
@@ -309,6 +264,7 @@ pub(crate) fn plot_grouped_bars(
     series: &[BarSeries],
 ) -> Result<()> {
     use plotters::prelude::*;
+    use plotters::style::text_anchor::{HPos, Pos, VPos};
     let err = |e: &dyn std::fmt::Display| anyhow::anyhow!("{}: plotting: {e}", path.display());
     let n = groups.len();
     ensure!(n > 0 && !series.is_empty(), "nothing to plot");
@@ -319,7 +275,10 @@ pub(crate) fn plot_grouped_bars(
         .collect();
     ensure!(!all.is_empty(), "no positive values to plot");
     let lo = all.iter().cloned().fold(f64::INFINITY, f64::min) / 2.0;
-    let hi = all.iter().cloned().fold(0.0, f64::max) * 2.0;
+    // The bars fill the lower 70 % of the (log) axis; the legend sits in the rest, where
+    // no bar reaches (drawn over the tallest group's bars, it hid them).
+    let top = all.iter().cloned().fold(0.0, f64::max) * 2.0;
+    let hi = lo * (top / lo).powf(1.0 / 0.7);
     let width = (40 * series.len() as u32 + 40) * n as u32 + 160;
     let root = SVGBackend::new(path, (width.max(480), 480)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| err(&e))?;
@@ -330,17 +289,24 @@ pub(crate) fn plot_grouped_bars(
         .y_label_area_size(70)
         .build_cartesian_2d(0f64..n as f64, (lo..hi).log_scale())
         .map_err(|e| err(&e))?;
+    // Group names centred under their bars, drawn by hand: the axis' own labels sit at
+    // tick positions plotters chooses (group boundaries), which left a group unnamed.
     chart
         .configure_mesh()
         .disable_x_mesh()
-        .x_labels(n)
-        .x_label_formatter(&|x| {
-            let i = x.floor() as usize;
-            groups.get(i).cloned().unwrap_or_default()
-        })
+        .x_labels(0)
         .y_desc(y_desc)
         .draw()
         .map_err(|e| err(&e))?;
+    let label_style = ("sans-serif", 12)
+        .into_font()
+        .into_text_style(&root)
+        .pos(Pos::new(HPos::Center, VPos::Top));
+    for (i, g) in groups.iter().enumerate() {
+        let (x, y) = chart.backend_coord(&(i as f64 + 0.5, lo));
+        root.draw(&Text::new(g.clone(), (x, y + 8), label_style.clone()))
+            .map_err(|e| err(&e))?;
+    }
     const PALETTE: [RGBColor; 6] = [
         RGBColor(120, 120, 120),
         RGBColor(200, 80, 40),
@@ -368,10 +334,78 @@ pub(crate) fn plot_grouped_bars(
     }
     chart
         .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
         .border_style(BLACK)
         .background_style(WHITE)
         .draw()
         .map_err(|e| err(&e))?;
     root.present().map_err(|e| err(&e))?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The numbers of every `<rect x=.. y=.. width=.. height=..` in an SVG as [x, y, w, h].
+    fn rects(svg: &str) -> Vec<[f64; 4]> {
+        svg.lines()
+            .filter(|l| l.starts_with("<rect "))
+            .map(|l| {
+                ["x", "y", "width", "height"].map(|k| {
+                    let at = l.find(&format!(" {k}=\"")).unwrap() + k.len() + 3;
+                    l[at..at + l[at..].find('"').unwrap()].parse().unwrap()
+                })
+            })
+            .collect()
+    }
+
+    #[test]
+    fn grouped_bars_name_every_group_under_its_bars_and_keep_the_legend_off_them() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("c.svg");
+        let groups = ["Alpha".to_string(), "Beta".to_string()];
+        let series: Vec<BarSeries> = [[20.0, 100.0], [5000.0, 9000.0], [60.0, 2.0]]
+            .iter()
+            .enumerate()
+            .map(|(j, v)| BarSeries {
+                label: format!("series{j}"),
+                values: v.iter().map(|x| Some(*x)).collect(),
+            })
+            .collect();
+        plot_grouped_bars(&path, "caption", "ms", &groups, &series).unwrap();
+        let svg = std::fs::read_to_string(&path).unwrap();
+        let all = rects(&svg);
+        // The background, then 3 series × 2 groups of bars, then the legend's box.
+        let bars = &all[1..7];
+        let legend = all[7];
+        for (i, g) in groups.iter().enumerate() {
+            let at = svg.find(&format!(">\n{g}\n</text>")).expect(g);
+            let open = svg[..at].rfind("<text x=\"").unwrap() + 9;
+            let x: f64 = svg[open..open + svg[open..].find('"').unwrap()]
+                .parse()
+                .unwrap();
+            // Group i's bars are i, i + 2, i + 4 (series by series).
+            let left = (0..3).map(|j| bars[i + 2 * j][0]).fold(f64::MAX, f64::min);
+            let right = (0..3)
+                .map(|j| bars[i + 2 * j][0] + bars[i + 2 * j][2])
+                .fold(0.0, f64::max);
+            assert!(
+                left < x && x < right,
+                "{g} at {x}, its bars {left}..{right}"
+            );
+            assert!(
+                ((left + right) / 2.0 - x).abs() < 0.05 * (right - left),
+                "{g} at {x} is not centred under {left}..{right}"
+            );
+        }
+        let legend_bottom = legend[1] + legend[3];
+        for b in bars {
+            let overlaps_x = b[0] < legend[0] + legend[2] && legend[0] < b[0] + b[2];
+            assert!(
+                !overlaps_x || b[1] > legend_bottom,
+                "the legend {legend:?} covers the bar {b:?}"
+            );
+        }
+    }
 }
