@@ -619,3 +619,108 @@ fn highlights_on_glass_have_no_rings() {
         assert!(worst <= 0.02, "highlight rings: {:.2} %", 100.0 * worst);
     });
 }
+
+/// Unpolarised Fresnel reflectance of a face between η 1 and `n` at `angle_deg` from its
+/// normal (the textbook s and p amplitudes, in f64: independent of the shader's form).
+fn fresnel_air_to(n: f64, angle_deg: f64) -> f64 {
+    let ci = angle_deg.to_radians().cos();
+    let si = angle_deg.to_radians().sin();
+    let ct = (1.0 - (si / n).powi(2)).sqrt();
+    let rs = (ci - n * ct) / (ci + n * ct);
+    let rp = (ct - n * ci) / (ct + n * ci);
+    0.5 * (rs * rs + rp * rp)
+}
+
+/// The demo's striped shadow (docs/NOTES.md): a skin of glass thinner than the plane
+/// spacing (η 1.5 over 0.3 voxels, as where an opaque floor's value ramp crosses a
+/// glass's η band) above a black opaque floor, seen 60° and 75° from its normal against
+/// a white background, so that all the floor shows is the skin's reflection. At sample
+/// distance 0.5 and 0.25 it must be the same on every row (within 2 %, detrended as for
+/// the lit floor) and equal to its two faces' reflection, 1 − (1 − F)² with F the Fresnel
+/// reflectance at that angle (within 3 %). Measured (60° / 75°): levels equal to 4
+/// digits; row to row 1.04 / 0.47 % at sample distance 0.5, 0.01 / 0.41 % at 0.25.
+/// Before the film search the face test saw the skin only where a plane sample landed
+/// inside it: 5.8 / 4.0 % and 7.9 / 7.4 %. Sample distance 1 is printed, not asserted, a
+/// known gap: 29 / 106 % (before: 132 / 233 %).
+#[test]
+fn a_thin_skin_of_glass_reflects_alike_wherever_the_planes_fall() {
+    with_context(|ctx| {
+        let n = 64u32;
+        let vol = f32_volume(n, |p| 0.5 + (-0.2 - p[1]) * n as f32);
+        let tf = TransferFunctions {
+            colour: Piecewise::new(vec![(0.0, [0.0, 0.0, 0.0]), (1.0, [0.0, 0.0, 0.0])]),
+            opacity: Piecewise::new(vec![(0.0, [0.0]), (0.75, [0.0]), (0.85, [1.0])]),
+            eta: Piecewise::new(vec![
+                (0.0, [1.0]),
+                (0.34, [1.0]),
+                (0.35, [1.5]),
+                (0.65, [1.5]),
+                (0.66, [1.0]),
+                (1.0, [1.0]),
+            ]),
+            ..Default::default()
+        };
+        let mut failures = Vec::new();
+        for angle in [60.0f32, 75.0] {
+            for sd in [1.0f32, 0.5, 0.25] {
+                let cam = Camera {
+                    azimuth: 0.0,
+                    elevation: 90.0 - angle,
+                    distance: 2.0,
+                    fov_y: 2.0
+                        * (0.3 * (90.0 - angle).to_radians().sin() / 2.0)
+                            .atan()
+                            .to_degrees(),
+                    target: Vec3::new(0.0, -0.2, 0.0),
+                };
+                let (w, h) = (96u32, 96u32);
+                let mut opts = RenderOptions {
+                    width: w,
+                    height: h,
+                    sample_distance: sd,
+                    background: [1.0, 1.0, 1.0, 1.0],
+                    ..Default::default()
+                };
+                opts.sweep.specular = 0.0;
+                let mut r = Renderer::new(ctx, &vol, &tf).unwrap();
+                let f = r.render(Model::Refract, &cam, &opts).unwrap();
+                // The floor's rows: opaque (the floor stops every ray) over the central
+                // half of the columns.
+                let rows: Vec<(f64, f64)> = (0..h)
+                    .filter(|&y| (w / 4..3 * w / 4).all(|x| f.pixel(x, y)[3] > 0.99))
+                    .map(|y| {
+                        let s: f64 = (w / 4..3 * w / 4).map(|x| f.pixel(x, y)[0] as f64).sum();
+                        (y as f64, s / (w / 2) as f64)
+                    })
+                    .collect();
+                assert!(rows.len() > 40, "too few floor rows ({})", rows.len());
+                let (rel, _, max_rel) = detrended_row_to_row(&rows);
+                // The centre rows are seen at very nearly `angle`.
+                let centre = rows[rows.len() / 2 - 2..rows.len() / 2 + 2]
+                    .iter()
+                    .map(|p| p.1)
+                    .sum::<f64>()
+                    / 4.0;
+                let fr = fresnel_air_to(1.5, angle as f64);
+                let want = 1.0 - (1.0 - fr) * (1.0 - fr);
+                println!(
+                    "skin at {angle}°, sample distance {sd}: level {centre:.4} (two faces' \
+                     {want:.4}), row to row {:.3} % (max {:.3} %)",
+                    100.0 * rel,
+                    100.0 * max_rel
+                );
+                // Known gap (docs/NOTES.md): at sample distance 1 a skin of 0.3 voxels still
+                // reflects once instead of twice on some rows (row to row 29 % at 60°,
+                // 106 % at 75°); measured and printed, not yet asserted.
+                if sd < 1.0 && (rel > 0.02 || (centre / want - 1.0).abs() > 0.03) {
+                    failures.push(format!(
+                        "{angle}° sd {sd}: level {centre:.4} against {want:.4}, row to row \
+                         {:.2} %",
+                        100.0 * rel
+                    ));
+                }
+            }
+        }
+        assert!(failures.is_empty(), "{}", failures.join("\n"));
+    });
+}
