@@ -13,6 +13,21 @@ use refrakt::render::{
 use refrakt::transfer::{Piecewise, TransferFunctions};
 use refrakt::vk::Context;
 
+/// A camera on the floor of the tests below (its top at world y = -0.2), `angle` degrees
+/// from its normal, seeing the top surface only, about ±0.3 around the target along it.
+fn floor_camera(angle: f32) -> Camera {
+    Camera {
+        azimuth: 0.0,
+        elevation: 90.0 - angle,
+        distance: 2.0,
+        fov_y: 2.0
+            * (0.3 * (90.0 - angle).to_radians().sin() / 2.0)
+                .atan()
+                .to_degrees(),
+        target: Vec3::new(0.0, -0.2, 0.0),
+    }
+}
+
 /// A flat opaque white floor (its top at world y = -0.2, a one-voxel ramp) lit from
 /// straight above, seen `angle` degrees from its normal. Returns the detrended row-to-row
 /// variation of the lit floor's brightness, relative to its level: the RMS of the
@@ -44,17 +59,7 @@ fn floor_banding(
         opacity: Piecewise::new(opacity),
         ..Default::default()
     };
-    let cam = Camera {
-        azimuth: 0.0,
-        elevation: 90.0 - angle,
-        distance: 2.0,
-        // The top surface only, about ±0.3 around the target along the floor.
-        fov_y: 2.0
-            * (0.3 * (90.0 - angle).to_radians().sin() / 2.0)
-                .atan()
-                .to_degrees(),
-        target: Vec3::new(0.0, -0.2, 0.0),
-    };
+    let cam = floor_camera(angle);
     let (w, h) = (96u32, 96u32);
     let mut opts = RenderOptions {
         width: w,
@@ -663,16 +668,7 @@ fn a_thin_skin_of_glass_reflects_alike_wherever_the_planes_fall() {
         let mut failures = Vec::new();
         for angle in [60.0f32, 75.0] {
             for sd in [1.0f32, 0.5, 0.25] {
-                let cam = Camera {
-                    azimuth: 0.0,
-                    elevation: 90.0 - angle,
-                    distance: 2.0,
-                    fov_y: 2.0
-                        * (0.3 * (90.0 - angle).to_radians().sin() / 2.0)
-                            .atan()
-                            .to_degrees(),
-                    target: Vec3::new(0.0, -0.2, 0.0),
-                };
+                let cam = floor_camera(angle);
                 let (w, h) = (96u32, 96u32);
                 let mut opts = RenderOptions {
                     width: w,
