@@ -141,11 +141,6 @@ float specular_term(vec3 n, vec3 l, vec3 v, float eta_ratio) {
 // Smallest change of eta treated as a face of glass (reflection, highlight): below it,
 // noise in a medium (see the viewing rays).
 const float MIN_FACE_STEP = 0.02;
-// A film of glass thinner than a segment (see the viewing rays): found by this many samples
-// inside the segment, and only where eta rises by at least FILM_MIN_STEP above both plane
-// samples (noise in a medium wobbles less; a skin of glass in air rises by 0.3 or more).
-const int FILM_SAMPLES = 3;
-const float FILM_MIN_STEP = 0.1;
 
 // The light chained through a surface's skin (see the viewing rays below), kept in the
 // medium buffer's .w: 0 = none; else 64 q + 32 + log2(luminance), q = the skin depth
@@ -452,7 +447,6 @@ void main() {
         float d_eta = eta_here - vd4.w;
         bool reflections = HAVE_REFLECTIONS && P.refraction.y > 0.5;
         bool specular = HAVE_SPECULAR && P.specular.y > 0.0 && !unlit;
-        bool face = false;
         if (abs(d_eta) > 1e-4 && (reflections || specular)) {
             vec3 mid = vp - 0.5 * seg_len * dir;
             vec3 g = n_here;   // the face's orientation (see below)
@@ -461,28 +455,12 @@ void main() {
             float h = 0.5 * seg_len + 2.5 * ref_step;
             float eta_lo = min(min(eta_here, vd4.w), eta_of(value_at_tex(to_tex(mid - h * n))));
             float eta_hi = max(max(eta_here, vd4.w), eta_of(value_at_tex(to_tex(mid + h * n))));
-            // A skin thinner than the probes (both probes in the medium around it) has its
-            // plateau within half a reference step of the plane sample inside it, which
-            // may have landed on its ramp: the step is skin to surroundings, not ramp to
-            // surroundings (else F, and the reflection, depended on where the plane fell).
-            // Along the normal there: in the air beside a skin the gradient at vp may
-            // vanish (n falls back to the ray's direction, which crosses a skin at a
-            // grazing view in a fraction of a reference step).
-            vec3 p_in = eta_here > vd4.w ? vp : vp - dir * seg_len;
-            vec3 g_in = surface_gradient(p_in);
-            vec3 n_in = dot(g_in, g_in) > 1e-12 ? normalize(g_in) : n;
-            for (int k = -2; k <= 2; ++k) {
-                if (k == 0) continue;
-                vec3 q = p_in + (0.25 * float(k) * ref_step) * n_in;
-                eta_hi = max(eta_hi, eta_of(value_at_tex(to_tex(q))));
-            }
             float eta_mid = 0.5 * (eta_lo + eta_hi);
             // A face is a step of at least MIN_FACE_STEP: in noise (a scanned or
             // simulated medium) eta wobbles about its plateau and the smoothed gradient
             // points anywhere, so a wobble seen at a grazing angle to that random normal
             // reflected nearly everything (white speckles through red wine, measured).
             if ((vd4.w < eta_mid) != (eta_here < eta_mid) && eta_hi - eta_lo >= MIN_FACE_STEP) {
-                face = true;
                 // The angle of incidence on the face's low-eta side, from the tangential
                 // part of v = eta dx/ds, which crossing the face keeps (Snell); the ray's
                 // own direction is already partly turned inside the ramp. F is the same
@@ -535,41 +513,6 @@ void main() {
                     float ratio = entering ? eta_hi / eta_lo : eta_lo / eta_hi;
                     i_s = P.specular.y * specular_term(nv, -l_face, v, ratio) * i_face;
                 }
-            }
-        }
-        if (!face && reflections) {
-            // A film: eta rises and falls back inside this segment, above both plane
-            // samples (a skin of glass thinner than the plane spacing, as where the
-            // demo floor's value ramp crosses the glass's eta band). The face test above
-            // sees such a skin only where a plane sample lands inside it, which the planes
-            // do row after row by turns: at a grazing view its reflection striped the
-            // floor at the plane spacing (docs/NOTES.md). Samples inside the segment find
-            // it wherever the planes fall, and it reflects once for its two faces:
-            // 1 - (1 - F)^2, what the face test's two reflections composite to where a
-            // plane sample does land inside (the rows must agree; the incoherent sum with
-            // inter-reflection, 2F / (1 + F), is 2-8 % less at F 0.05-0.2). FILM_MIN_STEP
-            // keeps noise in a medium out (the face test's MIN_FACE_STEP alone let it
-            // speckle).
-            float eta_end = max(eta_here, vd4.w);
-            float eta_film = eta_end;
-            vec3 front = vp - dir * seg_len;
-            vec3 p_film = vp;
-            for (int k = 1; k <= FILM_SAMPLES; ++k) {
-                vec3 q = front + dir * (seg_len * float(k) / float(FILM_SAMPLES + 1));
-                float e = eta_of(value_at_tex(to_tex(q)));
-                if (e > eta_film) {
-                    eta_film = e;
-                    p_film = q;
-                }
-            }
-            if (eta_film - eta_end >= FILM_MIN_STEP) {
-                // The skin's own normal (at vp, in the air beside it, there may be none).
-                vec3 g = surface_gradient(p_film);
-                vec3 n = dot(g, g) > 1e-12 ? normalize(g) : dir;
-                float f = fresnel(abs(dot(dir, n)), eta_film / min(eta_here, vd4.w));
-                float r = 1.0 - (1.0 - f) * (1.0 - f);
-                C += (1.0 - A) * M * r * environment_radiance(reflect(dir, n));
-                A += (1.0 - A) * r;
             }
         }
         // Oddy-Willis compositing (eq. 4.13): the medium factor once, specular not
