@@ -18,6 +18,11 @@
 //    sub-segment: 2e-3 for a step from m = 1 to 0.3, measured);
 // The colour sample sits at the sub-segment's midpoint, and its particles see the medium
 // up to the middle of their own sub-segment.
+//
+// Layer 2 is not an integral: the extremes of eta over the values between front and
+// back, (largest eta, the value where it peaks, smallest eta, the value of that dip). The
+// sweep uses it to find films of glass that a value ramp crosses between two samples
+// (sweep_plane.glsl, "films"). For a plateau the value is its middle.
 #extension GL_GOOGLE_include_directive : require
 #include "common.glsl"
 
@@ -71,6 +76,32 @@ vec3 eval_tf(uint f, float s, inout int cursor) {
     return mix(a.yzw, b.yzw, t);
 }
 
+// Largest (sign 1) or smallest (sign -1) eta over [lo, hi] and the middle of where it
+// is attained. eta is piecewise linear, so its extremes lie at the interval's ends or at
+// control points inside it.
+vec2 eta_extreme(float lo, float hi, float sign) {
+    uint off = tf.offset[3];
+    int n = int(tf.count[3]);
+    if (n == 0) return vec2(1.0, 0.5 * (lo + hi));   // no eta function: vacuum
+    int cursor = locate(3u, lo);
+    float best = sign * eval_tf(3u, lo, cursor).x;
+    float first = lo, last = lo;
+    for (int k = 0; k <= n; ++k) {
+        // The control points strictly inside (lo, hi), then hi itself.
+        float s = k < n ? tf.points[off + uint(k)].x : hi;
+        if (k < n && !(s > lo && s < hi)) continue;
+        float e = sign * (k < n ? tf.points[off + uint(k)].y : eval_tf(3u, hi, cursor).x);
+        if (e > best + 1e-6) {
+            best = e;
+            first = s;
+            last = s;
+        } else if (e >= best - 1e-6) {
+            last = s;
+        }
+    }
+    return vec2(sign * best, 0.5 * (first + last));
+}
+
 void main() {
     uvec2 id = gl_GlobalInvocationID.xy;
     if (any(greaterThanEqual(id, uvec2(PREINT_SIZE)))) return;
@@ -116,4 +147,6 @@ void main() {
     }
     imageStore(table, ivec3(id, 0), vec4(C, 1.0 - exp(-tau)));
     imageStore(table, ivec3(id, 1), vec4(exp(ln_m), 1.0));
+    float lo = min(front, back), hi = max(front, back);
+    imageStore(table, ivec3(id, 2), vec4(eta_extreme(lo, hi, 1.0), eta_extreme(lo, hi, -1.0)));
 }

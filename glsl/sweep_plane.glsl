@@ -138,9 +138,32 @@ float specular_term(vec3 n, vec3 l, vec3 v, float eta_ratio) {
     return D * F * G / (4.0 * nv);
 }
 
+// Fresnel reflectance of a face between eta_a and eta_b for a ray whose v = eta dx/ds has
+// the tangential part vt (kept across the face, Snell): F is the same both ways through a
+// face (reciprocity), from the angle on its low side; 1 beyond the critical angle.
+float face_fresnel(float vt, float eta_a, float eta_b) {
+    float lo = min(eta_a, eta_b), hi = max(eta_a, eta_b);
+    float sin_lo = vt / lo;
+    if (sin_lo >= 1.0) return 1.0;
+    return fresnel(sqrt(1.0 - sin_lo * sin_lo), hi / lo);
+}
+
 // Smallest change of eta treated as a face of glass (reflection, highlight): below it,
 // noise in a medium (see the viewing rays).
 const float MIN_FACE_STEP = 0.02;
+
+// A film between two probes of value v_a and v_b, eta e_a and e_b: eta over the values
+// between them (layer 2 of the preintegration table) rises above both ends (or falls
+// below both) by MIN_FACE_STEP or more. Returns (1 if so, else 0; the value where the
+// film peaks; its eta). See "A film" in main().
+vec3 film_between(float v_a, float v_b, float e_a, float e_b) {
+    vec4 t = textureLod(preint, vec3(preint_coord(v_a, v_b), 2.0), 0.0);
+    float k = P.refraction.x;   // eta' = 1 + k (eta - 1), k >= 0 keeps the order
+    float top = 1.0 + k * (t.x - 1.0), bottom = 1.0 + k * (t.z - 1.0);
+    if (top >= max(e_a, e_b) + MIN_FACE_STEP) return vec3(1.0, t.y, top);
+    if (bottom <= min(e_a, e_b) - MIN_FACE_STEP) return vec3(1.0, t.w, bottom);
+    return vec3(0.0);
+}
 
 // The light chained through a surface's skin (see the viewing rays below), kept in the
 // medium buffer's .w: 0 = none; else 64 q + 32 + log2(luminance), q = the skin depth
@@ -435,84 +458,132 @@ void main() {
             float depth = matter ? chained_depth + seg_len * across / ref_step : 0.0;
             chain_code = chain_encode(next, depth);
         }
-        // A face: where eta steps (a one-voxel ramp between plateaus) the viewing ray
-        // meets a surface of glass once, whatever the sample distance and however the
-        // planes cut the ramp: in the segment where eta passes the middle of the step,
-        // whose plateaus are found a few voxels either side along the normal. There it
-        // reflects (Fresnel) and shows the highlight, both with the whole step's F. (Per
-        // plane from consecutive eta samples, the highlight's F depended on how much of
-        // the ramp a plane happened to straddle: rings on glass at the plane spacing; and
-        // the sum of each segment's own small F is a fraction of the face's, as for a
-        // graded face, which physically reflects little.)
         float d_eta = eta_here - vd4.w;
         bool reflections = HAVE_REFLECTIONS && P.refraction.y > 0.5;
         bool specular = HAVE_SPECULAR && P.specular.y > 0.0 && !unlit;
-        if (abs(d_eta) > 1e-4 && (reflections || specular)) {
+        // Not only where eta changes between the two samples: a film of glass may lie
+        // between samples of equal eta, or hold both (below).
+        if (reflections || specular) {
             vec3 mid = vp - 0.5 * seg_len * dir;
             vec3 g = n_here;   // the face's orientation (see below)
             vec3 n = dot(g, g) > 1e-12 ? normalize(g) : dir;
             if (dot(n, dir) * d_eta < 0.0) n = -n;   // n points to higher eta
             float h = 0.5 * seg_len + 2.5 * ref_step;
-            float eta_lo = min(min(eta_here, vd4.w), eta_of(value_at_tex(to_tex(mid - h * n))));
-            float eta_hi = max(max(eta_here, vd4.w), eta_of(value_at_tex(to_tex(mid + h * n))));
-            float eta_mid = 0.5 * (eta_lo + eta_hi);
-            // A face is a step of at least MIN_FACE_STEP: in noise (a scanned or
-            // simulated medium) eta wobbles about its plateau and the smoothed gradient
-            // points anywhere, so a wobble seen at a grazing angle to that random normal
-            // reflected nearly everything (white speckles through red wine, measured).
-            if ((vd4.w < eta_mid) != (eta_here < eta_mid) && eta_hi - eta_lo >= MIN_FACE_STEP) {
-                // The angle of incidence on the face's low-eta side, from the tangential
-                // part of v = eta dx/ds, which crossing the face keeps (Snell); the ray's
-                // own direction is already partly turned inside the ramp. F is the same
-                // both ways through the face (reciprocity) short of total reflection.
-                vec3 vt = vd - dot(vd, n) * n;
-                bool entering = d_eta > 0.0;
-                float sin_lo = length(vt) / eta_lo;
-                // Fresnel reflection (the F of eq. 4.12, unpolarised): the reflected part
-                // sees the environment (or the background) in the mirrored direction,
-                // weighted by (1 - A) M like everything composited (eq. 4.13), and the ray
-                // goes on with the rest (folded into A, so what lies behind is seen through
-                // 1 - F). Not occluded: the mirrored direction is not traced through the
-                // volume (like the thesis' highlights, ch. 8). Beyond the critical angle
-                // the ray itself is the reflected light (its Snell step turns it back), so
-                // nothing is looked up. (Looking the environment up with F = 1 there and
-                // ending the ray was tried: no visible difference on the wine glass.)
-                if (reflections && sin_lo < 1.0) {
-                    float reflected = fresnel(sqrt(1.0 - sin_lo * sin_lo), eta_hi / eta_lo);
-                    // Mirror the direction the ray had on the side it came from.
-                    float eta_in = entering ? eta_lo : eta_hi;
-                    float vn = sqrt(max(eta_in * eta_in - dot(vt, vt), 0.0));
-                    vec3 incident = (vt + (dot(vd, n) >= 0.0 ? vn : -vn) * n) / eta_in;
-                    C += (1.0 - A) * M * reflected * environment_radiance(reflect(incident, n));
-                    A += (1.0 - A) * reflected;
+            float v_minus = value_at_tex(to_tex(mid - h * n));
+            float v_plus = value_at_tex(to_tex(mid + h * n));
+            float e_minus = eta_of(v_minus), e_plus = eta_of(v_plus);
+            // A film: where the value ramps between two matters through a band of eta
+            // that belongs to neither, eta rises (or falls) and returns between the
+            // probes. The demo floor's edge passes through the glass's band (0.45-0.6):
+            // a 1D transfer function dresses the floor in a skin of glass a fraction of a
+            // voxel thick. A plane sample lands in such a skin on some rows and not on
+            // others, so judged from the samples it reflected on every other row: the
+            // floor's shadow was striped +-20 % at the plane spacing. Such a skin is the
+            // classification's, not the scene's (a glass sphere over a white floor has
+            // no glass on the floor; wine touches its glass with no air between), and it
+            // is thinner than a face as the sweep knows faces, by their plateaus either
+            // side (the viewing ray's turn below sees only those). So a film is one face,
+            // between the probes' plateaus (none where both are alike, as on the floor),
+            // met in the one segment whose values pass the film's peak: found in value
+            // space (the extremes of eta between the probes' values, layer 2 of the
+            // preintegration table), it is the same whatever the planes. (Reflecting it as
+            // the two faces of a glass film, 1 - (1 - F1)(1 - F2), was tried: uniform on
+            // the floor, but where wine meets its glass the air the ramp passes through
+            // reflected up to total reflection, speckling the wine.)
+            vec3 film = film_between(v_minus, v_plus, e_minus, e_plus);
+            // The face or film met here, for its highlight (after both): its orientation
+            // and eta ratio.
+            vec3 highlight_n = vec3(0.0);
+            float highlight_ratio = 1.0;
+            if (film.x > 0.0) {
+                float s_film = film.y;
+                bool from_minus = (v_minus < s_film) == (vp4.w < s_film);
+                float eta_1 = from_minus ? e_minus : e_plus;   // the side the ray comes from
+                float eta_2 = from_minus ? e_plus : e_minus;
+                if ((vp4.w < s_film) != (f_v < s_film) && abs(eta_2 - eta_1) >= MIN_FACE_STEP) {
+                    vec3 nf = dot(n, dir) < 0.0 ? -n : n;
+                    float f = face_fresnel(length(vd - dot(vd, nf) * nf), eta_1, eta_2);
+                    // Beyond the critical angle nothing is looked up, as for a face below.
+                    if (reflections && f < 1.0) {
+                        C += (1.0 - A) * M * f * environment_radiance(reflect(normalize(vd), nf));
+                        A += (1.0 - A) * f;
+                    }
+                    highlight_n = nf;
+                    highlight_ratio = eta_2 / eta_1;
                 }
-                // The highlight of the light on the face (eqs. 4.9-4.11), lit by the light
-                // that meets the face: read on the segment's front plane, moved off the
-                // face along that plane to the side the light comes from. (Near the line
-                // where the plane cuts the face its light is a blur of the refracted and
-                // the unrefracted, whose mix depended on how the planes fell: the
-                // highlight banded at the plane spacing.)
-                if (specular) {
-                    vec3 front = vp - dir * seg_len;
-                    vec3 along = vec3(n.xy, 0.0);
-                    float la = length(along);
-                    float side = dot(ldir, n) > 0.0 ? -1.0 : 1.0;
-                    vec3 off = la > 1e-3 ? along / la * side * (2.5 * ref_step / max(la, 0.3))
-                                         : vec3(0.0);
-                    vec2 uv_face = project(front + off);
+            } else if (abs(d_eta) > 1e-4) {
+                // A face: where eta steps (a one-voxel ramp between plateaus) the viewing ray
+                // meets a surface of glass once, whatever the sample distance and however the
+                // planes cut the ramp: in the segment where eta passes the middle of the step,
+                // whose plateaus are found a few voxels either side along the normal. There it
+                // reflects (Fresnel) and shows the highlight, both with the whole step's F. (Per
+                // plane from consecutive eta samples, the highlight's F depended on how much of
+                // the ramp a plane happened to straddle: rings on glass at the plane spacing; and
+                // the sum of each segment's own small F is a fraction of the face's, as for a
+                // graded face, which physically reflects little.)
+                float eta_lo = min(min(eta_here, vd4.w), min(e_minus, e_plus));
+                float eta_hi = max(max(eta_here, vd4.w), max(e_minus, e_plus));
+                float eta_mid = 0.5 * (eta_lo + eta_hi);
+                // A face is a step of at least MIN_FACE_STEP: in noise (a scanned or
+                // simulated medium) eta wobbles about its plateau and the smoothed gradient
+                // points anywhere, so a wobble seen at a grazing angle to that random normal
+                // reflected nearly everything (white speckles through red wine, measured).
+                if ((vd4.w < eta_mid) != (eta_here < eta_mid) && eta_hi - eta_lo >= MIN_FACE_STEP) {
+                    // The angle of incidence on the face's low-eta side, from the tangential
+                    // part of v = eta dx/ds, which crossing the face keeps (Snell); the ray's
+                    // own direction is already partly turned inside the ramp. F is the same
+                    // both ways through the face (reciprocity) short of total reflection.
+                    vec3 vt = vd - dot(vd, n) * n;
+                    bool entering = d_eta > 0.0;
+                    float sin_lo = length(vt) / eta_lo;
+                    // Fresnel reflection (the F of eq. 4.12, unpolarised): the reflected part
+                    // sees the environment (or the background) in the mirrored direction,
+                    // weighted by (1 - A) M like everything composited (eq. 4.13), and the ray
+                    // goes on with the rest (folded into A, so what lies behind is seen through
+                    // 1 - F). Not occluded: the mirrored direction is not traced through the
+                    // volume (like the thesis' highlights, ch. 8). Beyond the critical angle
+                    // the ray itself is the reflected light (its Snell step turns it back), so
+                    // nothing is looked up. (Looking the environment up with F = 1 there and
+                    // ending the ray was tried: no visible difference on the wine glass.)
+                    if (reflections && sin_lo < 1.0) {
+                        float reflected = fresnel(sqrt(1.0 - sin_lo * sin_lo), eta_hi / eta_lo);
+                        // Mirror the direction the ray had on the side it came from.
+                        float eta_in = entering ? eta_lo : eta_hi;
+                        float vn = sqrt(max(eta_in * eta_in - dot(vt, vt), 0.0));
+                        vec3 incident = (vt + (dot(vd, n) >= 0.0 ? vn : -vn) * n) / eta_in;
+                        C += (1.0 - A) * M * reflected * environment_radiance(reflect(incident, n));
+                        A += (1.0 - A) * reflected;
+                    }
+                    highlight_n = n;
+                    highlight_ratio = entering ? eta_hi / eta_lo : eta_lo / eta_hi;
+                }
+            }
+            // The highlight of the light on the face (eqs. 4.9-4.11), lit by the light
+            // that meets the face: read on the segment's front plane, moved off the face
+            // along that plane to the side the light comes from. (Near the line where the
+            // plane cuts the face its light is a blur of the refracted and the
+            // unrefracted, whose mix depended on how the planes fell: the highlight
+            // banded at the plane spacing.)
+            if (specular && dot(highlight_n, highlight_n) > 0.0) {
+                vec3 n = highlight_n;
+                vec3 front = vp - dir * seg_len;
+                vec3 along = vec3(n.xy, 0.0);
+                float la = length(along);
+                float side = dot(ldir, n) > 0.0 ? -1.0 : 1.0;
+                vec3 off = la > 1e-3 ? along / la * side * (2.5 * ref_step / max(la, 0.3))
+                                     : vec3(0.0);
+                vec2 uv_face = project(front + off);
 #if FORWARD_LIGHT
-                    vec3 i_face = READ_BUFFER(irradiance, R, uv_face).rgb;
-                    vec4 lf = READ_BUFFER(irradiance_direction, R, uv_face);
-                    vec3 l_face = normalize(lf.w > 0.0 ? lf.xyz : P.light_dir.xyz);
+                vec3 i_face = READ_BUFFER(irradiance, R, uv_face).rgb;
+                vec4 lf = READ_BUFFER(irradiance_direction, R, uv_face);
+                vec3 l_face = normalize(lf.w > 0.0 ? lf.xyz : P.light_dir.xyz);
 #else
-                    vec3 i_face = READ_BUFFER(light_colour, R, uv_face).rgb;
-                    vec3 l_face = normalize(READ_BUFFER(light_direction, R, uv_face).xyz);
+                vec3 i_face = READ_BUFFER(light_colour, R, uv_face).rgb;
+                vec3 l_face = normalize(READ_BUFFER(light_direction, R, uv_face).xyz);
 #endif
-                    vec3 v = -dir;
-                    vec3 nv = dot(n, v) < 0.0 ? -n : n;
-                    float ratio = entering ? eta_hi / eta_lo : eta_lo / eta_hi;
-                    i_s = P.specular.y * specular_term(nv, -l_face, v, ratio) * i_face;
-                }
+                vec3 v = -dir;
+                vec3 nv = dot(n, v) < 0.0 ? -n : n;
+                i_s = P.specular.y * specular_term(nv, -l_face, v, highlight_ratio) * i_face;
             }
         }
         // Oddy-Willis compositing (eq. 4.13): the medium factor once, specular not

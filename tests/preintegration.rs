@@ -468,3 +468,75 @@ fn presets_render() {
         }
     });
 }
+
+/// Layer 2: the extremes of η over the values between front and back (largest, the middle
+/// of where it is attained, smallest, the same), which the sweep uses to find films of
+/// glass a value ramp crosses (tests/image_quality.rs). Checked against a dense CPU scan of
+/// the η function (10 000 values per interval, and each side of every control point) on
+/// transfer functions with a band (the demo's glass-floor), a band and a dip (wine glass:
+/// a glass band, then an η-1 gap before the wine) and sharp steps.
+#[test]
+fn eta_extremes_match_a_dense_scan() {
+    with_context(|ctx| {
+        let step = tf(r#"
+eta = [[0.0, 1.0], [0.3, 1.0], [0.3, 1.6], [0.5, 1.6], [0.5, 1.2], [1.0, 1.2]]
+"#);
+        for (name, tf) in [
+            (
+                "glass-floor",
+                TransferFunctions::load("glass-floor").unwrap(),
+            ),
+            ("wine-glass", TransferFunctions::load("wine-glass").unwrap()),
+            ("steps", step),
+        ] {
+            let vol = procedural::slab([4, 4, 4], 0.0).unwrap();
+            let mut r = Renderer::new(ctx, &vol, &tf).unwrap();
+            r.update_preintegration().unwrap();
+            let table = r.preintegration().read_eta_extremes(ctx).unwrap();
+            let points: Vec<f32> = tf.eta.points.iter().map(|p| p.0).collect();
+            let mut worst = (0.0f64, 0.0f64);
+            for b in (0..N).step_by(7).chain([N - 1]) {
+                for f in (0..N).step_by(5).chain([N - 1]) {
+                    let (lo, hi) = {
+                        let (x, y) = (f as f32 / 255.0, b as f32 / 255.0);
+                        (x.min(y), x.max(y))
+                    };
+                    let mut s_all: Vec<f32> = (0..=10_000)
+                        .map(|k| lo + (hi - lo) * k as f32 / 10_000.0)
+                        .collect();
+                    for &p in &points {
+                        s_all.extend(
+                            [p - 1e-6, p, p + 1e-6]
+                                .iter()
+                                .filter(|s| (lo..=hi).contains(*s)),
+                        );
+                    }
+                    let eta: Vec<(f32, f32)> =
+                        s_all.iter().map(|&s| (s, tf.eta.eval(s)[0])).collect();
+                    let g = table[b * N + f];
+                    for (sign, got_eta, got_s) in [(1.0f32, g[0], g[1]), (-1.0, g[2], g[3])] {
+                        let best = eta.iter().map(|e| sign * e.1).fold(f32::MIN, f32::max);
+                        let at: Vec<f32> = eta
+                            .iter()
+                            .filter(|e| sign * e.1 >= best - 1e-5)
+                            .map(|e| e.0)
+                            .collect();
+                        let first = at.iter().copied().fold(f32::MAX, f32::min);
+                        let last = at.iter().copied().fold(f32::MIN, f32::max);
+                        let want_s = 0.5 * (first + last);
+                        let de = (got_eta - sign * best).abs() as f64;
+                        let ds = (got_s - want_s).abs() as f64;
+                        worst = (worst.0.max(de), worst.1.max(ds));
+                        assert!(
+                            de <= 1e-4 && ds <= 2e-3,
+                            "{name}: [{lo}, {hi}] sign {sign}: table ({got_eta}, {got_s}), \
+                             scan ({}, {want_s})",
+                            sign * best
+                        );
+                    }
+                }
+            }
+            println!("{name}: worst |Δη| {:.1e}, |Δs| {:.1e}", worst.0, worst.1);
+        }
+    });
+}

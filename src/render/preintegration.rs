@@ -1,11 +1,14 @@
 //! The preintegration table (thesis sect. 3.9, 4.3 "Compositing", 5.1).
 //!
-//! A 256 × 256 2D image with 2 array layers of RGBA32F, indexed by (front value, back value):
+//! A 256 × 256 2D image with 3 array layers of RGBA32F, indexed by (front value, back value):
 //! layer 0 = premultiplied particle colour and opacity of a segment one reference sample
 //! distance long (eqs. 3.17, 4.16), layer 1 = its medium colour, the multiplicative
 //! integral of m_tf (eqs. 4.14–4.15). Renderers correct both for their actual step length
-//! (eq. 3.19 and the power rule). Built by `glsl/preintegrate.comp`, only when the transfer
-//! functions change.
+//! (eq. 3.19 and the power rule). Layer 2 = the extremes of η over the values between the
+//! two (largest η, the value where it peaks, smallest η, the value of that dip): the
+//! sweep finds with it the films of glass a value ramp crosses between two samples (a
+//! floor whose edge passes through the glass's η band). Built by `glsl/preintegrate.comp`,
+//! only when the transfer functions change.
 
 use anyhow::Result;
 
@@ -46,7 +49,7 @@ impl PreintegrationTable {
                 ImageKind::D2Array,
                 vk::Format::R32G32B32A32_SFLOAT,
                 [TABLE_SIZE, TABLE_SIZE, 1],
-                2,
+                3,
             ),
             "preintegration table",
         )?;
@@ -107,5 +110,11 @@ impl PreintegrationTable {
             bytemuck::cast_slice(&l0).to_vec(),
             bytemuck::cast_slice(&l1).to_vec(),
         ))
+    }
+
+    /// Read layer 2 back: the extremes of η between the two values (largest, its value,
+    /// smallest, its value), indexed as `read`.
+    pub fn read_eta_extremes(&self, ctx: &Context) -> Result<Vec<[f32; 4]>> {
+        Ok(bytemuck::cast_slice(&ctx.read_image(&self.image, 2)?).to_vec())
     }
 }
