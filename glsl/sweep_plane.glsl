@@ -495,6 +495,10 @@ void main() {
             // and eta ratio.
             vec3 highlight_n = vec3(0.0);
             float highlight_ratio = 1.0;
+            // Its reflection: the fraction reflected and the mirrored direction (looked up
+            // once, after both: llvmpipe would run a lookup in each branch).
+            float reflected = 0.0;
+            vec3 reflected_dir = vec3(0.0, 0.0, -1.0);
             if (film.x > 0.0) {
                 float s_film = film.y;
                 bool from_minus = (v_minus < s_film) == (vp4.w < s_film);
@@ -505,8 +509,8 @@ void main() {
                     float f = face_fresnel(length(vd - dot(vd, nf) * nf), eta_1, eta_2);
                     // Beyond the critical angle nothing is looked up, as for a face below.
                     if (reflections && f < 1.0) {
-                        C += (1.0 - A) * M * f * environment_radiance(reflect(normalize(vd), nf));
-                        A += (1.0 - A) * f;
+                        reflected = f;
+                        reflected_dir = reflect(normalize(vd), nf);
                     }
                     highlight_n = nf;
                     highlight_ratio = eta_2 / eta_1;
@@ -521,8 +525,8 @@ void main() {
                 // the ramp a plane happened to straddle: rings on glass at the plane spacing; and
                 // the sum of each segment's own small F is a fraction of the face's, as for a
                 // graded face, which physically reflects little.)
-                float eta_lo = min(min(eta_here, vd4.w), min(e_minus, e_plus));
-                float eta_hi = max(max(eta_here, vd4.w), max(e_minus, e_plus));
+                float eta_lo = min(min(eta_here, vd4.w), e_minus);
+                float eta_hi = max(max(eta_here, vd4.w), e_plus);
                 float eta_mid = 0.5 * (eta_lo + eta_hi);
                 // A face is a step of at least MIN_FACE_STEP: in noise (a scanned or
                 // simulated medium) eta wobbles about its plateau and the smoothed gradient
@@ -546,17 +550,20 @@ void main() {
                     // nothing is looked up. (Looking the environment up with F = 1 there and
                     // ending the ray was tried: no visible difference on the wine glass.)
                     if (reflections && sin_lo < 1.0) {
-                        float reflected = fresnel(sqrt(1.0 - sin_lo * sin_lo), eta_hi / eta_lo);
+                        reflected = fresnel(sqrt(1.0 - sin_lo * sin_lo), eta_hi / eta_lo);
                         // Mirror the direction the ray had on the side it came from.
                         float eta_in = entering ? eta_lo : eta_hi;
                         float vn = sqrt(max(eta_in * eta_in - dot(vt, vt), 0.0));
                         vec3 incident = (vt + (dot(vd, n) >= 0.0 ? vn : -vn) * n) / eta_in;
-                        C += (1.0 - A) * M * reflected * environment_radiance(reflect(incident, n));
-                        A += (1.0 - A) * reflected;
+                        reflected_dir = reflect(incident, n);
                     }
                     highlight_n = n;
                     highlight_ratio = entering ? eta_hi / eta_lo : eta_lo / eta_hi;
                 }
+            }
+            if (reflected > 0.0) {
+                C += (1.0 - A) * M * reflected * environment_radiance(reflected_dir);
+                A += (1.0 - A) * reflected;
             }
             // The highlight of the light on the face (eqs. 4.9-4.11), lit by the light
             // that meets the face: read on the segment's front plane, moved off the face
