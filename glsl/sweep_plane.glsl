@@ -156,7 +156,9 @@ const float MIN_FACE_STEP = 0.02;
 // between them (layer 2 of the preintegration table) rises above both ends (or falls
 // below both) by MIN_FACE_STEP or more. Returns (1 if so, else 0; the value where the
 // film peaks; its eta). See "A film" in main().
+layout(constant_id = 7) const bool HAVE_FILMS = true;   // eta has an interior extremum
 vec3 film_between(float v_a, float v_b, float e_a, float e_b) {
+    if (!HAVE_FILMS) return vec3(0.0);
     vec4 t = textureLod(preint, vec3(preint_coord(v_a, v_b), 2.0), 0.0);
     float k = P.refraction.x;   // eta' = 1 + k (eta - 1), k >= 0 keeps the order
     float top = 1.0 + k * (t.x - 1.0), bottom = 1.0 + k * (t.z - 1.0);

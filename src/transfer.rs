@@ -328,6 +328,20 @@ impl TransferFunctions {
         )
     }
 
+    /// Whether η has an interior extremum: rises and then falls (or falls and then rises)
+    /// along the values. Only then can a ramp between two values pass through a band of η
+    /// past both its ends (a film, which the sweep treats as one face between them);
+    /// a monotone η makes none.
+    pub fn eta_has_films(&self) -> bool {
+        let (mut rose, mut fell) = (false, false);
+        for w in self.eta.points.windows(2) {
+            let d = w[1].1[0] - w[0].1[0];
+            rose |= d > 0.0;
+            fell |= d < 0.0;
+        }
+        rose && fell
+    }
+
     /// The texels of the 1D TF image: layer 0 then layer 1, each `TF_SAMPLES` RGBA f32,
     /// sample i at s = i / (TF_SAMPLES - 1).
     pub fn texels(&self) -> (Vec<[f32; 4]>, Vec<[f32; 4]>) {
@@ -493,5 +507,32 @@ mod tests {
             let again = TransferFunctions::parse(&tf.to_toml(), "round trip").unwrap();
             assert_eq!(tf, again, "{name}");
         }
+    }
+
+    /// Films need η to rise and fall (or fall and rise) along the values: the presets
+    /// with a band of η (glass under a floor or wine, the hand's bone band, the
+    /// supernova's shell band) have them; a ramp to a plateau (CT, MRI, the ship's block),
+    /// a constant or a step up have none.
+    #[test]
+    fn films_need_an_interior_extremum_of_eta() {
+        for (name, films) in [
+            ("glass-floor", true),
+            ("wine-glass", true),
+            ("hand", true),
+            ("supernova", true),
+            ("lung-ct", false),
+            ("head", false),
+            ("ship", false),
+            ("glass", false),
+        ] {
+            let tf = TransferFunctions::load(name).unwrap();
+            assert_eq!(tf.eta_has_films(), films, "{name}");
+        }
+        let mut tf = TransferFunctions::default();
+        assert!(!tf.eta_has_films(), "constant eta");
+        tf.eta = Piecewise::new(vec![(0.0, [1.0]), (0.5, [1.0]), (0.5, [1.5]), (1.0, [1.5])]);
+        assert!(!tf.eta_has_films(), "a step up");
+        tf.eta = Piecewise::new(vec![(0.0, [1.5]), (0.5, [1.0]), (1.0, [1.2])]);
+        assert!(tf.eta_has_films(), "a dip");
     }
 }

@@ -636,6 +636,7 @@ impl Renderer {
             transmittance: self.transmittance.as_ref(),
             ambient_table: self.ambient_table.as_ref(),
             tf: &self.tf_image,
+            eta_films: self.tf.eta_has_films(),
             preint: self.preint.image(),
             linear: &self.linear,
             env: refract::EnvInputs {

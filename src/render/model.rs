@@ -46,6 +46,8 @@ pub(crate) struct Inputs<'a> {
     pub ambient_table: Option<&'a ambient::TableTextures>,
     /// The transfer functions as a 1D-per-row image.
     pub tf: &'a Image,
+    /// Whether their η function has an interior extremum (films; the sweep's films).
+    pub eta_films: bool,
     pub preint: &'a Image,
     pub linear: &'a Sampler,
     pub env: EnvInputs<'a>,

@@ -86,10 +86,13 @@ pub(crate) struct SweepPass {
 }
 
 /// The features a frame uses that the plane shaders can leave out, and the shader levers:
-/// specialization constants 1-6 (glsl/sweep_common.glsl, sweep_buffers.glsl). The first
+/// specialization constants 1-7 (glsl/sweep_common.glsl, sweep_buffers.glsl). The first
 /// four are on exactly when their runtime condition can hold, so switching one off changes
 /// no image (tested) and costs nothing; `arrays` and `field` choose how the shaders read
-/// the state and the field (`Levers`).
+/// the state and the field (`Levers`). `films` is on when the η function has an interior
+/// extremum (`TransferFunctions::eta_has_films`): without one no value ramp passes through
+/// a band of η past both its ends, so the film tests (sweep_plane.glsl) can only be set off
+/// by the 1D transfer-function texture's blur of a step, which is no film either.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub(crate) struct Features {
     pub(crate) specular: bool,
@@ -98,6 +101,7 @@ pub(crate) struct Features {
     pub(crate) soft_light: bool,
     pub(crate) arrays: bool,
     pub(crate) field: bool,
+    pub(crate) films: bool,
 }
 
 impl Features {
@@ -108,10 +112,12 @@ impl Features {
         soft_light: true,
         arrays: true,
         field: true,
+        films: true,
     };
 
-    /// `have_field`: whether the field texture exists (it may not fit in memory).
-    pub(crate) fn of(sweep: &SweepOptions, have_field: bool) -> Self {
+    /// `have_field`: whether the field texture exists (it may not fit in memory);
+    /// `eta_films`: whether the transfer functions' η can make films.
+    pub(crate) fn of(sweep: &SweepOptions, have_field: bool, eta_films: bool) -> Self {
         let levers = sweep.levers;
         let shader = Self {
             arrays: levers.arrays,
@@ -126,12 +132,13 @@ impl Features {
             clip: sweep.clip.is_some(),
             reflections: sweep.reflections,
             soft_light: sweep.light.softness > 0.0,
+            films: eta_films,
             ..shader
         }
     }
 
-    /// Constant 0 (the gradient volume is bound), then 1-6.
-    fn constants(self, have_gradient: bool) -> [u32; 7] {
+    /// Constant 0 (the gradient volume is bound), then 1-7.
+    fn constants(self, have_gradient: bool) -> [u32; 8] {
         [
             have_gradient as u32,
             self.specular as u32,
@@ -140,6 +147,7 @@ impl Features {
             self.soft_light as u32,
             self.arrays as u32,
             self.field as u32,
+            self.films as u32,
         ]
     }
 }
@@ -159,7 +167,7 @@ impl PlanePipelines {
         ctx: &Context,
         passes: [&RenderPass; 3],
         set: &DescriptorSet,
-        constants: [u32; 7],
+        constants: [u32; 8],
         forward: bool,
     ) -> Result<Self> {
         let plane = |fragment, pass, name: &str| {

@@ -16,7 +16,7 @@ impl SweepPass {
         let (camera, opts, read_back) = (inputs.camera, inputs.opts, inputs.read_back);
         let (ctx, info, env, sweep) = (inputs.ctx, inputs.info, &inputs.env, &opts.sweep);
         // The plane pipelines with what this frame does not use compiled out.
-        let features = Features::of(sweep, self.have_field);
+        let features = Features::of(sweep, self.have_field, inputs.eta_films);
         self.ensure_planes(ctx, features)?;
         let volume_dims = info.dims;
         let (eye, forward, right, up) = camera.frame();
