@@ -148,6 +148,18 @@ float face_fresnel(float vt, float eta_a, float eta_b) {
     return fresnel(sqrt(1.0 - sin_lo * sin_lo), hi / lo);
 }
 
+// The part of the straight segment a -> b (view space) inside the volume box, as the
+// fractions [t0, t1] of the way from a to b (t1 <= t0: it misses the box).
+vec2 box_span(vec3 a, vec3 b) {
+    vec3 ta = to_tex(a);
+    vec3 d = to_tex(b) - ta;
+    d = mix(d, vec3(1e-20), lessThan(abs(d), vec3(1e-20)));   // parallel to a face
+    vec3 t_lo = -ta / d, t_hi = (1.0 - ta) / d;
+    vec3 t_in = min(t_lo, t_hi), t_out = max(t_lo, t_hi);
+    return vec2(max(max(t_in.x, t_in.y), max(t_in.z, 0.0)),
+                min(min(t_out.x, t_out.y), min(t_out.z, 1.0)));
+}
+
 // Smallest change of eta treated as a face of glass (reflection, highlight): below it,
 // noise in a medium (see the viewing rays).
 const float MIN_FACE_STEP = 0.02;
@@ -411,7 +423,20 @@ void main() {
     if (A < P.termination_alpha) {
         vec2 uv_v = project(vp);
         vec3 c; float a; vec3 m;
-        segment(vp4.w, f_v, seg_len / ref_step, clipped(vp), c, a, m);
+        // Where the volume's data ends (a floor cut by the box's side, a scan cut through
+        // the body) the value steps at the box face, not along the segment: integrate
+        // only the part inside, from the value on the face. (Preintegrated as a ramp from
+        // the empty outside, the face's opacity depended on where the planes cut it: the
+        // floors' cut sides were hatched at the plane spacing.)
+        vec2 span = box_span(vp - dir * seg_len, vp);
+        float v_front = vp4.w, v_back = f_v, inside = max(span.y - span.x, 0.0);
+        if (inside > 0.0 && (span.x > 0.0 || span.y < 1.0)) {
+            float t_face = span.x > 0.0 ? span.x : span.y;
+            vec3 on_face = clamp(to_tex(vp - dir * (seg_len * (1.0 - t_face))), 0.0, 1.0);
+            float v_face = textureLod(volume, on_face, 0.0).r;
+            if (span.x > 0.0) v_front = v_face; else v_back = v_face;
+        }
+        segment(v_front, v_back, inside * seg_len / ref_step, clipped(vp), c, a, m);
 #if FORWARD_LIGHT
         // The light of this plane's segment (i-1 -> i): the irradiance where the ray
         // enters it, on plane i-1 (the segment's front, as the backward step uses).

@@ -746,3 +746,77 @@ fn specialized_pipelines_render_what_the_general_one_renders() {
         }
     });
 }
+
+/// Where the data end at the box with matter in them (every stand-in's floor runs to the
+/// box's sides), the value steps at the box face. A box full of absorbing matter (opacity
+/// 0.05 per reference step, black, against a white background), seen obliquely so rays
+/// enter and leave through different faces, must let through exp(τ) of the background
+/// with τ = L ln(1 − α) / reference step, L the ray's path inside the box (Beer–Lambert),
+/// for every pixel and every sample distance (within 0.5 %; measured < 5e-5).
+/// Preintegrated as a ramp from the empty outside, the segment crossing a face counted
+/// matter over half of it whatever part lay inside: off by up to 5.2 / 2.5 / 2.0 % at
+/// sample distance 1 / 0.5 / 0.37, from pixel to pixel as the planes fell.
+#[test]
+fn a_full_box_attenuates_by_beer_lambert_wherever_its_faces_fall() {
+    with_context(|ctx| {
+        let n = 32u32;
+        let vol = f32_volume(n, |_| 1.0);
+        let alpha = 0.05f64;
+        let tf = tf_from(
+            "colour = [[0.0, 0.0, 0.0, 0.0]]\nopacity = [[0.0, 0.0], [0.5, 0.0], [0.5, 0.05], \
+             [1.0, 0.05]]\n",
+        );
+        let cam = Camera {
+            azimuth: 35.0,
+            elevation: 25.0,
+            distance: 2.5,
+            fov_y: 35.0,
+            ..Default::default()
+        };
+        let ref_step = vol.min_voxel_size() as f64;
+        let (w, h) = (48u32, 48u32);
+        let (eye, forward, right, up) = cam.frame();
+        let t = (cam.fov_y.to_radians() * 0.5).tan();
+        let mut failures = Vec::new();
+        for sd in [1.0f32, 0.5, 0.37] {
+            let mut opts = frame_options(w, h, sd);
+            opts.background = [1.0, 1.0, 1.0, 1.0];
+            opts.termination_alpha = 1.0;
+            let f = sweep(ctx, &vol, &tf, &cam, &opts);
+            let (mut worst, mut count) = (0.0f64, 0);
+            for y in 0..h {
+                for x in 0..w {
+                    let nx = (x as f32 + 0.5) / w as f32 * 2.0 - 1.0;
+                    let ny = (y as f32 + 0.5) / h as f32 * 2.0 - 1.0;
+                    let d = (forward + right * nx * t - up * ny * t).normalize();
+                    // Slab intersection with [-0.5, 0.5]³.
+                    let (mut t0, mut t1) = (0.0f32, f32::MAX);
+                    for k in 0..3 {
+                        let (a, b) = ((-0.5 - eye[k]) / d[k], (0.5 - eye[k]) / d[k]);
+                        t0 = t0.max(a.min(b));
+                        t1 = t1.min(a.max(b));
+                    }
+                    let path = (t1 - t0) as f64;
+                    // Rays that only graze an edge or corner say little; skip them.
+                    if path < 4.0 * ref_step {
+                        continue;
+                    }
+                    let want = (path / ref_step * (1.0 - alpha).ln()).exp();
+                    let got = f.pixel(x, y)[0] as f64;
+                    worst = worst.max((got / want - 1.0).abs());
+                    count += 1;
+                }
+            }
+            println!(
+                "sample distance {sd}: {count} pixels, worst |T / Beer–Lambert − 1| {worst:.4}"
+            );
+            assert!(count > 500, "too few pixels through the box ({count})");
+            if worst > 0.005 {
+                failures.push(format!(
+                    "sample distance {sd}: worst relative error {worst:.4}"
+                ));
+            }
+        }
+        assert!(failures.is_empty(), "{}", failures.join("\n"));
+    });
+}
