@@ -599,7 +599,7 @@ void main() {
                     // nothing is looked up. (Looking the environment up with F = 1 there and
                     // ending the ray was tried: no visible difference on the wine glass.)
                     if (reflections && sin_lo < 1.0) {
-                        reflected = fresnel(sqrt(1.0 - sin_lo * sin_lo), eta_hi / eta_lo);
+                        reflected = face_fresnel(length(vt), eta_lo, eta_hi);
                         // Mirror the direction the ray had on the side it came from.
                         float eta_in = entering ? eta_lo : eta_hi;
                         float vn = sqrt(max(eta_in * eta_in - dot(vt, vt), 0.0));
