@@ -431,12 +431,14 @@ fn measure_floor(img: &[[f32; 4]], w: usize, h: usize) -> FloorLight {
     }
 }
 
-fn disc_mean(img: &[[f32; 4]], w: usize, h: usize, c: glam::DVec2, r: f64) -> f64 {
+/// Mean of channel 0 over the pixels whose centres lie from r0 (inclusive) to r1
+/// (exclusive) pixels from `c`: a disc when r0 is 0.
+fn annulus_mean(img: &[[f32; 4]], w: usize, h: usize, c: glam::DVec2, r0: f64, r1: f64) -> f64 {
     let (mut s, mut n) = (0.0, 0);
     for y in 0..h {
         for x in 0..w {
-            let p = glam::DVec2::new(x as f64 + 0.5, y as f64 + 0.5);
-            if (p - c).length() <= r {
+            let d = (glam::DVec2::new(x as f64 + 0.5, y as f64 + 0.5) - c).length();
+            if d >= r0 && d < r1 {
                 s += img[y * w + x][0] as f64;
                 n += 1;
             }
@@ -565,8 +567,8 @@ fn sphere_on_floor_caustic_matches_the_photon_tracer() {
             );
             let mut disc_errs = Vec::new();
             for frac in [0.05, 0.1, 0.2] {
-                let ma = disc_mean(swept, w, h, b.brightest, frac * rr);
-                let mb = disc_mean(traced, w, h, b.brightest, frac * rr);
+                let ma = annulus_mean(swept, w, h, b.brightest, 0.0, frac * rr);
+                let mb = annulus_mean(traced, w, h, b.brightest, 0.0, frac * rr);
                 println!("  disc {frac} R around the caustic: sweep {ma:.2}, tracer {mb:.2}");
                 disc_errs.push((ma - mb).abs() / mb);
             }
@@ -690,24 +692,11 @@ fn the_demos_caustic_matches_the_photon_tracer_ring_by_ring() {
             println!("sd {sd} (plane {k}): power sweep {pa:.1}, tracer {pb:.1}");
             assert!((pa - pb).abs() / pb <= 0.01, "sd {sd}: power {pa} vs {pb}");
             let centre = measure_floor(&traced, w, h).brightest;
-            let ring = |img: &[[f32; 4]], r0: f64, r1: f64| {
-                let (mut s, mut m) = (0.0, 0usize);
-                for y in 0..h {
-                    for x in 0..w {
-                        let d =
-                            (glam::DVec2::new(x as f64 + 0.5, y as f64 + 0.5) - centre).length();
-                        if d >= r0 && d < r1 {
-                            s += img[y * w + x][0] as f64;
-                            m += 1;
-                        }
-                    }
-                }
-                s / m.max(1) as f64
-            };
             let mut worst = (0.0f64, 0.0f64);
             for i in 0..9 {
                 let (r0, r1) = (i as f64 * 0.15 * r_px, (i + 1) as f64 * 0.15 * r_px);
-                let (a, b) = (ring(swept, r0, r1), ring(&traced, r0, r1));
+                let a = annulus_mean(swept, w, h, centre, r0, r1);
+                let b = annulus_mean(&traced, w, h, centre, r0, r1);
                 let e = (a - b).abs() / b;
                 println!(
                     "  ring {:.2}-{:.2} R: sweep {a:.3}, tracer {b:.3} ({:+.1} %)",
