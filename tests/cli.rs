@@ -389,6 +389,12 @@ fn bad_sweep_options_are_clear_errors() {
         "light direction",
     );
     assert_clean_failure(&["render", "--softness", "-1", "-o", "x.png"], "softness");
+    for bad in ["0.1", "5", "NaN"] {
+        assert_clean_failure(
+            &["render", "--light-spacing", bad, "-o", "x.png"],
+            "light ray spacing",
+        );
+    }
     assert_clean_failure(&["render", "--clip", "0,0,1", "-o", "x.png"], "--clip");
     assert_clean_failure(
         &["render", "--reflections", "maybe", "-o", "x.png"],
@@ -549,6 +555,7 @@ fn ea_refuses_the_refractive_models_flags() {
         (&["--light", "0,1,1"][..], "--light"),
         (&["--clip", "1,0,0,0"][..], "--clip"),
         (&["--eta-scale", "2"][..], "--eta-scale"),
+        (&["--light-spacing", "0.5"][..], "--light-spacing"),
         (&["--dump", "medium@1"][..], "dumps"),
         (&["--pass-timings"][..], "--pass-timings"),
     ] {

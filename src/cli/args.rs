@@ -590,6 +590,14 @@ pub struct SceneArgs {
     /// proportional to their number [default: 2].
     #[arg(long, value_name = "N", allow_negative_numbers = true)]
     pub light_rays: Option<u32>,
+    /// Forward light transport: the light rays' spacing in pixels of the nearest plane,
+    /// 0.25 to 4 (refract). Below 1 the rays resolve caustics finer than the pixels (0.5:
+    /// four times the rays, closer to a photon tracer's irradiance); above 1 they are
+    /// fewer and faster, and caustics blur. The time of the light transport grows with
+    /// 1 / spacing²; --light-rays bounds the rays' number, and `render` says when that
+    /// bound widened the spacing [default: 1].
+    #[arg(long, value_name = "PIXELS")]
+    pub light_spacing: Option<f32>,
     /// Fresnel reflection of viewing rays at changes of η (refract): the reflected part
     /// sees the environment (or background) in the mirrored direction, not occluded by
     /// the volume; "off" is the thesis' model, everything transmitted [default: on].

@@ -7,7 +7,9 @@ use std::process::ExitCode;
 use anyhow::{bail, Result};
 
 use refrakt::output;
-use refrakt::render::{upload, Camera, Model, Renderer, StateBuffer};
+use refrakt::render::{
+    upload, Camera, LightTransport, Model, Renderer, StateBuffer, MAX_LIGHT_RAYS,
+};
 use refrakt::scene::LoadedScene;
 use refrakt::vk::{self, Context, ContextDesc};
 
@@ -208,6 +210,29 @@ pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
         );
         if let Some(ms) = frame.timings.get("sweep") {
             println!("  {:.3} ms per plane", ms / planes as f64);
+        }
+        if stats.light_transport == LightTransport::Forward {
+            let [columns, rows, ..] = stats.light_rays;
+            let [asked, launched] = stats.light_spacing;
+            print!(
+                "light rays: {columns} × {rows}, {launched:.2} pixels of the nearest plane apart"
+            );
+            // The grid's cells fit its extent, so they come out a little under the asked
+            // spacing when the budget does not bind.
+            let budget = opts.sweep.light_rays;
+            if launched > asked * 1.001 && budget < MAX_LIGHT_RAYS {
+                println!(
+                    ", not {asked}: the budget of {budget} rays per screen pixel binds \
+                     (--light-rays, up to {MAX_LIGHT_RAYS})"
+                );
+            } else if launched > asked * 1.001 {
+                println!(
+                    ", not {asked}: the most rays there can be, {MAX_LIGHT_RAYS} per screen \
+                     pixel, bind"
+                );
+            } else {
+                println!();
+            }
         }
         let c = stats.clamps;
         println!(

@@ -164,6 +164,7 @@ pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Resu
     o.specular = args.specular;
     o.eta_scale = args.eta_scale;
     o.light_rays = args.light_rays;
+    o.light_spacing = args.light_spacing;
     if let Some(t) = &args.light_transport {
         o.light_transport =
             Some(refrakt::render::LightTransport::parse(t).context("--light-transport")?);
@@ -308,6 +309,7 @@ fn refract_only_flags(args: &SceneArgs) -> Vec<&'static str> {
         ("--eta-scale", args.eta_scale.is_some()),
         ("--light-transport", args.light_transport.is_some()),
         ("--light-rays", args.light_rays.is_some()),
+        ("--light-spacing", args.light_spacing.is_some()),
         ("--reflections", args.reflections.is_some()),
         ("--clip", args.clip.is_some()),
         ("--env", args.env.is_some()),

@@ -92,6 +92,7 @@ struct RenderTable {
     eta_scale: Option<f32>,
     light_transport: Option<String>,
     light_rays: Option<u32>,
+    light_spacing: Option<f32>,
     reflections: Option<bool>,
     clip: Option<[f32; 4]>,
     exposure: Option<f32>,
@@ -342,6 +343,7 @@ impl SceneFile {
             o.specular = r.specular;
             o.eta_scale = r.eta_scale;
             o.light_rays = r.light_rays;
+            o.light_spacing = r.light_spacing;
             if let Some(t) = &r.light_transport {
                 o.light_transport =
                     Some(LightTransport::parse(t).context("[render] light_transport")?);

@@ -96,6 +96,8 @@ pub struct Scene {
     pub light_transport: LightTransport,
     /// Forward transport: light rays per screen pixel.
     pub light_rays: u32,
+    /// Forward transport: light ray spacing on the launch plane, pixel pitches of plane 0.
+    pub light_spacing: f32,
     /// Fresnel reflection of viewing rays (false: the thesis' model).
     pub reflections: bool,
     pub clip: Option<(Vec3, f32)>,
@@ -129,6 +131,7 @@ pub struct Overrides {
     pub specular: Option<f32>,
     pub eta_scale: Option<f32>,
     pub light_rays: Option<u32>,
+    pub light_spacing: Option<f32>,
     pub light_transport: Option<LightTransport>,
     pub reflections: Option<bool>,
     /// `Some(None)` removes the scene's clipping plane.
@@ -174,6 +177,7 @@ impl Scene {
         set(&mut self.specular, o.specular);
         set(&mut self.eta_scale, o.eta_scale);
         set(&mut self.light_rays, o.light_rays);
+        set(&mut self.light_spacing, o.light_spacing);
         set(&mut self.light_transport, o.light_transport);
         set(&mut self.reflections, o.reflections);
         set(&mut self.clip, o.clip);
@@ -265,6 +269,7 @@ impl Default for Scene {
             eta_scale: 1.0,
             light_transport: LightTransport::Forward,
             light_rays: 2,
+            light_spacing: 1.0,
             reflections: true,
             clip: None,
             exposure: 0.0,
@@ -528,6 +533,7 @@ impl Scene {
                 eta_scale: self.eta_scale,
                 light_transport: self.light_transport,
                 light_rays: self.light_rays,
+                light_spacing: self.light_spacing,
                 reflections: self.reflections,
                 clip: self.clip,
                 env_rotation: self.env_rotation,

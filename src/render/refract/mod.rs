@@ -198,6 +198,14 @@ pub struct SweepOptions {
     /// allows; more rays resolve oblique light and crossing rays more finely, at a cost
     /// proportional to their number.
     pub light_rays: u32,
+    /// Forward transport: the light rays' spacing on the launch plane, in pixel pitches of
+    /// plane 0 (`MIN_LIGHT_SPACING` to `MAX_LIGHT_SPACING`; 1 by default). Below 1 the rays
+    /// resolve folds of the light (the arms of a caustic) finer than the pixels, and the
+    /// irradiance converges toward a photon tracer's (measured: docs/NOTES.md); above 1
+    /// they are fewer and faster, and caustics blur. The cost is proportional to the
+    /// rays' number, 1 / spacing². `light_rays` bounds that number: where it binds the
+    /// spacing widens evenly, and [`SweepStats::light_spacing`] says so.
+    pub light_spacing: f32,
     /// Fresnel reflection of viewing rays at changes of η: the reflected fraction sees the
     /// environment (or background) in the mirrored direction, unoccluded; false = the
     /// thesis' model (no reflection, everything transmitted).
@@ -233,6 +241,7 @@ impl Default for SweepOptions {
             eta_scale: 1.0,
             light_transport: LightTransport::Forward,
             light_rays: 2,
+            light_spacing: 1.0,
             reflections: true,
             floor: false,
             levers: Levers::default(),
@@ -288,6 +297,13 @@ impl SweepOptions {
             (1..=MAX_LIGHT_RAYS).contains(&self.light_rays),
             "light rays per pixel {} must be in 1..={MAX_LIGHT_RAYS}",
             self.light_rays
+        );
+        ensure!(
+            self.light_spacing.is_finite()
+                && (MIN_LIGHT_SPACING..=MAX_LIGHT_SPACING).contains(&self.light_spacing),
+            "light ray spacing {} must be in [{MIN_LIGHT_SPACING}, {MAX_LIGHT_SPACING}] \
+             pixel pitches",
+            self.light_spacing
         );
         if let Some((n, o)) = self.clip {
             ensure!(
@@ -509,6 +525,11 @@ pub struct SweepStats {
     /// height. Ray r = j * columns + i is texel (r % width, r / width) of the
     /// `light-rays` / `light-ray-directions` dumps.
     pub light_rays: [u32; 4],
+    /// Forward transport: the light rays' spacing asked for (`SweepOptions::light_spacing`)
+    /// and the one launched, in pixel pitches of plane 0 (the larger of the grid's two
+    /// cell sides). Wider than asked when the grid would need more rays than
+    /// `SweepOptions::light_rays` per screen pixel.
+    pub light_spacing: [f32; 2],
     /// How often physics was bent, summed over pixels and planes (read back after the
     /// frame; zero for recorded frames that were not read back): see [`Clamps`].
     pub clamps: Clamps,
@@ -536,6 +557,12 @@ impl Clamps {
 
 /// Most light rays per screen pixel (`SweepOptions::light_rays`).
 pub const MAX_LIGHT_RAYS: u32 = 8;
+
+/// Finest light ray spacing, in pixel pitches of plane 0 (`SweepOptions::light_spacing`):
+/// sixteen rays per pixel, which twice `MAX_LIGHT_RAYS` could not hold anyway.
+pub const MIN_LIGHT_SPACING: f32 = 0.25;
+/// Coarsest light ray spacing: a ray per 4 × 4 pixels of plane 0.
+pub const MAX_LIGHT_SPACING: f32 = 4.0;
 
 mod levers;
 mod params;

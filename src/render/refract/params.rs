@@ -57,17 +57,19 @@ pub(crate) struct PlanePush {
 /// plane 0): (x, y of the grid's corner, cell width, cell height) in view units, and its
 /// columns and rows. Every point of every plane's view rectangle traced back along the
 /// (unrefracted) light lands inside it, so no plane has a region no ray could reach; two
-/// cells of margin on each side keep the splats at the border whole. The cells are the
-/// pixel pitch of plane 0 (where pixels are smallest), so the irradiance is resolved at
-/// least as finely as the screen, unless that takes more than `budget` rays: oblique
-/// light seen through a narrow view needs rays over several screen heights (the light
-/// reaching the deepest plane comes from far aside), and then the pitch grows evenly.
+/// cells of margin on each side keep the splats at the border whole. The cells are
+/// `spacing` times the pixel pitch of plane 0 (where pixels are smallest; at 1 the
+/// irradiance is resolved at least as finely as the screen), unless that takes more than
+/// `budget` rays: oblique light seen through a narrow view needs rays over several screen
+/// heights (the light reaching the deepest plane comes from far aside), and then the
+/// pitch grows evenly.
 pub(crate) fn light_grid(
     planes: &Planes,
     light: Vec3,
     tan_half: f32,
     aspect: f32,
     size: [u32; 2],
+    spacing: f32,
     budget: u64,
 ) -> ([f32; 4], [u32; 2]) {
     let launch = planes.first_depth - planes.spacing;
@@ -85,7 +87,7 @@ pub(crate) fn light_grid(
             hi = hi.max(back);
         }
     }
-    let pitch = 2.0 * planes.first_depth * tan_half / size[1] as f32;
+    let pitch = spacing * plane0_pixel_pitch(planes, tan_half, size);
     let extent = hi - lo;
     let mut n = (extent / pitch).ceil() + 4.0;
     let count = n.x as f64 * n.y as f64;
@@ -99,6 +101,11 @@ pub(crate) fn light_grid(
         [corner.x, corner.y, cell.x, cell.y],
         [n.x as u32, n.y as u32],
     )
+}
+
+/// The height of a pixel on plane 0, view units (pixels are square).
+pub(crate) fn plane0_pixel_pitch(planes: &Planes, tan_half: f32, size: [u32; 2]) -> f32 {
+    2.0 * planes.first_depth * tan_half / size[1] as f32
 }
 
 /// Softness as diffusion between neighbouring light rays: the weight each ray hands to each

@@ -58,6 +58,7 @@ impl SweepPass {
             tan_half,
             aspect,
             [self.width, self.height],
+            sweep.light_spacing,
             ray_image[0] as u64 * ray_image[1] as u64,
         );
         let soft = sweep.light.softness > 0.0;
@@ -440,6 +441,11 @@ impl SweepPass {
                 light_transport: sweep.light_transport,
                 light_grid: grid,
                 light_rays: [grid_dims[0], grid_dims[1], ray_image[0], ray_image[1]],
+                light_spacing: [
+                    sweep.light_spacing,
+                    grid[2].max(grid[3])
+                        / plane0_pixel_pitch(&planes, tan_half, [self.width, self.height]),
+                ],
                 clamps: Clamps::default(),
             },
             dumps: dump_buffers,
