@@ -624,6 +624,85 @@ fn sphere_on_floor_caustic_matches_the_photon_tracer() {
     });
 }
 
+/// The demo's own geometry seen from straight above (the scene of the two tests below):
+/// `sphere-on-floor` at 64³ with its `glass-floor` transfer functions, a light 16° off
+/// the vertical, 128², and the view depth 2.5 voxels above the floor with the ball's
+/// radius there in pixels.
+struct DemoFromAbove {
+    vox: f32,
+    vol: refrakt::volume::Volume,
+    tf: TransferFunctions,
+    cam: Camera,
+    light: Light,
+    w: usize,
+    h: usize,
+    depth_floor: f32,
+    r_px: f64,
+}
+
+impl DemoFromAbove {
+    fn new() -> Self {
+        let n = 64u32;
+        let vox = 1.0 / n as f32;
+        let (r, floor_top) = (0.24f32, -0.38f32);
+        let cam = Camera {
+            azimuth: 0.0,
+            elevation: 90.0,
+            distance: 2.2,
+            fov_y: 35.0,
+            ..Default::default()
+        };
+        let (w, h) = (128usize, 128usize);
+        let depth_floor = cam.distance - (floor_top + 2.5 * vox);
+        let t = (cam.fov_y.to_radians() * 0.5).tan();
+        Self {
+            vox,
+            vol: refrakt::volume::procedural::sphere_on_floor(n).unwrap(),
+            tf: TransferFunctions::load("glass-floor").unwrap(),
+            cam,
+            light: Light {
+                towards: Vec3::new(0.25, 1.0, -0.15).normalize(),
+                colour: [1.0; 3],
+                softness: 0.0,
+            },
+            w,
+            h,
+            depth_floor,
+            r_px: r as f64 * h as f64 / (2.0 * depth_floor as f64 * t as f64),
+        }
+    }
+
+    /// The photon tracer's irradiance at view depth `depth`.
+    fn traced(&self, opts: &RenderOptions, depth: f32, photons_per_pixel: u32) -> Vec<[f32; 4]> {
+        let photons = refrakt::photons::PhotonOptions {
+            photons_per_pixel,
+            ..Default::default()
+        };
+        refrakt::photons::trace_irradiance(&self.vol, &self.tf, &self.cam, opts, depth, &photons)
+            .unwrap()
+            .pixels
+    }
+
+    /// The planes at sample distance `sd`, and options that dump the irradiance of the
+    /// last plane before the floor's depth.
+    fn floor_plane(&self, sd: f32) -> (Planes, RenderOptions) {
+        let planes = Planes::for_box(&self.cam, Vec3::splat(0.5), sd * self.vox).unwrap();
+        let k = ((self.depth_floor - planes.first_depth) / planes.spacing).floor() as u32;
+        let mut opts = RenderOptions {
+            width: self.w as u32,
+            height: self.h as u32,
+            sample_distance: sd,
+            ..Default::default()
+        };
+        opts.sweep = SweepOptions {
+            light: self.light,
+            dumps: vec![(StateBuffer::LightColour, k)],
+            ..Default::default()
+        };
+        (planes, opts)
+    }
+}
+
 /// The demo's own geometry (`sphere-on-floor`, here at 64³, with its `glass-floor`
 /// transfer functions: the floor's value ramp passes the glass's η band, a film): the
 /// floor lies 0.67 R below the ball, beyond its paraxial focus (1.5 R from the centre),
@@ -635,58 +714,14 @@ fn sphere_on_floor_caustic_matches_the_photon_tracer() {
 #[test]
 fn the_demos_caustic_matches_the_photon_tracer_ring_by_ring() {
     with_context(|ctx| {
-        let n = 64u32;
-        let vox = 1.0 / n as f32;
-        let vol = refrakt::volume::procedural::sphere_on_floor(n).unwrap();
-        let tf = TransferFunctions::load("glass-floor").unwrap();
-        let (r, floor_top) = (0.24f32, -0.38f32);
-        let cam = Camera {
-            azimuth: 0.0,
-            elevation: 90.0,
-            distance: 2.2,
-            fov_y: 35.0,
-            ..Default::default()
-        };
-        let (w, h) = (128usize, 128usize);
-        let light = Light {
-            towards: Vec3::new(0.25, 1.0, -0.15).normalize(),
-            colour: [1.0; 3],
-            softness: 0.0,
-        };
-        let depth_floor = cam.distance - (floor_top + 2.5 * vox);
-        let r_px = {
-            let t = (cam.fov_y.to_radians() * 0.5).tan();
-            r as f64 * h as f64 / (2.0 * depth_floor as f64 * t as f64)
-        };
+        let demo = DemoFromAbove::new();
+        let (w, h, r_px) = (demo.w, demo.h, demo.r_px);
         for sd in [1.0f32, 0.5] {
-            let planes = Planes::for_box(&cam, Vec3::splat(0.5), sd * vox).unwrap();
-            let k = ((depth_floor - planes.first_depth) / planes.spacing).floor() as u32;
-            let mut opts = RenderOptions {
-                width: w as u32,
-                height: h as u32,
-                sample_distance: sd,
-                ..Default::default()
-            };
-            opts.sweep = SweepOptions {
-                light,
-                dumps: vec![(StateBuffer::LightColour, k)],
-                ..Default::default()
-            };
-            let f = sweep(ctx, &vol, &tf, &cam, &opts);
+            let (planes, opts) = demo.floor_plane(sd);
+            let k = opts.sweep.dumps[0].1;
+            let f = sweep(ctx, &demo.vol, &demo.tf, &demo.cam, &opts);
             let swept = &f.dumps[0].pixels;
-            let traced = refrakt::photons::trace_irradiance(
-                &vol,
-                &tf,
-                &cam,
-                &opts,
-                planes.depth(k),
-                &refrakt::photons::PhotonOptions {
-                    photons_per_pixel: 16,
-                    ..Default::default()
-                },
-            )
-            .unwrap()
-            .pixels;
+            let traced = demo.traced(&opts, planes.depth(k), 16);
             let power = |img: &[[f32; 4]]| img.iter().map(|p| p[0] as f64).sum::<f64>();
             let (pa, pb) = (power(swept), power(&traced));
             println!("sd {sd} (plane {k}): power sweep {pa:.1}, tracer {pb:.1}");
@@ -745,64 +780,22 @@ fn relative_l1(a: &[[f32; 4]], b: &[[f32; 4]], w: usize, c: glam::DVec2, r: f64)
 #[test]
 fn a_finer_light_spacing_converges_the_caustic_to_the_photon_tracer() {
     with_context(|ctx| {
-        let n = 64u32;
-        let vox = 1.0 / n as f32;
-        let vol = refrakt::volume::procedural::sphere_on_floor(n).unwrap();
-        let tf = TransferFunctions::load("glass-floor").unwrap();
-        let (r, floor_top) = (0.24f32, -0.38f32);
-        let cam = Camera {
-            azimuth: 0.0,
-            elevation: 90.0,
-            distance: 2.2,
-            fov_y: 35.0,
-            ..Default::default()
-        };
-        let (w, h) = (128usize, 128usize);
-        let light = Light {
-            towards: Vec3::new(0.25, 1.0, -0.15).normalize(),
-            colour: [1.0; 3],
-            softness: 0.0,
-        };
-        let depth_floor = cam.distance - (floor_top + 2.5 * vox);
-        let r_px = {
-            let t = (cam.fov_y.to_radians() * 0.5).tan();
-            r as f64 * h as f64 / (2.0 * depth_floor as f64 * t as f64)
-        };
-        let planes = Planes::for_box(&cam, Vec3::splat(0.5), vox).unwrap();
-        let k = ((depth_floor - planes.first_depth) / planes.spacing).floor() as u32;
+        let demo = DemoFromAbove::new();
+        let (w, h, r_px) = (demo.w, demo.h, demo.r_px);
+        let (planes, plain) = demo.floor_plane(1.0);
+        let k = plain.sweep.dumps[0].1;
         let opts = |spacing: f32| {
-            let mut o = RenderOptions {
-                width: w as u32,
-                height: h as u32,
-                ..Default::default()
-            };
-            o.sweep = SweepOptions {
-                light,
-                light_rays: 8,
-                light_spacing: spacing,
-                dumps: vec![(StateBuffer::LightColour, k)],
-                ..Default::default()
-            };
+            let mut o = plain.clone();
+            o.sweep.light_rays = 8;
+            o.sweep.light_spacing = spacing;
             o
         };
-        let traced = refrakt::photons::trace_irradiance(
-            &vol,
-            &tf,
-            &cam,
-            &opts(1.0),
-            planes.depth(k),
-            &refrakt::photons::PhotonOptions {
-                photons_per_pixel: 64,
-                ..Default::default()
-            },
-        )
-        .unwrap()
-        .pixels;
+        let traced = demo.traced(&opts(1.0), planes.depth(k), 64);
         let centre = measure_floor(&traced, w, h).brightest;
         let power = |img: &[[f32; 4]]| img.iter().map(|p| p[0] as f64).sum::<f64>();
         let mut errors = Vec::new();
         for spacing in [2.0f32, 1.0, 0.6] {
-            let f = sweep(ctx, &vol, &tf, &cam, &opts(spacing));
+            let f = sweep(ctx, &demo.vol, &demo.tf, &demo.cam, &opts(spacing));
             let stats = f.sweep.as_ref().unwrap();
             let swept = &f.dumps[0].pixels;
             let e = relative_l1(swept, &traced, w, centre, r_px);
