@@ -218,14 +218,16 @@ pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
                 "light rays: {columns} × {rows}, {launched:.2} pixels of the nearest plane apart"
             );
             // The grid's cells fit its extent, so they come out a little under the asked
-            // spacing when the budget does not bind.
+            // spacing when the budget does not bind, a little over when it just does.
             let budget = opts.sweep.light_rays;
-            if launched > asked * 1.001 && budget < MAX_LIGHT_RAYS {
+            // The printed two decimals must show the difference.
+            let bound = launched > asked * 1.01;
+            if bound && budget < MAX_LIGHT_RAYS {
                 println!(
                     ", not {asked}: the budget of {budget} rays per screen pixel binds \
                      (--light-rays, up to {MAX_LIGHT_RAYS})"
                 );
-            } else if launched > asked * 1.001 {
+            } else if bound {
                 println!(
                     ", not {asked}: the most rays there can be, {MAX_LIGHT_RAYS} per screen \
                      pixel, bind"
