@@ -34,9 +34,7 @@ layout(set = 0, binding = 16) uniform sampler3D gradient_volume;
 // differences one voxel apart, and the fallback below, tilt it by 1-3° (measured on a
 // voxelised sphere, render/gradient.rs). Without: a 3D Sobel of trilinear fetches one
 // voxel apart (26 fetches).
-vec3 surface_gradient(vec3 p) {
-    vec3 t = to_tex(p);
-    if (any(lessThan(t, vec3(0.0))) || any(greaterThan(t, vec3(1.0)))) return vec3(0.0);
+vec3 surface_gradient_tex(vec3 t) {
     vec3 g = vec3(0.0);
     if (HAVE_GRADIENT_VOLUME) {
         g = textureLod(gradient_volume, t, 0.0).xyz * P.volume_dims.xyz;
@@ -54,6 +52,18 @@ vec3 surface_gradient(vec3 p) {
         g /= 32.0 * h;
     }
     return transpose(mat3(P.view_to_tex)) * g;
+}
+
+vec3 surface_gradient(vec3 p) {
+    vec3 t = to_tex(p);
+    if (any(lessThan(t, vec3(0.0))) || any(greaterThan(t, vec3(1.0)))) return vec3(0.0);
+    return surface_gradient_tex(t);
+}
+
+// The surface direction at the point of the volume box nearest to p: for a ray that has
+// just left the box through a face.
+vec3 surface_gradient_at_box(vec3 p) {
+    return surface_gradient_tex(clamp(to_tex(p), vec3(0.0), vec3(1.0)));
 }
 
 void count_clamp(uint which) {

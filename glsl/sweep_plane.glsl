@@ -685,13 +685,27 @@ void main() {
     vec3 d = normalize(vd);
     vec3 q_straight = vp + d * (ds / d.z);
     float eta_b = eta_of(value_at_tex(to_tex(q_straight)));
-    vec3 v_kick = vd + length(q_straight - vp) * grad_eta;
+    // Outside the volume box eta is constant: nothing there turns a ray. (grad_eta's
+    // central differences a voxel wide reach back into the box from just outside it; as
+    // a kick they turned rays the face step had already turned at the box's face, once or
+    // twice as the planes fell: single-pixel diagonal lines across the water stand-in's
+    // tank, seen through its back face.)
+    vec3 t_here = to_tex(vp);
+    bool in_box = all(greaterThanEqual(t_here, vec3(0.0))) && all(lessThanEqual(t_here, vec3(1.0)));
+    vec3 v_kick = vd + (in_box ? length(q_straight - vp) : 0.0) * grad_eta;
     vec3 v_face = vd;
     vec3 q_face = q_straight;
     float face_step = 0.0;
     bool in_film = false;
-    if (dot(n_here, n_here) > 1e-12) {
-        vec3 nn = normalize(n_here);
+    // A ray that left the box with its face's turn still pending (|v| still the eta
+    // inside: the face step placed the face a hair beyond the step's end, and the ray
+    // stepped out) is turned at its first plane outside, about the normal at the box's
+    // edge: outside the box the gradient volume is not read, and nothing else would turn
+    // it (it left 8° off Snell's direction, tests/refraction_geometry.rs).
+    vec3 n_face = n_here;
+    if (!in_box && abs(length(vd) - eta_here) > 1e-3 * eta_here) n_face = surface_gradient_at_box(vp);
+    if (dot(n_face, n_face) > 1e-12) {
+        vec3 nn = normalize(n_face);
         vec3 centre = 0.5 * (vp + q_straight);
         float hs = 0.5 * abs(dot(q_straight - vp, nn)) + 2.5 * ref_step;
         float v_plus = value_at_tex(to_tex(centre + hs * nn));

@@ -244,3 +244,91 @@ fn tilted_slab_shifts_rays_by_snells_law() {
         assert!(worst(&e.graded) <= 0.01, "worst {}", worst(&e.graded));
     });
 }
+
+/// Glass filling the whole volume box is a slab whose faces are the box's own: a ray
+/// that enters through the front face and leaves through the back one leaves parallel
+/// to its camera ray (Snell's law at two parallel faces), whatever the sample distance
+/// and however the planes fall. Outside the box nothing may turn it again. (The ray
+/// equation's central differences of η, taken a voxel apart from a point just outside
+/// the box, reached back into it and kicked rays that had already turned at the face —
+/// once or twice, as the planes fell, by up to 6°: single-pixel diagonal lines across the
+/// water stand-in's tank, seen through its back face.) Oblique view, 20° and 12° off the
+/// face normals; the central pixels' rays, which all leave through the back face.
+#[test]
+fn rays_leave_a_box_full_of_glass_parallel_to_their_camera_rays() {
+    with_context(|ctx| {
+        let n = 32u32;
+        let mut vol = Volume::new(
+            [n; 3],
+            [1.0; 3],
+            Voxels::F32(vec![1.0; (n * n * n) as usize]),
+        )
+        .unwrap();
+        vol.range = Some((0.0, 1.0));
+        let tf = TransferFunctions {
+            eta: Piecewise::new(vec![(0.0, [1.0]), (1.0, [1.5])]),
+            ..Default::default()
+        };
+        let cam = refrakt::render::Camera {
+            azimuth: 20.0,
+            elevation: 12.0,
+            distance: 4.0,
+            fov_y: 8.0,
+            ..Default::default()
+        };
+        let (w, h) = (32u32, 32u32);
+        let t = (cam.fov_y.to_radians() * 0.5).tan();
+        for sd in [1.0f32, 0.5] {
+            let planes =
+                refrakt::render::Planes::for_box(&cam, Vec3::splat(0.5), sd / n as f32).unwrap();
+            let mut opts = RenderOptions {
+                width: w,
+                height: h,
+                sample_distance: sd,
+                ..Default::default()
+            };
+            opts.sweep = SweepOptions {
+                light: Light {
+                    towards: cam.eye().normalize(),
+                    colour: [1.0; 3],
+                    softness: 0.0,
+                },
+                dumps: vec![(StateBuffer::ViewDirection, planes.count - 1)],
+                ..Default::default()
+            };
+            let mut r = Renderer::new(ctx, &vol, &tf).unwrap();
+            let f = r.render(Model::Refract, &cam, &opts).unwrap();
+            let (mut worst, mut sum, mut count) = (0.0f32, 0.0f32, 0);
+            for y in 8..24 {
+                for x in 8..24 {
+                    let v = f.dumps[0].pixels[(y * w + x) as usize];
+                    // View space: x right, y up, z forward.
+                    let camera_ray = Vec3::new(
+                        ((x as f32 + 0.5) / w as f32 * 2.0 - 1.0) * t,
+                        -((y as f32 + 0.5) / h as f32 * 2.0 - 1.0) * t,
+                        1.0,
+                    )
+                    .normalize();
+                    let left = Vec3::new(v[0], v[1], v[2]).normalize();
+                    let angle = left.dot(camera_ray).clamp(-1.0, 1.0).acos().to_degrees();
+                    assert!(
+                        (v[3] - 1.0).abs() < 1e-3,
+                        "sd {sd} pixel ({x}, {y}): the ray is still in glass (η {})",
+                        v[3]
+                    );
+                    worst = worst.max(angle);
+                    sum += angle;
+                    count += 1;
+                }
+            }
+            println!(
+                "sd {sd}: angle between leaving and camera rays mean {:.4}°, worst {worst:.4}°",
+                sum / count as f32
+            );
+            assert!(
+                worst <= 0.1,
+                "sd {sd}: a ray left {worst}° off its camera ray"
+            );
+        }
+    });
+}
