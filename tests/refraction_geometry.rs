@@ -105,6 +105,32 @@ impl Slab {
     }
 }
 
+/// Options for a `size` image at sample distance `sd`, lit by hard white light from the
+/// camera's side, with `dumps`.
+fn lit_from_the_camera(
+    cam: &refrakt::render::Camera,
+    size: [u32; 2],
+    sd: f32,
+    dumps: Vec<(StateBuffer, u32)>,
+) -> RenderOptions {
+    let mut opts = RenderOptions {
+        width: size[0],
+        height: size[1],
+        sample_distance: sd,
+        ..Default::default()
+    };
+    opts.sweep = SweepOptions {
+        light: Light {
+            towards: cam.eye().normalize(),
+            colour: [1.0; 3],
+            softness: 0.0,
+        },
+        dumps,
+        ..Default::default()
+    };
+    opts
+}
+
 /// Relative per-pixel errors of the measured ray positions behind the slab.
 struct Errors {
     /// Against the exact shift for the graded interface the volume holds.
@@ -140,24 +166,11 @@ fn measure(ctx: &refrakt::vk::Context, slab: &Slab, n: u32, ramp: f32) -> Errors
     // 0.1 apart, so an error in the exit direction shows as well as one in the offset.
     let behind = [0.36f32, 0.46]
         .map(|z| ((cam.distance + z - planes.first_depth) / planes.spacing).ceil() as u32);
-    let mut opts = RenderOptions {
-        width: w,
-        height: h,
-        sample_distance: sd,
-        ..Default::default()
-    };
-    opts.sweep = SweepOptions {
-        light: Light {
-            towards: cam.eye().normalize(),
-            colour: [1.0; 3],
-            softness: 0.0,
-        },
-        dumps: behind
-            .iter()
-            .map(|&p| (StateBuffer::ViewPosition, p))
-            .collect(),
-        ..Default::default()
-    };
+    let dumps = behind
+        .iter()
+        .map(|&p| (StateBuffer::ViewPosition, p))
+        .collect();
+    let opts = lit_from_the_camera(&cam, [w, h], sd, dumps);
     let mut r = Renderer::new(ctx, &vol, &tf).unwrap();
     let f = r.render(Model::Refract, &cam, &opts).unwrap();
     let nrm = slab.normal();
@@ -281,21 +294,8 @@ fn rays_leave_a_box_full_of_glass_parallel_to_their_camera_rays() {
         for sd in [1.0f32, 0.5] {
             let planes =
                 refrakt::render::Planes::for_box(&cam, Vec3::splat(0.5), sd / n as f32).unwrap();
-            let mut opts = RenderOptions {
-                width: w,
-                height: h,
-                sample_distance: sd,
-                ..Default::default()
-            };
-            opts.sweep = SweepOptions {
-                light: Light {
-                    towards: cam.eye().normalize(),
-                    colour: [1.0; 3],
-                    softness: 0.0,
-                },
-                dumps: vec![(StateBuffer::ViewDirection, planes.count - 1)],
-                ..Default::default()
-            };
+            let dumps = vec![(StateBuffer::ViewDirection, planes.count - 1)];
+            let opts = lit_from_the_camera(&cam, [w, h], sd, dumps);
             let mut r = Renderer::new(ctx, &vol, &tf).unwrap();
             let f = r.render(Model::Refract, &cam, &opts).unwrap();
             let (mut worst, mut sum, mut count) = (0.0f32, 0.0f32, 0);
