@@ -60,12 +60,6 @@ vec3 surface_gradient(vec3 p) {
     return surface_gradient_tex(t);
 }
 
-// The surface direction at the point of the volume box nearest to p: for a ray that has
-// just left the box through a face.
-vec3 surface_gradient_at_box(vec3 p) {
-    return surface_gradient_tex(clamp(to_tex(p), vec3(0.0), vec3(1.0)));
-}
-
 void count_clamp(uint which) {
     atomicAdd(counters.clamps[which], 1u);
 }

@@ -419,7 +419,12 @@ void main() {
     float chain_code = M4.w;
     // The surface normal at this plane's point (the smoothed gradient volume): the face's
     // for the segment ending here, and the probing direction of the step starting here.
-    vec3 n_here = surface_gradient(vp);
+    // One read, at the box's nearest point: zero outside the box for n_here, but a ray
+    // just outside it may still need its face's normal (the face step below).
+    vec3 t_here = to_tex(vp);
+    bool in_box = all(greaterThanEqual(t_here, vec3(0.0))) && all(lessThanEqual(t_here, vec3(1.0)));
+    vec3 n_box = surface_gradient_tex(clamp(t_here, vec3(0.0), vec3(1.0)));
+    vec3 n_here = in_box ? n_box : vec3(0.0);
     if (A < P.termination_alpha) {
         vec2 uv_v = project(vp);
         vec3 c; float a; vec3 m;
@@ -690,8 +695,6 @@ void main() {
     // a kick they turned rays the face step had already turned at the box's face, once or
     // twice as the planes fell: single-pixel diagonal lines across the water stand-in's
     // tank, seen through its back face.)
-    vec3 t_here = to_tex(vp);
-    bool in_box = all(greaterThanEqual(t_here, vec3(0.0))) && all(lessThanEqual(t_here, vec3(1.0)));
     vec3 v_kick = vd + (in_box ? length(q_straight - vp) : 0.0) * grad_eta;
     vec3 v_face = vd;
     vec3 q_face = q_straight;
@@ -702,8 +705,8 @@ void main() {
     // stepped out) is turned at its first plane outside, about the normal at the box's
     // edge: outside the box the gradient volume is not read, and nothing else would turn
     // it (it left 8° off Snell's direction, tests/refraction_geometry.rs).
-    vec3 n_face = n_here;
-    if (!in_box && abs(length(vd) - eta_here) > 1e-3 * eta_here) n_face = surface_gradient_at_box(vp);
+    bool pending = abs(length(vd) - eta_here) > 1e-3 * eta_here;
+    vec3 n_face = in_box || pending ? n_box : vec3(0.0);
     if (dot(n_face, n_face) > 1e-12) {
         vec3 nn = normalize(n_face);
         vec3 centre = 0.5 * (vp + q_straight);
