@@ -58,6 +58,7 @@ fn tiny_thesis_bench_has_the_documented_structure() {
         "6.45",
         "Refract / EA",
         "Refract / floor",
+        "Skeleton / floor",
     ] {
         assert!(stdout.contains(needle), "no {needle} in\n{stdout}");
     }
@@ -84,8 +85,9 @@ fn tiny_thesis_bench_has_the_documented_structure() {
         assert_eq!(row.resolution, expect, "{}", row.dataset);
         assert_eq!(row.viewport, [38, 38]);
         assert!(row.planes >= 2);
-        for v in [Some(&row.refract), row.ea.as_ref(), row.floor.as_ref()] {
-            let v = v.expect("baselines were asked for");
+        let names: Vec<&str> = row.variants().map(|v| v.variant.as_str()).collect();
+        assert_eq!(names, ["refract", "ea", "floor", "skeleton"]);
+        for v in row.variants() {
             assert_eq!(
                 (v.frames_ms.len(), v.warmup_ms.len()),
                 (2, 1),
@@ -109,6 +111,7 @@ fn tiny_thesis_bench_has_the_documented_structure() {
         let ratio = |v: &Option<Variant>| row.refract.stats.mean / v.as_ref().unwrap().stats.mean;
         assert!((row.sweep_over_ea.unwrap() - ratio(&row.ea)).abs() < 1e-9);
         assert!((row.sweep_over_floor.unwrap() - ratio(&row.floor)).abs() < 1e-9);
+        assert!((row.sweep_over_skeleton.unwrap() - ratio(&row.skeleton)).abs() < 1e-9);
         assert!(row.bytes_per_plane_pixel > 0.0);
     }
 
@@ -127,7 +130,8 @@ fn tiny_thesis_bench_has_the_documented_structure() {
     ] {
         assert!(header.split(',').any(|c| c == col), "no {col} in {header}");
     }
-    assert_eq!(lines.count(), 2 * 3 * 3);
+    // 2 rows × 3 frames × 4 variants (the sweep, EA, floor, skeleton).
+    assert_eq!(lines.count(), 2 * 3 * 4);
 
     // --light-transport backward reaches the sweep: the thesis' transport has no light
     // rays and fetches other state, so its bytes per plane-pixel (counted from what the

@@ -444,8 +444,10 @@ fn thesis_report(scale: f64, rows: &[(&str, &str, Vec<f64>)]) -> Report {
                 effective_gb_per_s: 1.0,
                 ea: None,
                 floor: None,
+                skeleton: None,
                 sweep_over_ea: None,
                 sweep_over_floor: None,
+                sweep_over_skeleton: None,
             })
             .collect(),
     }

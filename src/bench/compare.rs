@@ -156,7 +156,7 @@ pub enum Outcome {
 pub struct Line {
     pub dataset: String,
     pub title: String,
-    /// "refract", "ea", "floor" (thesis reports) or the variant's name.
+    /// "refract", "ea", "floor", "skeleton" (thesis reports) or the variant's name.
     pub variant: String,
     pub outcome: Outcome,
 }
@@ -241,9 +241,8 @@ fn flatten(r: &AnyReport) -> Flat<'_> {
                     resolution: row.resolution,
                     viewport: row.viewport,
                     planes: row.planes,
-                    entries: [Some(&row.refract), row.ea.as_ref(), row.floor.as_ref()]
-                        .into_iter()
-                        .flatten()
+                    entries: row
+                        .variants()
                         .map(|v| (v.variant.as_str(), v.frames_ms.as_slice()))
                         .collect(),
                 })

@@ -147,8 +147,28 @@ pub struct Row {
     pub effective_gb_per_s: f64,
     pub ea: Option<Variant>,
     pub floor: Option<Variant>,
+    /// Algorithm 1's fetches and plain arithmetic (`SweepOptions::skeleton`); absent from
+    /// reports written before it existed.
+    #[serde(default)]
+    pub skeleton: Option<Variant>,
     pub sweep_over_ea: Option<f64>,
     pub sweep_over_floor: Option<f64>,
+    #[serde(default)]
+    pub sweep_over_skeleton: Option<f64>,
+}
+
+impl Row {
+    /// The sweep and whichever baselines ran, in the order they render each frame.
+    pub fn variants(&self) -> impl Iterator<Item = &Variant> {
+        [
+            Some(&self.refract),
+            self.ea.as_ref(),
+            self.floor.as_ref(),
+            self.skeleton.as_ref(),
+        ]
+        .into_iter()
+        .flatten()
+    }
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -428,7 +448,7 @@ fn transport_record(t: &[LightTransport]) -> String {
 pub fn thesis(ctx: &Context, s: &ThesisSettings) -> Result<Report> {
     ensure!(s.frames >= 1, "--frames must be at least 1");
     let rows = select_rows(&s.rows)?;
-    let variants = if s.baselines { 3 } else { 1 };
+    let variants = if s.baselines { 4 } else { 1 };
     let total = rows.len() as u64 * (s.warmup + s.frames) as u64 * variants;
     let pb = progress_bar(total, s.progress);
     let side = scaled_side(s.scale);
@@ -453,10 +473,13 @@ pub fn thesis(ctx: &Context, s: &ThesisSettings) -> Result<Report> {
         pb.set_message(d.name.to_string());
         let mut floor_opts = opts.clone();
         floor_opts.sweep.floor = true;
+        let mut skeleton_opts = opts.clone();
+        skeleton_opts.sweep.skeleton = true;
         let mut variants = vec![("refract", Model::Refract, &opts)];
         if s.baselines {
             variants.push(("ea", Model::Ea, &opts));
             variants.push(("floor", Model::Refract, &floor_opts));
+            variants.push(("skeleton", Model::Refract, &skeleton_opts));
         }
         let mut runs = run_interleaved(
             &mut renderer,
@@ -472,6 +495,7 @@ pub fn thesis(ctx: &Context, s: &ThesisSettings) -> Result<Report> {
         let bytes = bytes.unwrap_or(0);
         let ea = runs.next().map(|r| r.0);
         let floor = runs.next().map(|r| r.0);
+        let skeleton = runs.next().map(|r| r.0);
         let pixels = side as f64 * side as f64;
         let sweep_s = refract.passes.sweep_ms / 1000.0;
         let plane_pixels_per_s = if sweep_s > 0.0 {
@@ -503,9 +527,11 @@ pub fn thesis(ctx: &Context, s: &ThesisSettings) -> Result<Report> {
             effective_gb_per_s: bytes_per_plane_pixel * plane_pixels_per_s / 1e9,
             sweep_over_ea: ea.as_ref().map(|e| refract.stats.mean / e.stats.mean),
             sweep_over_floor: floor.as_ref().map(|f| refract.stats.mean / f.stats.mean),
+            sweep_over_skeleton: skeleton.as_ref().map(|k| refract.stats.mean / k.stats.mean),
             refract,
             ea,
             floor,
+            skeleton,
         });
     }
     pb.finish_and_clear();

@@ -80,9 +80,12 @@ pub fn markdown(r: &Report) -> String {
         );
     }
     if r.settings.baselines {
-        s += "\nBaselines in the same run (mean GPU ms per frame):\n\n";
-        s += "| Dataset | Refract | EA ray marcher | Sweep floor | Refract / EA | Refract / floor |\n";
-        s += "|---|---:|---:|---:|---:|---:|\n";
+        s += "\nBaselines in the same run (mean GPU ms per frame; the floor only moves the \
+              state, the skeleton makes Algorithm 1's fetches and plain arithmetic, none of \
+              the optics past it: docs/BENCH.md):\n\n";
+        s += "| Dataset | Refract | EA ray marcher | Sweep floor | Skeleton | Refract / EA \
+              | Refract / floor | Skeleton / floor | Skeleton / EA |\n";
+        s += "|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
         for row in &r.rows {
             let f = |v: &Option<Variant>| {
                 v.as_ref()
@@ -90,14 +93,21 @@ pub fn markdown(r: &Report) -> String {
                     .unwrap_or_default()
             };
             let g = |x: Option<f64>| x.map(|x| format!("{x:.2}")).unwrap_or_default();
+            let over = |a: &Option<Variant>, b: &Option<Variant>| match (a, b) {
+                (Some(a), Some(b)) => Some(a.stats.mean / b.stats.mean),
+                _ => None,
+            };
             s += &format!(
-                "| {} | {:.2} | {} | {} | {} | {} |\n",
+                "| {} | {:.2} | {} | {} | {} | {} | {} | {} | {} |\n",
                 row.title,
                 row.refract.stats.mean,
                 f(&row.ea),
                 f(&row.floor),
+                f(&row.skeleton),
                 g(row.sweep_over_ea),
-                g(row.sweep_over_floor)
+                g(row.sweep_over_floor),
+                g(over(&row.skeleton, &row.floor)),
+                g(over(&row.skeleton, &row.ea))
             );
         }
     }
@@ -134,8 +144,7 @@ pub fn write_csv(r: &Report, path: &Path) -> Result<()> {
         "levers",
     ])?;
     for row in &r.rows {
-        let variants = [Some(&row.refract), row.ea.as_ref(), row.floor.as_ref()];
-        for v in variants.into_iter().flatten() {
+        for v in row.variants() {
             let all = v
                 .warmup_ms
                 .iter()

@@ -223,8 +223,10 @@ pub struct ThesisArgs {
     /// kiwi). Default: all.
     #[arg(long, value_delimiter = ',')]
     pub rows: Vec<String>,
-    /// Also time the EA ray marcher and the sweep's floor variant (same buffers, trivial
-    /// shader) per row, and print the ratios.
+    /// Also time, interleaved with the sweep, the EA ray marcher, the sweep's floor (same
+    /// buffers, a shader that only carries the state) and its skeleton (Algorithm 1's
+    /// fetches and plain arithmetic, none of the optics past it) per row, and print the
+    /// ratios (docs/BENCH.md)
     #[arg(long)]
     pub baselines: bool,
     /// Folder with the thesis originals (<name>.<ext>, e.g. supernova.nrrd) that replace

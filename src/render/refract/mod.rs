@@ -214,6 +214,14 @@ pub struct SweepOptions {
     /// the state forward (same passes, barriers, attachments and reads). The image is not
     /// a rendering; the time is the floor the sweep's optics add to.
     pub floor: bool,
+    /// Benchmark baseline: run every plane with glsl/sweep_skeleton.frag, which makes the
+    /// fetches of the thesis' Algorithm 1 (value and ∇η at the light's and the viewing
+    /// ray's points as the `field` lever says, the backward step's bilinear light, the
+    /// preintegration table) and its plain arithmetic, and none of the optics past it
+    /// (soft kernel, intensity law, face steps, films, reflections, specular). Between
+    /// the floor and the sweep: what the method costs on this device before those. Not a
+    /// rendering. Ignored where `floor` is set.
+    pub skeleton: bool,
     /// The speed levers (region drawn per plane, field texture, image-array reads,
     /// specialization constants): each renders the same image as the plain
     /// implementation within stated bounds (tested); `Levers::REFERENCE` is the plain one.
@@ -244,6 +252,7 @@ impl Default for SweepOptions {
             light_spacing: 1.0,
             reflections: true,
             floor: false,
+            skeleton: false,
             levers: Levers::default(),
             pass_timings: false,
         }

@@ -158,6 +158,9 @@ pub(crate) struct PlanePipelines {
     pub(crate) sweep: GraphicsPipeline,
     /// The benchmark floor (`SweepOptions::floor`), reading the state as `sweep` does.
     pub(crate) floor: GraphicsPipeline,
+    /// The benchmark skeleton (`SweepOptions::skeleton`): Algorithm 1's fetches and plain
+    /// arithmetic, none of the optics past it.
+    pub(crate) skeleton: GraphicsPipeline,
     pub(crate) forward: Option<ForwardPlanes>,
 }
 
@@ -187,6 +190,11 @@ impl PlanePipelines {
         Ok(Self {
             sweep: plane(shaders::SWEEP_FRAG, sweep_pass, "sweep plane")?,
             floor: plane(shaders::SWEEP_FLOOR_FRAG, sweep_pass, "sweep floor plane")?,
+            skeleton: plane(
+                shaders::SWEEP_SKELETON_FRAG,
+                sweep_pass,
+                "sweep skeleton plane",
+            )?,
             forward: if forward {
                 Some(ForwardPlanes {
                     light: plane(

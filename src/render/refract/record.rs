@@ -220,11 +220,14 @@ impl SweepPass {
         rec.begin_scope("sweep");
         // Bound once: between planes only push constants change, and the forward
         // transport switches pipelines (same layout, so the set stays bound).
-        let forward = forward.filter(|_| !sweep.floor);
+        // The baselines run the backward sweep's one pass per plane.
+        let baseline = sweep.floor || sweep.skeleton;
+        let forward = forward.filter(|_| !baseline);
         let pipelines = &self.planes[&features];
         let forward_planes = pipelines.forward.as_ref();
         let plane_pipeline = match (sweep.floor, forward_planes.filter(|_| forward.is_some())) {
             (true, _) => &pipelines.floor,
+            (false, _) if sweep.skeleton => &pipelines.skeleton,
             (false, Some(f)) if soft => &f.light_soft,
             (false, Some(f)) => &f.light,
             (false, None) => &pipelines.sweep,
