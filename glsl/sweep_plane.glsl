@@ -486,7 +486,15 @@ void main() {
             if (layered) {
                 vec3 n = normalize(n_here);
                 across = abs(dot(n, dir));
-                r = across / max(abs(dot(n, ldir)), 1e-3);
+                // Not for light grazing the layers: the ratio is a flat layer's, as wide as
+                // the light's path in it, which grows without bound as n.l -> 0. (Bounded
+                // at 1e-3, r reached 1000 where noise or a fog's curved layers put n.l
+                // near 0, and single pixels along a fog's terminator lost most of their
+                // light: speckle, and contour lines over the supernova's noisy shells;
+                // tests/baselines.rs.) Bounded as the sweep bounds directions, at
+                // MIN_FORWARD (84 degrees from the normal), so r <= 10: the weight stays
+                // continuous in n.l, and a surface lit at up to 84 degrees keeps its law.
+                r = across / max(abs(dot(n, ldir)), MIN_FORWARD);
             }
             float k = 1.0 + r;
             c *= a > 1e-4 ? (1.0 - pow(1.0 - a, k)) / (k * a) : 1.0 - 0.5 * r * a;
