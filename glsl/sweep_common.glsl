@@ -39,6 +39,18 @@ layout(set = 0, binding = 1) uniform sampler3D volume;
 layout(set = 0, binding = 2) uniform sampler1DArray tf;       // layer 1 .a = eta
 layout(set = 0, binding = 3) uniform sampler2DArray preint;   // preintegration table
 
+// Preintegrated segment from value a to value b, `ratio` reference steps long:
+// premultiplied colour, opacity (eq. 3.19), medium (power rule).
+void segment(float a, float b, float ratio, bool clip, out vec3 colour, out float alpha,
+             out vec3 m) {
+    vec2 c = preint_coord(a, b);
+    vec4 ca = textureLod(preint, vec3(c, 0.0), 0.0);
+    m = correct_medium(textureLod(preint, vec3(c, 1.0), 0.0).rgb, ratio);
+    alpha = correct_opacity(ca.a, ratio);
+    colour = ca.a > 1e-6 ? ca.rgb * (alpha / ca.a) : ca.rgb * ratio;
+    if (clip) { alpha = 0.0; colour = vec3(0.0); }  // clipping keeps the medium (Fig. 6.6)
+}
+
 // Light and viewing rays cannot turn by more than ~84 degrees from the sweep direction:
 // they must reach the next plane (thesis ch. 7). Directions are bent no further.
 // MIN_FORWARD (that cosine) is a macro build.rs defines from src/render/limits.rs.

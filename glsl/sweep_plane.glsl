@@ -96,18 +96,6 @@ float hash(uvec3 v) {
     return float(h & 0xffffu) / 65536.0;
 }
 
-// Preintegrated segment from value a to value b, `ratio` reference steps long:
-// premultiplied colour, opacity (eq. 3.19), medium (power rule).
-void segment(float a, float b, float ratio, bool clip, out vec3 colour, out float alpha,
-             out vec3 m) {
-    vec2 c = preint_coord(a, b);
-    vec4 ca = textureLod(preint, vec3(c, 0.0), 0.0);
-    m = correct_medium(textureLod(preint, vec3(c, 1.0), 0.0).rgb, ratio);
-    alpha = correct_opacity(ca.a, ratio);
-    colour = ca.a > 1e-6 ? ca.rgb * (alpha / ca.a) : ca.rgb * ratio;
-    if (clip) { alpha = 0.0; colour = vec3(0.0); }  // clipping keeps the medium (Fig. 6.6)
-}
-
 // Cook-Torrance Fresnel for unpolarised light (eq. 4.12; the thesis prints the bracket's
 // square and (g+c) as (g+2) wrongly). eta_ratio = eta_t / eta_i; total reflection where g
 // would be imaginary.

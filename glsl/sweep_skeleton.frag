@@ -33,16 +33,6 @@ layout(location = 3) out vec4 out_view_direction;
 layout(location = 4) out vec4 out_colour_opacity;
 layout(location = 5) out vec4 out_medium;
 
-// The preintegration table's colour, opacity and medium for a segment from value a to b,
-// `ratio` reference steps long (as the sweep's segment()).
-void table(float a, float b, float ratio, out vec4 colour_opacity, out vec3 medium) {
-    vec2 c = preint_coord(a, b);
-    vec4 ca = textureLod(preint, vec3(c, 0.0), 0.0);
-    medium = correct_medium(textureLod(preint, vec3(c, 1.0), 0.0).rgb, ratio);
-    float alpha = correct_opacity(ca.a, ratio);
-    colour_opacity = vec4(ca.a > 1e-6 ? ca.rgb * (alpha / ca.a) : ca.rgb * ratio, alpha);
-}
-
 void main() {
     vec2 uv = gl_FragCoord.xy / P.camera.zw;
     ivec2 pixel = ivec2(gl_FragCoord.xy);
@@ -61,10 +51,10 @@ void main() {
     vec3 grad_p;
     sample_field(p, f_p, grad_p);
     float f_lp = value_at_tex(to_tex(lp));
-    vec4 seg;
-    vec3 seg_m;
-    table(f_lp, f_p, length(p - lp) / ref_step, seg, seg_m);
-    vec3 light = light_prev * (1.0 - seg.a) * seg_m;
+    vec3 seg_c, seg_m;
+    float seg_a;
+    segment(f_lp, f_p, length(p - lp) / ref_step, false, seg_c, seg_a, seg_m);
+    vec3 light = light_prev * (1.0 - seg_a) * seg_m;
     vec3 light_dir = limit_direction(dir_prev + length(p - lp) * grad_p);
 
     // ---- viewing ray (eqs. 4.3, 4.13) ----
@@ -77,12 +67,12 @@ void main() {
     vec3 grad_v;
     sample_field(vp, f_v, grad_v);
     vec3 d = normalize(vd4.xyz);
-    vec4 s;
-    vec3 m;
-    table(vp4.w, f_v, ds / (d.z * ref_step), s, m);
+    vec3 c, m;
+    float a;
+    segment(vp4.w, f_v, ds / (d.z * ref_step), false, c, a, m);
     vec3 i_d = READ_BUFFER(light_colour, R, project(vp)).rgb;
-    vec3 C = CA.rgb + (1.0 - CA.a) * M4.rgb * s.rgb * i_d;   // eq. 4.13
-    float A = CA.a + (1.0 - CA.a) * s.a;
+    vec3 C = CA.rgb + (1.0 - CA.a) * M4.rgb * c * i_d;   // eq. 4.13
+    float A = CA.a + (1.0 - CA.a) * a;
     vec3 vd = limit_direction(vd4.xyz + (ds / d.z) * grad_v);
     vec3 dn = normalize(vd);
 
