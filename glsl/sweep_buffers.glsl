@@ -4,12 +4,26 @@
 #ifndef REFRAKT_SWEEP_BUFFERS_GLSL
 #define REFRAKT_SWEEP_BUFFERS_GLSL
 
-layout(set = 0, binding = 4) uniform sampler2DArray light_colour;
-layout(set = 0, binding = 5) uniform sampler2DArray light_direction;
-layout(set = 0, binding = 6) uniform sampler2DArray view_position;
-layout(set = 0, binding = 7) uniform sampler2DArray view_direction;
-layout(set = 0, binding = 8) uniform sampler2DArray colour_opacity;
-layout(set = 0, binding = 9) uniform sampler2DArray medium;
+// SWEEP_COMPUTE 1: the compute sweep (issue 31). The same images are storage images
+// there, read with imageLoad at the read layer and written with imageStore at the other
+// (every state read is a texel fetch or a bilinear tap computed here, never hardware
+// filtering, so both paths read the same values). STATE_IMAGE declares a binding as the
+// path needs it.
+#ifndef SWEEP_COMPUTE
+#define SWEEP_COMPUTE 0
+#endif
+#if SWEEP_COMPUTE
+#define STATE_IMAGE(b, name) layout(set = 0, binding = b, rgba32f) uniform image2DArray name
+#else
+#define STATE_IMAGE(b, name) layout(set = 0, binding = b) uniform sampler2DArray name
+#endif
+
+STATE_IMAGE(4, light_colour);
+STATE_IMAGE(5, light_direction);
+STATE_IMAGE(6, view_position);
+STATE_IMAGE(7, view_direction);
+STATE_IMAGE(8, colour_opacity);
+STATE_IMAGE(9, medium);
 
 // The `arrays` lever (specialization constant 5): on, a state value of the read layer is
 // one fetch at the push-constant layer; off, the way the sweep first read it, a choice
@@ -42,6 +56,27 @@ Bilinear bilinear_taps(ivec2 size, vec2 uv) {
     return b;
 }
 
+#if SWEEP_COMPUTE
+// Storage images cannot be passed to a function of any image (their format is part of
+// the type), so each binding the sweep reads bilinearly gets its own function,
+// bilinear_<name> (DEFINE_BILINEAR after the binding's declaration), with the same
+// arithmetic as bilinear_layer below.
+#define STATE_SIZE(tex) imageSize(tex).xy
+#define FETCH_LAYER(tex, pixel, layer) imageLoad(tex, ivec3((pixel), (layer)))
+#define DEFINE_BILINEAR(name) \
+    vec4 bilinear_##name(uint layer, vec2 uv) { \
+        Bilinear b = bilinear_taps(STATE_SIZE(name), uv); \
+        vec4 sum = vec4(0.0); \
+        for (int k = 0; k < 4; ++k) sum += b.weight[k] * FETCH_LAYER(name, b.texel[k], layer); \
+        return sum; \
+    }
+#define READ_BUFFER(name, layer, uv) bilinear_##name((layer), (uv))
+DEFINE_BILINEAR(light_colour)
+DEFINE_BILINEAR(light_direction)
+#else
+#define STATE_SIZE(tex) textureSize(tex, 0).xy
+#define DEFINE_BILINEAR(name)
+
 vec4 bilinear_layer(sampler2DArray tex, uint layer, vec2 uv) {
     Bilinear b = bilinear_taps(textureSize(tex, 0).xy, uv);
     vec4 sum = vec4(0.0);
@@ -59,6 +94,7 @@ vec4 bilinear_layer(sampler2DArray tex, uint layer, vec2 uv) {
 #define READ_BUFFER(name, layer, uv) \
     (ARRAY_READS ? bilinear_layer(name, (layer), (uv)) \
                  : (layer) == 0u ? bilinear_layer(name, 0u, (uv)) : bilinear_layer(name, 1u, (uv)))
+#endif
 
 // A state value of this pixel of the read layer (exact, one fetch).
 #define READ_PIXEL(name, layer, pixel) FETCH_LAYER(name, pixel, layer)

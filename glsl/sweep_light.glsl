@@ -6,9 +6,11 @@
 // Irradiance of the last two planes, ping-ponged like the state (plane i in layer i % 2):
 // rgb = flux per unit plane area, relative to the unobstructed light (an unobstructed
 // beam reads the light colour), a unused.
-layout(set = 0, binding = 10) uniform sampler2DArray irradiance;
+STATE_IMAGE(10, irradiance);
 // xyz = sum of luminance-weighted unit light directions, w = sum of the weights.
-layout(set = 0, binding = 11) uniform sampler2DArray irradiance_direction;
+STATE_IMAGE(11, irradiance_direction);
+DEFINE_BILINEAR(irradiance)
+DEFINE_BILINEAR(irradiance_direction)
 
 // How often the sweep had to bend physics, summed over pixels and planes (read back and
 // printed): 0 = light direction clamped to MIN_FORWARD, 1 = light ray turned back and

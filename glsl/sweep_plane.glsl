@@ -24,28 +24,39 @@
 #include "sweep_rays.glsl"
 #endif
 
-layout(push_constant) uniform Push {
-    uint plane;
-    uint read_layer;
-    float depth;   // depth of this plane
-    uint pad;
-} pc;
+#include "sweep_plane_io.glsl"
 
 #if PASS == 0
-layout(location = 0) out vec4 out_light_colour;
-layout(location = 1) out vec4 out_light_direction;
-layout(location = 2) out vec4 out_view_position;
-layout(location = 3) out vec4 out_view_direction;
-layout(location = 4) out vec4 out_colour_opacity;
-layout(location = 5) out vec4 out_medium;
+PLANE_OUTPUT(0, out_light_colour);
+PLANE_OUTPUT(1, out_light_direction);
+PLANE_OUTPUT(2, out_view_position);
+PLANE_OUTPUT(3, out_view_direction);
+PLANE_OUTPUT(4, out_colour_opacity);
+PLANE_OUTPUT(5, out_medium);
+#define STORE_OUTPUTS(at) \
+    imageStore(light_colour, at, out_light_colour); \
+    imageStore(light_direction, at, out_light_direction); \
+    imageStore(view_position, at, out_view_position); \
+    imageStore(view_direction, at, out_view_direction); \
+    imageStore(colour_opacity, at, out_colour_opacity); \
+    imageStore(medium, at, out_medium);
 #elif PASS == 1
-layout(location = 0) out vec4 out_light_colour;
-layout(location = 1) out vec4 out_light_direction;
+// The light rays' images (the ray texel is the invocation's pixel).
+PLANE_OUTPUT(0, out_light_colour);
+PLANE_OUTPUT(1, out_light_direction);
+#define STORE_OUTPUTS(at) \
+    imageStore(rays_flux, at, out_light_colour); \
+    imageStore(rays_direction, at, out_light_direction);
 #else
-layout(location = 0) out vec4 out_view_position;
-layout(location = 1) out vec4 out_view_direction;
-layout(location = 2) out vec4 out_colour_opacity;
-layout(location = 3) out vec4 out_medium;
+PLANE_OUTPUT(0, out_view_position);
+PLANE_OUTPUT(1, out_view_direction);
+PLANE_OUTPUT(2, out_colour_opacity);
+PLANE_OUTPUT(3, out_medium);
+#define STORE_OUTPUTS(at) \
+    imageStore(view_position, at, out_view_position); \
+    imageStore(view_direction, at, out_view_direction); \
+    imageStore(colour_opacity, at, out_colour_opacity); \
+    imageStore(medium, at, out_medium);
 #endif
 
 const float PI = 3.14159265358979;
@@ -56,7 +67,7 @@ const float PI = 3.14159265358979;
 // that is not there must not bend the light that is. Where no light arrives at all, plain
 // bilinear weights keep the direction field defined.
 void light_at(vec2 uv, uint layer, out vec3 light, out vec3 dir) {
-    ivec2 size = textureSize(light_colour, 0).xy;
+    ivec2 size = STATE_SIZE(light_colour);
     vec2 x = uv * vec2(size) - 0.5;
     ivec2 i = ivec2(floor(x));
     vec2 t = x - vec2(i);
@@ -184,13 +195,24 @@ bool chain_decode(float code, out float light, out float depth) {
     return code > 0.0;
 }
 
-void main() {
+#if SWEEP_COMPUTE && PASS == 0
+// Where the light reaching pixel `px` of this plane left the previous one: the backward
+// step's origin, computed as plane_main computes it for its own pixel (same arithmetic,
+// so a neighbour's value is bit for bit what that neighbour's invocation holds).
+vec3 light_origin(ivec2 px, uint R, float ds) {
+    vec3 p = plane_point((vec2(px) + 0.5) / P.camera.zw, pc.depth);
+    vec3 ld = READ_PIXEL(light_direction, R, px).xyz;
+    return p - ld * (ds / ld.z);
+}
+#endif
+
+void PLANE_MAIN() {
     vec2 size = P.camera.zw;
-    vec2 uv = gl_FragCoord.xy / size;
+    vec2 uv = FRAG_XY / size;
     uint R = pc.read_layer;
     float ds = P.planes.y;
     float ref_step = P.planes.w;
-    ivec2 pixel = ivec2(gl_FragCoord.xy);
+    ivec2 pixel = ivec2(FRAG_XY);
 
 #if PASS == 1
     // ---- light propagation, forward (Lagrangian) --------------------------------------
@@ -314,7 +336,7 @@ void main() {
         vec2 across = vec2(-lateral.y, lateral.x);
         float world_per_uv_y = 2.0 * (pc.depth - ds) * P.camera.x;  // plane i-1 height
         vec2 to_uv = vec2(1.0 / (world_per_uv_y * P.camera.y), -1.0 / world_per_uv_y);
-        float rot = 2.0 * PI * hash(uvec3(gl_FragCoord.xy, pc.plane));
+        float rot = 2.0 * PI * hash(uvec3(FRAG_XY, pc.plane));
         for (int k = 0; k < 3; ++k) {
             float phi = rot + float(k) * (2.0 * PI / 3.0);
             vec2 offset = radius * (cos(phi) / dn.z * lateral + sin(phi) * across);
@@ -332,8 +354,27 @@ void main() {
     // Intensity law (eqs. 4.6-4.8): I = S_{i-1} / S_i, the areas of this pixel's footprint
     // on this plane and of the light's origin on the previous one. Areas from the cross
     // product of the screen-space derivatives (exact for sheared footprints).
+#if SWEEP_COMPUTE
+    // The fine derivatives of a fragment quad, as explicit differences with the quad
+    // neighbour (the pixel whose x, or y, differs in the lowest bit): right minus left,
+    // lower minus upper, the same value for both pixels of a pair, as dFdxFine and
+    // dFdyFine give it. Where the neighbour lies past the image's edge (an odd size) the
+    // pixel on the other side stands in. p is linear in the pixel, so its differences
+    // are the neighbour's p minus this one's.
+    ivec2 isize = ivec2(size);
+    ivec2 nx = ivec2(pixel.x ^ 1, pixel.y), ny = ivec2(pixel.x, pixel.y ^ 1);
+    if (nx.x >= isize.x) nx.x = pixel.x - 1;
+    if (ny.y >= isize.y) ny.y = pixel.y - 1;
+    float sx = nx.x > pixel.x ? 1.0 : -1.0, sy = ny.y > pixel.y ? 1.0 : -1.0;
+    vec3 p_x = plane_point((vec2(nx) + 0.5) / size, pc.depth);
+    vec3 p_y = plane_point((vec2(ny) + 0.5) / size, pc.depth);
+    float s_here = length(cross(sx * (p_x - p), sy * (p_y - p)));
+    float s_prev = length(cross(sx * (light_origin(nx, R, ds) - lp),
+                                sy * (light_origin(ny, R, ds) - lp)));
+#else
     float s_here = length(cross(dFdxFine(p), dFdyFine(p)));
     float s_prev = length(cross(dFdxFine(lp), dFdyFine(lp)));
+#endif
     float gain = s_prev / s_here;
     // Chapter 7's bright spots: neighbours with very different directions give huge
     // footprints. Bound the gain per plane (P.max_gain) and never let NaN/Inf through.
@@ -775,3 +816,5 @@ void main() {
     out_medium = vec4(M, chain_code);
 #endif
 }
+
+COMPUTE_ENTRY

@@ -6,9 +6,9 @@
 #define REFRAKT_SWEEP_RAYS_GLSL
 
 // rgb = flux, a = view x on the ray's plane.
-layout(set = 0, binding = 13) uniform sampler2DArray rays_flux;
+STATE_IMAGE(13, rays_flux);
 // xyz = v = eta dx/ds, w = view y on the ray's plane.
-layout(set = 0, binding = 14) uniform sampler2DArray rays_direction;
+STATE_IMAGE(14, rays_direction);
 
 ivec2 ray_grid() { return ivec2(P.light_rays.xy); }
 

@@ -44,7 +44,7 @@ pub use sat::SummedAreaTable;
 pub use preintegration::{PreintegrationTable, TABLE_SIZE};
 pub use refract::{
     Clamps, Dump, Levers, Light, LightTransport, Planes, Region, Splat, StateBuffer, SweepOptions,
-    SweepStats, MAX_ETA_SCALE, MAX_LIGHT_RAYS,
+    SweepPath, SweepStats, MAX_ETA_SCALE, MAX_LIGHT_RAYS,
 };
 pub use tonemap::ToneMapPass;
 

@@ -16,7 +16,7 @@ mod resources;
 pub mod spirv;
 mod swapchain;
 
-pub use ash::vk::{Format, ImageUsageFlags};
+pub use ash::vk::{Format, ImageUsageFlags, PhysicalDeviceType};
 pub use barriers::Access;
 pub use commands::{Area, Recorder, Timings, Use};
 pub use context::{

@@ -255,13 +255,46 @@ impl ComputePipeline {
         push_size: u32,
         name: &str,
     ) -> Result<Self> {
+        Self::with_constants(ctx, spirv, set, push_size, &[], name)
+    }
+
+    /// As [`ComputePipeline::new`], with specialization constants: `constants[i]` is the
+    /// 32-bit value of `constant_id = i`.
+    pub fn with_constants(
+        ctx: &Context,
+        spirv: &[u8],
+        set: &DescriptorSet,
+        push_size: u32,
+        constants: &[u32],
+        name: &str,
+    ) -> Result<Self> {
         let device = ctx.device();
         let layout = pipeline_layout(ctx, set, push_size)?;
-        let module = shader_module(ctx, spirv, name)?;
-        let stage = vk::PipelineShaderStageCreateInfo::default()
+        let module = match shader_module(ctx, spirv, name) {
+            Ok(m) => m,
+            Err(e) => {
+                // SAFETY: created above, unused.
+                unsafe { device.destroy_pipeline_layout(layout, None) };
+                return Err(e);
+            }
+        };
+        let entries: Vec<vk::SpecializationMapEntry> = (0..constants.len() as u32)
+            .map(|i| vk::SpecializationMapEntry {
+                constant_id: i,
+                offset: 4 * i,
+                size: 4,
+            })
+            .collect();
+        let spec = vk::SpecializationInfo::default()
+            .map_entries(&entries)
+            .data(bytemuck::cast_slice(constants));
+        let mut stage = vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(module)
             .name(c"main");
+        if !constants.is_empty() {
+            stage = stage.specialization_info(&spec);
+        }
         let info = vk::ComputePipelineCreateInfo::default()
             .stage(stage)
             .layout(layout);

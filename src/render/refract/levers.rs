@@ -34,6 +34,48 @@ pub enum Splat {
     Compute,
 }
 
+/// How the planes of the sweep run (issue 31).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SweepPath {
+    /// What measured fastest on this class of device ([`SweepPath::for_device`]).
+    Auto,
+    /// Full-screen draws into render passes (the thesis' design): every plane's passes
+    /// are graphics draws, the state images colour attachments.
+    Fragment,
+    /// One compute dispatch per pass and plane on storage images (the same shaders,
+    /// glsl/sweep_plane_io.glsl): on Hopper GPUs only 4 of 132 SMs run fragment
+    /// shaders, dispatches use all of them. The forward transport's splat is the compute
+    /// one (integer sums) on this path.
+    Compute,
+}
+
+impl SweepPath {
+    /// The path `Auto` stands for on a device of this type: what `bench variants`
+    /// measured fastest there (docs/BENCH.md, "Compute or fragment"). CPU (lavapipe):
+    /// measured. GPUs: compute, from the structure of the hardware (a draw per plane runs
+    /// on the graphics-capable SMs only: 4 of 132 on an H100), until `scripts/gpu-bench.sh`
+    /// has measured both there.
+    pub fn for_device(self, device_type: crate::vk::PhysicalDeviceType) -> SweepPath {
+        match self {
+            SweepPath::Auto if device_type == crate::vk::PhysicalDeviceType::CPU => CPU_SWEEP_PATH,
+            SweepPath::Auto => SweepPath::Compute,
+            explicit => explicit,
+        }
+    }
+
+    fn name(self) -> &'static str {
+        match self {
+            SweepPath::Auto => "auto",
+            SweepPath::Fragment => "fragment",
+            SweepPath::Compute => "compute",
+        }
+    }
+}
+
+/// What `SweepPath::Auto` runs on a CPU device (lavapipe), as measured there.
+pub const CPU_SWEEP_PATH: SweepPath = SweepPath::Compute;
+
 /// One combination of the levers. `Levers::default()` (what renders unless told
 /// otherwise) has every lever on that renders the plain implementation's image
 /// ([`Levers::REFERENCE`], every lever off) within float rounding: region, arrays,
@@ -58,8 +100,16 @@ pub struct Levers {
     /// Specialization constants compile out what a frame does not use (specular,
     /// clipping, reflections, the backward soft-shadow kernel).
     pub specialize: bool,
-    /// How the forward transport's light rays deposit their flux.
+    /// How the forward transport's light rays deposit their flux (the fragment path's;
+    /// the compute path always splats with compute).
     pub splat: Splat,
+    /// Draws or dispatches per plane.
+    #[serde(default = "auto_path")]
+    pub sweep: SweepPath,
+}
+
+fn auto_path() -> SweepPath {
+    SweepPath::Auto
 }
 
 impl Default for Levers {
@@ -70,6 +120,7 @@ impl Default for Levers {
             arrays: true,
             specialize: true,
             splat: Splat::Raster,
+            sweep: SweepPath::Auto,
         }
     }
 }
@@ -82,11 +133,13 @@ impl Levers {
         arrays: false,
         specialize: false,
         splat: Splat::Raster,
+        sweep: SweepPath::Fragment,
     };
 
     /// The keys of [`Levers::parse`], with their values, for help texts.
     pub const SYNTAX: &'static str =
-        "region=full|rect, field=off|on, arrays=off|on, specialize=off|on, splat=raster|compute";
+        "region=full|rect, field=off|on, arrays=off|on, specialize=off|on, splat=raster|compute, \
+         sweep=auto|fragment|compute";
 
     /// `default`, `reference`, or comma-separated `key=value` pairs applied to the
     /// default (e.g. `region=full,field=off`); a pair may also follow `reference,` to
@@ -142,6 +195,14 @@ impl Levers {
                         _ => bail!("splat={value}: expected raster or compute"),
                     }
                 }
+                "sweep" => {
+                    levers.sweep = match value {
+                        "auto" => SweepPath::Auto,
+                        "fragment" => SweepPath::Fragment,
+                        "compute" => SweepPath::Compute,
+                        _ => bail!("sweep={value}: expected auto, fragment or compute"),
+                    }
+                }
                 _ => bail!(
                     "unknown lever '{key}' in variant '{spec}'; the keys are {}",
                     Self::SYNTAX
@@ -176,6 +237,16 @@ impl Levers {
             flip(&mut v);
             out.push(v);
         }
+        // The path: the other explicit one, or from `auto` both (one of which is what
+        // `auto` runs on the device at hand).
+        let paths: &[SweepPath] = match self.sweep {
+            SweepPath::Auto => &[SweepPath::Fragment, SweepPath::Compute],
+            SweepPath::Fragment => &[SweepPath::Compute],
+            SweepPath::Compute => &[SweepPath::Fragment],
+        };
+        for &sweep in paths {
+            out.push(Levers { sweep, ..self });
+        }
         out
     }
 }
@@ -185,7 +256,7 @@ impl fmt::Display for Levers {
         let on = |b: bool| if b { "on" } else { "off" };
         write!(
             f,
-            "region={},field={},arrays={},specialize={},splat={}",
+            "region={},field={},arrays={},specialize={},splat={},sweep={}",
             match self.region {
                 Region::Full => "full",
                 Region::Rect => "rect",
@@ -196,7 +267,8 @@ impl fmt::Display for Levers {
             match self.splat {
                 Splat::Raster => "raster",
                 Splat::Compute => "compute",
-            }
+            },
+            self.sweep.name()
         )
     }
 }
@@ -209,8 +281,10 @@ mod tests {
     fn parse_round_trips_and_applies_to_the_default() {
         let all = [Region::Full, Region::Rect];
         for region in all {
-            for bits in 0..16u32 {
+            for bits in 0..48u32 {
                 let l = Levers {
+                    sweep: [SweepPath::Auto, SweepPath::Fragment, SweepPath::Compute]
+                        [(bits / 16) as usize],
                     region,
                     field: bits & 1 != 0,
                     arrays: bits & 2 != 0,
@@ -227,6 +301,11 @@ mod tests {
         let l = Levers::parse("region=full").unwrap();
         assert_eq!(l.region, Region::Full);
         assert!(!l.field && l.arrays && l.specialize && l.splat == Splat::Raster);
+        assert_eq!(l.sweep, SweepPath::Auto);
+        assert_eq!(
+            Levers::parse("sweep=fragment").unwrap().sweep,
+            SweepPath::Fragment
+        );
         let r = Levers::parse("reference, field=on").unwrap();
         assert_eq!(
             r,
@@ -244,6 +323,7 @@ mod tests {
             ("", "empty"),
             ("region=polygon", "full or rect"),
             ("splat=gather", "raster or compute"),
+            ("sweep=vertex", "auto, fragment or compute"),
             ("field=maybe", "on or off"),
             ("speed=11", "unknown lever 'speed'"),
             ("field", "not key=value"),
@@ -258,7 +338,8 @@ mod tests {
     fn each_flipped_differs_in_exactly_one_lever() {
         let base = Levers::default();
         let flipped = base.each_flipped();
-        assert_eq!(flipped.len(), 5);
+        // Four on/off levers and the region, and from `auto` both explicit paths.
+        assert_eq!(flipped.len(), 7);
         for v in flipped {
             let diffs = [
                 v.region != base.region,
@@ -266,6 +347,7 @@ mod tests {
                 v.arrays != base.arrays,
                 v.specialize != base.specialize,
                 v.splat != base.splat,
+                v.sweep != base.sweep,
             ];
             assert_eq!(diffs.iter().filter(|d| **d).count(), 1, "{v}");
         }

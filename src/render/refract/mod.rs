@@ -573,13 +573,15 @@ pub const MIN_LIGHT_SPACING: f32 = 0.25;
 /// Coarsest light ray spacing: a ray per 4 × 4 pixels of plane 0.
 pub const MAX_LIGHT_SPACING: f32 = 4.0;
 
+mod compute;
 mod levers;
 mod params;
 mod pass;
 mod record;
 mod region;
 
-pub use levers::{Levers, Region, Splat};
+use compute::ComputeFrame;
+pub use levers::{Levers, Region, Splat, SweepPath, CPU_SWEEP_PATH};
 pub(crate) use params::EnvInputs;
 use params::*;
-pub(crate) use pass::{Features, SweepPass, TrafficInputs};
+pub(crate) use pass::{Features, StateImage, SweepPass, TrafficInputs};

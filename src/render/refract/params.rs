@@ -53,6 +53,21 @@ pub(crate) struct PlanePush {
     pub(crate) pad: u32,
 }
 
+/// Push constants of every pipeline of the compute sweep (glsl/sweep_plane_io.glsl): one
+/// size for all, so that switching between them keeps the descriptor set bound.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+pub(crate) struct ComputePush {
+    pub(crate) plane: u32,
+    pub(crate) read_layer: u32,
+    pub(crate) depth: f32,
+    /// The compute splat's fixed-point unit (glsl/light_splat_fixed.glsl).
+    pub(crate) unit: f32,
+    /// The first pixel (or ray texel) the dispatch covers, and how many.
+    pub(crate) origin: [i32; 2],
+    pub(crate) extent: [i32; 2],
+}
+
 /// The forward transport's grid of light rays on the launch plane (one spacing before
 /// plane 0): (x, y of the grid's corner, cell width, cell height) in view units, and its
 /// columns and rows. Every point of every plane's view rectangle traced back along the
@@ -183,6 +198,36 @@ mod tests {
         ] {
             check_block(spirv, "Push", &push, size, false).unwrap();
         }
+        let push = crate::host_layout!(ComputePush {
+            plane,
+            read_layer,
+            depth,
+            unit,
+            origin,
+            extent
+        });
+        let size = std::mem::size_of::<ComputePush>();
+        for spirv in [
+            shaders::SWEEP_COMP,
+            shaders::SWEEP_LIGHT_FORWARD_COMP,
+            shaders::SWEEP_VIEW_FORWARD_COMP,
+            shaders::SWEEP_RESOLVE_COMP,
+            shaders::SWEEP_FLOOR_COMP,
+        ] {
+            check_block(spirv, "Push", &push, size, false).unwrap();
+        }
+        check_block(
+            shaders::SWEEP_COMP,
+            "SweepParams",
+            &params,
+            size_of_params(),
+            true,
+        )
+        .unwrap();
+    }
+
+    fn size_of_params() -> usize {
+        std::mem::size_of::<SweepParams>()
     }
 
     /// The check fails when a host field is missing or moved (it can fail).

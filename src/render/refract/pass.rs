@@ -80,6 +80,15 @@ pub(crate) struct SweepPass {
     pub(crate) view_pass: RenderPass,
     pub(crate) view_framebuffers: [Framebuffer; 2],
     pub(crate) counters: Buffer,
+    /// The compute sweep's set (issue 31): the plane set's bindings, with the state,
+    /// irradiance and ray images as storage images (glsl/sweep_buffers.glsl).
+    pub(crate) compute_set: DescriptorSet,
+    /// The compute sweep's plane pipelines per feature set, made on the first frame that
+    /// runs the compute path with those features.
+    pub(crate) compute_planes: HashMap<Features, ComputePlanes>,
+    /// The compute sweep's splat and resolve (feature-independent), made with the first
+    /// compute plane pipelines.
+    pub(crate) compute_splat: Option<[ComputePipeline; 2]>,
     pub(crate) composite: ComputePipeline,
     pub(crate) output: FrameTarget,
     pub(crate) env_params: Buffer,
@@ -216,6 +225,47 @@ impl PlanePipelines {
             } else {
                 None
             },
+        })
+    }
+}
+
+/// The compute sweep's plane pipelines for one feature set (the same shaders as
+/// [`PlanePipelines`], glsl/*.comp), all on [`SweepPass::compute_set`] with
+/// [`ComputePush`].
+pub(crate) struct ComputePlanes {
+    pub(crate) sweep: ComputePipeline,
+    pub(crate) floor: ComputePipeline,
+    pub(crate) skeleton: ComputePipeline,
+    pub(crate) light: ComputePipeline,
+    pub(crate) light_soft: ComputePipeline,
+    pub(crate) view: ComputePipeline,
+}
+
+impl ComputePlanes {
+    fn new(ctx: &Context, set: &DescriptorSet, constants: [u32; 8]) -> Result<Self> {
+        let push = std::mem::size_of::<ComputePush>() as u32;
+        let make = |spirv, name: &str| {
+            ComputePipeline::with_constants(ctx, spirv, set, push, &constants, name)
+        };
+        Ok(Self {
+            sweep: make(shaders::SWEEP_COMP, "sweep plane (compute)")?,
+            floor: make(shaders::SWEEP_FLOOR_COMP, "sweep floor plane (compute)")?,
+            skeleton: make(
+                shaders::SWEEP_SKELETON_COMP,
+                "sweep skeleton plane (compute)",
+            )?,
+            light: make(
+                shaders::SWEEP_LIGHT_FORWARD_COMP,
+                "sweep light rays (compute)",
+            )?,
+            light_soft: make(
+                shaders::SWEEP_LIGHT_FORWARD_SOFT_COMP,
+                "sweep light rays, soft (compute)",
+            )?,
+            view: make(
+                shaders::SWEEP_VIEW_FORWARD_COMP,
+                "sweep viewing rays (compute)",
+            )?,
         })
     }
 }
@@ -406,6 +456,17 @@ impl SweepPass {
         // 18: the compute splat's sums (the `splat` lever).
         plane_bindings.push(Binding::Storage(&splat_sums));
         let sweep_set = DescriptorSet::new(ctx, &plane_bindings, "sweep")?;
+        // The compute sweep's set: the same bindings, with every image a plane writes
+        // (states 4-9, irradiance 10-11, rays 13-14) a storage image.
+        let mut compute_bindings = plane_bindings.clone();
+        for (k, s) in states.iter().enumerate() {
+            compute_bindings[4 + k] = Binding::StorageImage(&s.image);
+        }
+        compute_bindings[10] = Binding::StorageImage(&irradiance[0].image);
+        compute_bindings[11] = Binding::StorageImage(&irradiance[1].image);
+        compute_bindings[13] = Binding::StorageImage(&rays[0].image);
+        compute_bindings[14] = Binding::StorageImage(&rays[1].image);
+        let compute_set = DescriptorSet::new(ctx, &compute_bindings, "sweep (compute)")?;
         let output = FrameTarget::new(ctx, width, height, "sweep frame")?;
         let env_params = Buffer::uniform::<EnvParams>(ctx, "environment params")?;
         let mut composite_bindings = sampled.clone();
@@ -518,6 +579,9 @@ impl SweepPass {
             view_pass,
             view_framebuffers,
             counters,
+            compute_set,
+            compute_planes: HashMap::new(),
+            compute_splat: None,
             composite,
             output,
             env_params,
@@ -536,6 +600,43 @@ impl SweepPass {
                 self.forward.is_some(),
             )?;
             self.planes.insert(features, planes);
+        }
+        Ok(())
+    }
+
+    /// Make the compute sweep's plane pipelines for `features` if this pass has none yet,
+    /// and its splat and resolve with the first.
+    pub(crate) fn ensure_compute_planes(
+        &mut self,
+        ctx: &Context,
+        features: Features,
+    ) -> Result<()> {
+        if !self.compute_planes.contains_key(&features) {
+            let planes = ComputePlanes::new(
+                ctx,
+                &self.compute_set,
+                features.constants(self.have_gradient),
+            )?;
+            self.compute_planes.insert(features, planes);
+        }
+        if self.compute_splat.is_none() {
+            let push = std::mem::size_of::<ComputePush>() as u32;
+            self.compute_splat = Some([
+                ComputePipeline::new(
+                    ctx,
+                    shaders::SWEEP_SPLAT_COMP,
+                    &self.compute_set,
+                    push,
+                    "light splat (compute sweep)",
+                )?,
+                ComputePipeline::new(
+                    ctx,
+                    shaders::SWEEP_RESOLVE_COMP,
+                    &self.compute_set,
+                    push,
+                    "light splat resolve (compute sweep)",
+                )?,
+            ]);
         }
         Ok(())
     }

@@ -17,7 +17,14 @@ impl SweepPass {
         let (ctx, info, env, sweep) = (inputs.ctx, inputs.info, &inputs.env, &opts.sweep);
         // The plane pipelines with what this frame does not use compiled out.
         let features = Features::of(sweep, self.have_field, inputs.eta_films);
-        self.ensure_planes(ctx, features)?;
+        // Draws or dispatches per plane (issue 31): `auto` is what measured fastest on
+        // this class of device.
+        let compute = sweep.levers.sweep.for_device(ctx.info().device_type) == SweepPath::Compute;
+        if compute {
+            self.ensure_compute_planes(ctx, features)?;
+        } else {
+            self.ensure_planes(ctx, features)?;
+        }
         let volume_dims = info.dims;
         let (eye, forward, right, up) = camera.frame();
         let travel = -sweep.light.towards.normalize();
@@ -36,9 +43,13 @@ impl SweepPass {
             .clip
             .map(|(n, o)| (n.normalize(), o))
             .unwrap_or((Vec3::ZERO, 0.0));
+        // The transport; the fragment path's forward pipelines where it runs. The compute
+        // path needs neither point sprites nor fragment-shader atomics.
+        let forward_on = sweep.light_transport == LightTransport::Forward;
         let forward = match (sweep.light_transport, &self.forward) {
             (LightTransport::Backward, _) => None,
             (LightTransport::Forward, Some(f)) => Some(f),
+            (LightTransport::Forward, None) if compute => None,
             (LightTransport::Forward, None) => bail!(
                 "the forward light transport needs point sizes above 1 and fragment-shader \
                  atomics (largePoints, fragmentStoresAndAtomics), which device '{}' lacks; \
@@ -116,10 +127,14 @@ impl SweepPass {
                 ray_image[1] as f32,
             ],
             transport: [
-                if forward.is_some() { 1.0 } else { 0.0 },
+                if forward_on { 1.0 } else { 0.0 },
                 diffusion_w,
                 diffusion_stride as f32,
-                forward.map_or(MAX_SPLAT_HALF_WIDTH, |f| f.max_half_width),
+                // The point sprites' size limit binds the fragment path only.
+                match (compute, forward) {
+                    (false, Some(f)) => f.max_half_width,
+                    _ => MAX_SPLAT_HALF_WIDTH,
+                },
             ],
             max_gain: sweep.max_gain,
             termination_alpha: opts.termination_alpha,
@@ -147,7 +162,7 @@ impl SweepPass {
             .dumps
             .iter()
             .map(|&(b, plane)| {
-                let image = match (forward.is_some(), b) {
+                let image = match (forward_on, b) {
                     (true, StateBuffer::LightRays) => &self.rays[0].image,
                     (true, StateBuffer::LightRayDirections) => &self.rays[1].image,
                     _ => &self.states[b.index()].image,
@@ -187,7 +202,7 @@ impl SweepPass {
         // The compute splat's unit (glsl/light_splat_fixed.glsl): the brightest channel.
         let unit = sweep.light.colour.into_iter().fold(0.0f32, f32::max);
         let unit = if unit > 0.0 { unit } else { 1.0 };
-        let compute_splat = forward.is_some() && sweep.levers.splat == Splat::Compute;
+        let compute_splat = forward_on && (compute || sweep.levers.splat == Splat::Compute);
         rec.pass("sweep setup", &uses, |rec| {
             rec.clear_storage(&self.counters);
             if compute_splat {
@@ -197,7 +212,10 @@ impl SweepPass {
             let setup_groups = [ray_image[0].div_ceil(8), ray_image[1].div_ceil(8), 1];
             rec.dispatch(&self.setup, &self.setup_set, &[], setup_groups)?;
             // Both layers become sampled: every draw's set names both (see module docs).
-            rec.transition_many(&self.every_layer(Access::SampledGeneral));
+            // (The compute planes declare their storage uses themselves.)
+            if !compute {
+                rec.transition_many(&self.every_layer(Access::SampledGeneral));
+            }
             Ok(())
         })?;
 
@@ -218,189 +236,211 @@ impl SweepPass {
         };
 
         rec.begin_scope("sweep");
-        // Bound once: between planes only push constants change, and the forward
-        // transport switches pipelines (same layout, so the set stays bound).
-        // The baselines run the backward sweep's one pass per plane.
         let baseline = sweep.floor || sweep.skeleton;
-        let forward = forward.filter(|_| !baseline);
-        let pipelines = &self.planes[&features];
-        let forward_planes = pipelines.forward.as_ref();
-        let plane_pipeline = match (sweep.floor, forward_planes.filter(|_| forward.is_some())) {
-            (true, _) => &pipelines.floor,
-            (false, _) if sweep.skeleton => &pipelines.skeleton,
-            (false, Some(f)) if soft => &f.light_soft,
-            (false, Some(f)) => &f.light,
-            (false, None) => &pipelines.sweep,
-        };
-        rec.bind_graphics(plane_pipeline, &self.sweep_set, self.width, self.height);
-        let light_images = [&self.rays[0].image, &self.rays[1].image];
-        for i in 0..planes.count {
-            let write = i % 2;
-            let read = 1 - write;
-            let push = PlanePush {
-                plane: i,
-                read_layer: read,
-                depth: planes.depth(i),
-                pad: 0,
+        if compute {
+            self.record_compute_planes(
+                rec,
+                &ComputeFrame {
+                    features,
+                    planes: &planes,
+                    regions: &regions,
+                    forward: forward_on && !baseline,
+                    soft,
+                    grid_rays: grid_dims[0] * grid_dims[1],
+                    ray_image,
+                    unit,
+                    dumps: &dump_buffers,
+                },
+                sweep,
+            )?;
+        } else {
+            // Bound once: between planes only push constants change, and the forward
+            // transport switches pipelines (same layout, so the set stays bound).
+            // The baselines run the backward sweep's one pass per plane.
+            let forward = forward.filter(|_| !baseline);
+            let pipelines = &self.planes[&features];
+            let forward_planes = pipelines.forward.as_ref();
+            let plane_pipeline = match (sweep.floor, forward_planes.filter(|_| forward.is_some())) {
+                (true, _) => &pipelines.floor,
+                (false, _) if sweep.skeleton => &pipelines.skeleton,
+                (false, Some(f)) if soft => &f.light_soft,
+                (false, Some(f)) => &f.light,
+                (false, None) => &pipelines.sweep,
             };
-            // The layer the previous plane wrote becomes sampled (one batched barrier
-            // over the six images); begin_render_pass then makes the layer the previous
-            // plane sampled an attachment (a second one). Nothing else is synchronised.
-            if sweep.drop_barrier_before_plane == Some(i) {
-                for s in &self.states {
-                    rec.assume_without_barrier(&s.image, read..read + 1, Access::SampledGeneral);
-                }
-            } else {
-                // With the forward transport the previous plane's irradiance, which this
-                // plane's viewing rays read, is in the same batch (a dump may have copied
-                // it out).
-                let mut items = self.state_layers(read..read + 1, Access::SampledGeneral);
-                if forward.is_some() {
-                    for img in self.irradiance.iter().map(|i| &i.image).chain(light_images) {
-                        items.push((img, read..read + 1, Access::SampledGeneral));
-                    }
-                }
-                rec.transition_many(&items);
-            }
-            match forward {
-                None => {
-                    let attachments: Vec<(&Image, u32)> =
-                        self.states.iter().map(|s| (&s.image, write)).collect();
-                    let area = regions[i as usize];
-                    rec.begin_render_pass_in(
-                        &self.render_pass,
-                        &self.framebuffers[write as usize],
-                        &attachments,
-                        area,
-                    )?;
-                    rec.set_scissor(area);
-                    rec.draw_fullscreen(plane_pipeline, bytemuck::bytes_of(&push))?;
-                    rec.end_render_pass();
-                }
-                Some(f) => {
-                    let timed = sweep.pass_timings;
-                    if timed {
-                        rec.begin_scope("sweep: light rays");
-                    }
-                    // 1. The light rays advance to plane i (over the ray images).
-                    rec.begin_render_pass(
-                        &self.light_pass,
-                        &self.light_framebuffers[write as usize],
-                        &[(light_images[0], write), (light_images[1], write)],
-                    )?;
-                    // Only the rows that hold rays.
-                    let rows = (grid_dims[0] * grid_dims[1]).div_ceil(ray_image[0]);
-                    rec.set_viewport(ray_image[0], rows.clamp(1, ray_image[1]));
-                    rec.draw_fullscreen(plane_pipeline, bytemuck::bytes_of(&push))?;
-                    rec.end_render_pass();
-                    rec.set_viewport(self.width, self.height);
-                    if timed {
-                        rec.end_scope();
-                        rec.begin_scope("sweep: splat");
-                    }
-                    // 2. They deposit their flux on plane i: irradiance layer `write`
-                    // (plane i - 2's, read by no draw any more) is overwritten.
-                    rec.transition_many(&[
-                        (light_images[0], write..write + 1, Access::SampledGeneral),
-                        (light_images[1], write..write + 1, Access::SampledGeneral),
-                    ]);
-                    match sweep.levers.splat {
-                        Splat::Raster => {
-                            rec.begin_render_pass(
-                                &self.splat_pass,
-                                &self.splat_framebuffers[write as usize],
-                                &[
-                                    (&self.irradiance[0].image, write),
-                                    (&self.irradiance[1].image, write),
-                                ],
-                            )?;
-                            rec.bind_pipeline(&f.splat);
-                            let splat_push = PlanePush {
-                                read_layer: write,
-                                ..push
-                            };
-                            rec.draw(
-                                &f.splat,
-                                bytemuck::bytes_of(&splat_push),
-                                grid_dims[0] * grid_dims[1],
-                            )?;
-                            rec.end_render_pass();
-                        }
-                        Splat::Compute => {
-                            // The previous plane's resolve zeroed the sums.
-                            rec.compute_storage_barrier(&self.splat_sums);
-                            let rays = grid_dims[0] * grid_dims[1];
-                            let splat_push = [i, write, push.depth.to_bits(), unit.to_bits()];
-                            rec.dispatch(
-                                &f.splat_compute,
-                                &self.sweep_set,
-                                bytemuck::bytes_of(&splat_push),
-                                [rays.div_ceil(64), 1, 1],
-                            )?;
-                            rec.compute_storage_barrier(&self.splat_sums);
-                            // The resolve's storage views name both layers, so both
-                            // are ordered after their last reads (only `write` is
-                            // written).
-                            rec.transition_many(&[
-                                (&self.irradiance[0].image, 0..2, Access::ComputeStorage),
-                                (&self.irradiance[1].image, 0..2, Access::ComputeStorage),
-                            ]);
-                            let resolve_push = [write, self.width, self.height, unit.to_bits()];
-                            rec.dispatch(
-                                &f.splat_resolve,
-                                &self.splat_resolve_set,
-                                bytemuck::bytes_of(&resolve_push),
-                                groups,
-                            )?;
-                        }
-                    }
-                    if timed {
-                        rec.end_scope();
-                        rec.begin_scope("sweep: viewing rays");
-                    }
-                    // 3. The viewing rays cross the segment from plane i - 1 to plane i,
-                    // lit by the irradiance of both (layers `read` and `write`).
-                    rec.transition_many(&[
-                        (&self.irradiance[0].image, 0..2, Access::SampledGeneral),
-                        (&self.irradiance[1].image, 0..2, Access::SampledGeneral),
-                    ]);
-                    let views: Vec<(&Image, u32)> =
-                        self.states[2..].iter().map(|s| (&s.image, write)).collect();
-                    let area = regions[i as usize];
-                    rec.begin_render_pass_in(
-                        &self.view_pass,
-                        &self.view_framebuffers[write as usize],
-                        &views,
-                        area,
-                    )?;
-                    rec.set_scissor(area);
-                    let view = &forward_planes
-                        .expect("made with the forward transport")
-                        .view;
-                    rec.bind_pipeline(view);
-                    rec.draw_fullscreen(view, bytemuck::bytes_of(&push))?;
-                    rec.end_render_pass();
-                    if timed {
-                        rec.end_scope();
-                    }
-                    rec.bind_pipeline(plane_pipeline);
-                }
-            }
-            let splat = forward;
-            for (b, plane, buf) in &dump_buffers {
-                if *plane != i {
-                    continue;
-                }
-                // With the forward transport what a plane's light is, is the splatted
-                // irradiance; the rays are in images of their own.
-                let image = match (splat.is_some(), b) {
-                    (true, StateBuffer::LightColour) => &self.irradiance[0].image,
-                    (true, StateBuffer::LightDirection) => &self.irradiance[1].image,
-                    (true, StateBuffer::LightRays) => &self.rays[0].image,
-                    (true, StateBuffer::LightRayDirections) => &self.rays[1].image,
-                    _ => &self.states[b.index()].image,
+            rec.bind_graphics(plane_pipeline, &self.sweep_set, self.width, self.height);
+            let light_images = [&self.rays[0].image, &self.rays[1].image];
+            for i in 0..planes.count {
+                let write = i % 2;
+                let read = 1 - write;
+                let push = PlanePush {
+                    plane: i,
+                    read_layer: read,
+                    depth: planes.depth(i),
+                    pad: 0,
                 };
-                rec.copy_image_to_buffer(image, write, buf);
+                // The layer the previous plane wrote becomes sampled (one batched barrier
+                // over the six images); begin_render_pass then makes the layer the previous
+                // plane sampled an attachment (a second one). Nothing else is synchronised.
+                if sweep.drop_barrier_before_plane == Some(i) {
+                    for s in &self.states {
+                        rec.assume_without_barrier(
+                            &s.image,
+                            read..read + 1,
+                            Access::SampledGeneral,
+                        );
+                    }
+                } else {
+                    // With the forward transport the previous plane's irradiance, which this
+                    // plane's viewing rays read, is in the same batch (a dump may have copied
+                    // it out).
+                    let mut items = self.state_layers(read..read + 1, Access::SampledGeneral);
+                    if forward.is_some() {
+                        for img in self.irradiance.iter().map(|i| &i.image).chain(light_images) {
+                            items.push((img, read..read + 1, Access::SampledGeneral));
+                        }
+                    }
+                    rec.transition_many(&items);
+                }
+                match forward {
+                    None => {
+                        let attachments: Vec<(&Image, u32)> =
+                            self.states.iter().map(|s| (&s.image, write)).collect();
+                        let area = regions[i as usize];
+                        rec.begin_render_pass_in(
+                            &self.render_pass,
+                            &self.framebuffers[write as usize],
+                            &attachments,
+                            area,
+                        )?;
+                        rec.set_scissor(area);
+                        rec.draw_fullscreen(plane_pipeline, bytemuck::bytes_of(&push))?;
+                        rec.end_render_pass();
+                    }
+                    Some(f) => {
+                        let timed = sweep.pass_timings;
+                        if timed {
+                            rec.begin_scope("sweep: light rays");
+                        }
+                        // 1. The light rays advance to plane i (over the ray images).
+                        rec.begin_render_pass(
+                            &self.light_pass,
+                            &self.light_framebuffers[write as usize],
+                            &[(light_images[0], write), (light_images[1], write)],
+                        )?;
+                        // Only the rows that hold rays.
+                        let rows = (grid_dims[0] * grid_dims[1]).div_ceil(ray_image[0]);
+                        rec.set_viewport(ray_image[0], rows.clamp(1, ray_image[1]));
+                        rec.draw_fullscreen(plane_pipeline, bytemuck::bytes_of(&push))?;
+                        rec.end_render_pass();
+                        rec.set_viewport(self.width, self.height);
+                        if timed {
+                            rec.end_scope();
+                            rec.begin_scope("sweep: splat");
+                        }
+                        // 2. They deposit their flux on plane i: irradiance layer `write`
+                        // (plane i - 2's, read by no draw any more) is overwritten.
+                        rec.transition_many(&[
+                            (light_images[0], write..write + 1, Access::SampledGeneral),
+                            (light_images[1], write..write + 1, Access::SampledGeneral),
+                        ]);
+                        match sweep.levers.splat {
+                            Splat::Raster => {
+                                rec.begin_render_pass(
+                                    &self.splat_pass,
+                                    &self.splat_framebuffers[write as usize],
+                                    &[
+                                        (&self.irradiance[0].image, write),
+                                        (&self.irradiance[1].image, write),
+                                    ],
+                                )?;
+                                rec.bind_pipeline(&f.splat);
+                                let splat_push = PlanePush {
+                                    read_layer: write,
+                                    ..push
+                                };
+                                rec.draw(
+                                    &f.splat,
+                                    bytemuck::bytes_of(&splat_push),
+                                    grid_dims[0] * grid_dims[1],
+                                )?;
+                                rec.end_render_pass();
+                            }
+                            Splat::Compute => {
+                                // The previous plane's resolve zeroed the sums.
+                                rec.compute_storage_barrier(&self.splat_sums);
+                                let rays = grid_dims[0] * grid_dims[1];
+                                let splat_push = [i, write, push.depth.to_bits(), unit.to_bits()];
+                                rec.dispatch(
+                                    &f.splat_compute,
+                                    &self.sweep_set,
+                                    bytemuck::bytes_of(&splat_push),
+                                    [rays.div_ceil(64), 1, 1],
+                                )?;
+                                rec.compute_storage_barrier(&self.splat_sums);
+                                // The resolve's storage views name both layers, so both
+                                // are ordered after their last reads (only `write` is
+                                // written).
+                                rec.transition_many(&[
+                                    (&self.irradiance[0].image, 0..2, Access::ComputeStorage),
+                                    (&self.irradiance[1].image, 0..2, Access::ComputeStorage),
+                                ]);
+                                let resolve_push = [write, self.width, self.height, unit.to_bits()];
+                                rec.dispatch(
+                                    &f.splat_resolve,
+                                    &self.splat_resolve_set,
+                                    bytemuck::bytes_of(&resolve_push),
+                                    groups,
+                                )?;
+                            }
+                        }
+                        if timed {
+                            rec.end_scope();
+                            rec.begin_scope("sweep: viewing rays");
+                        }
+                        // 3. The viewing rays cross the segment from plane i - 1 to plane i,
+                        // lit by the irradiance of both (layers `read` and `write`).
+                        rec.transition_many(&[
+                            (&self.irradiance[0].image, 0..2, Access::SampledGeneral),
+                            (&self.irradiance[1].image, 0..2, Access::SampledGeneral),
+                        ]);
+                        let views: Vec<(&Image, u32)> =
+                            self.states[2..].iter().map(|s| (&s.image, write)).collect();
+                        let area = regions[i as usize];
+                        rec.begin_render_pass_in(
+                            &self.view_pass,
+                            &self.view_framebuffers[write as usize],
+                            &views,
+                            area,
+                        )?;
+                        rec.set_scissor(area);
+                        let view = &forward_planes
+                            .expect("made with the forward transport")
+                            .view;
+                        rec.bind_pipeline(view);
+                        rec.draw_fullscreen(view, bytemuck::bytes_of(&push))?;
+                        rec.end_render_pass();
+                        if timed {
+                            rec.end_scope();
+                        }
+                        rec.bind_pipeline(plane_pipeline);
+                    }
+                }
+                let splat = forward;
+                for (b, plane, buf) in &dump_buffers {
+                    if *plane != i {
+                        continue;
+                    }
+                    // With the forward transport what a plane's light is, is the splatted
+                    // irradiance; the rays are in images of their own.
+                    let image = match (splat.is_some(), b) {
+                        (true, StateBuffer::LightColour) => &self.irradiance[0].image,
+                        (true, StateBuffer::LightDirection) => &self.irradiance[1].image,
+                        (true, StateBuffer::LightRays) => &self.rays[0].image,
+                        (true, StateBuffer::LightRayDirections) => &self.rays[1].image,
+                        _ => &self.states[b.index()].image,
+                    };
+                    rec.copy_image_to_buffer(image, write, buf);
+                }
             }
         }
         rec.end_scope();
@@ -432,7 +472,7 @@ impl SweepPass {
                 planes,
                 bytes_per_plane: self.bytes_per_plane(TrafficInputs {
                     features,
-                    forward: forward.is_some(),
+                    forward: forward_on && !baseline,
                     soft,
                     shaded_pixels: (shaded_fraction * self.width as f64 * self.height as f64)
                         .round() as u64,

@@ -1,0 +1,38 @@
+// Benchmark floor of the plane sweep (`SweepOptions::floor`): the same render pass, the
+// same six attachments, barriers and sampled reads of the previous plane as sweep.frag,
+// but each state texel is only carried forward. Its time per plane is the cost of moving
+// the state buffers on this device; sweep time / floor time is how much the optics cost
+// on top of that.
+#include "sweep_buffers.glsl"
+
+#include "sweep_plane_io.glsl"
+
+PLANE_OUTPUT(0, out_light_colour);
+PLANE_OUTPUT(1, out_light_direction);
+PLANE_OUTPUT(2, out_view_position);
+PLANE_OUTPUT(3, out_view_direction);
+PLANE_OUTPUT(4, out_colour_opacity);
+PLANE_OUTPUT(5, out_medium);
+#define STORE_OUTPUTS(at) \
+    imageStore(light_colour, at, out_light_colour); \
+    imageStore(light_direction, at, out_light_direction); \
+    imageStore(view_position, at, out_view_position); \
+    imageStore(view_direction, at, out_view_direction); \
+    imageStore(colour_opacity, at, out_colour_opacity); \
+    imageStore(medium, at, out_medium);
+
+// Read like the plane shaders read their own pixel (per the `arrays` lever).
+#define CARRY(name) READ_PIXEL(name, pc.read_layer, p)
+
+void PLANE_MAIN() {
+    ivec2 p = ivec2(FRAG_XY);
+    out_light_colour = CARRY(light_colour);
+    out_light_direction = CARRY(light_direction);
+    // Advance the view position by one plane so the work depends on the plane.
+    out_view_position = CARRY(view_position) + vec4(0.0, 0.0, pc.depth * 1e-9, 0.0);
+    out_view_direction = CARRY(view_direction);
+    out_colour_opacity = CARRY(colour_opacity);
+    out_medium = CARRY(medium);
+}
+
+COMPUTE_ENTRY

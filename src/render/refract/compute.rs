@@ -1,0 +1,238 @@
+//! The compute sweep (issue 31): every per-plane pass of both transports as a compute
+//! dispatch on storage images, in the same one command buffer, with the same shaders as
+//! the fragment path (glsl/sweep_plane_io.glsl says what differs).
+//!
+//! Why: on Hopper GPUs (H100, H200) only two TPCs, 4 of 132 SMs, run vertex and fragment
+//! shaders, so a sweep of draws runs on about 3 % of the chip; dispatches use all of it.
+//!
+//! Synchronisation: every image a plane pass writes is bound as a storage image over
+//! both layers (one set for the whole frame, bound once: a set bind per plane costs
+//! ~4 ms and 3 MB on lavapipe), so each dispatch declares its images' both layers as
+//! `Access::ComputeStorage` and the recorder puts a barrier wherever a dispatch follows
+//! a write of an image it uses. A pipeline barrier waits for all earlier dispatches, so
+//! the passes are ordered to let independent work share the interval between two
+//! barriers. Forward transport, per plane i (three barriers a plane):
+//!
+//! ```text
+//!   barrier | viewing rays of plane i-1   (state, irradiance of planes i-2 and i-1)
+//!           | light rays of plane i       (rays only: independent of the view)
+//!   barrier | splat of plane i            (rays -> integer sums)
+//!   barrier | resolve of plane i          (sums -> irradiance layer i % 2, which the
+//!                                          viewing rays of plane i-1 have read)
+//! ```
+//!
+//! and the viewing rays of the last plane after the loop. The backward transport is one
+//! dispatch per plane with one barrier before it.
+
+use super::*;
+use crate::vk::Area;
+
+/// What one frame's compute planes need from [`SweepPass::record_sweep`].
+pub(crate) struct ComputeFrame<'a> {
+    pub(crate) features: Features,
+    pub(crate) planes: &'a Planes,
+    /// The pixels each plane shades (the `region` lever).
+    pub(crate) regions: &'a [Area],
+    /// The forward transport's passes (not for the baselines).
+    pub(crate) forward: bool,
+    pub(crate) soft: bool,
+    /// Light rays in the grid, and the ray images' size.
+    pub(crate) grid_rays: u32,
+    pub(crate) ray_image: [u32; 2],
+    /// The splat's fixed-point unit.
+    pub(crate) unit: f32,
+    pub(crate) dumps: &'a [(StateBuffer, u32, Buffer)],
+}
+
+/// Workgroups of 8 × 8 covering `area`.
+fn groups(area: Area) -> [u32; 3] {
+    [area.width.div_ceil(8), area.height.div_ceil(8), 1]
+}
+
+impl SweepPass {
+    fn push(&self, plane: u32, depth: f32, unit: f32, area: Area) -> ComputePush {
+        ComputePush {
+            plane,
+            read_layer: 1 - plane % 2,
+            depth,
+            unit,
+            origin: [area.x as i32, area.y as i32],
+            extent: [area.width as i32, area.height as i32],
+        }
+    }
+
+    /// Both layers of `images` as storage images of the next dispatches.
+    fn storage<'a>(
+        images: impl IntoIterator<Item = &'a StateImage>,
+    ) -> Vec<(&'a Image, std::ops::Range<u32>, Access)> {
+        images
+            .into_iter()
+            .map(|s| (&s.image, 0..2, Access::ComputeStorage))
+            .collect()
+    }
+
+    /// Copy plane `plane`'s dumps out, and return the dumped images to storage use (a
+    /// copied layer is in TRANSFER_SRC, and every dispatch names both layers).
+    fn compute_dumps(&self, rec: &mut Recorder, f: &ComputeFrame, plane: u32) {
+        let write = plane % 2;
+        for (b, at, buf) in f.dumps {
+            if *at != plane {
+                continue;
+            }
+            let image = match (f.forward, b) {
+                (true, StateBuffer::LightColour) => &self.irradiance[0].image,
+                (true, StateBuffer::LightDirection) => &self.irradiance[1].image,
+                (true, StateBuffer::LightRays) => &self.rays[0].image,
+                (true, StateBuffer::LightRayDirections) => &self.rays[1].image,
+                _ => &self.states[b.index()].image,
+            };
+            rec.copy_image_to_buffer(image, write, buf);
+            rec.transition(image, 0..2, Access::ComputeStorage);
+        }
+    }
+
+    /// Record every plane of the frame as dispatches (see the module docs).
+    pub(crate) fn record_compute_planes(
+        &self,
+        rec: &mut Recorder,
+        f: &ComputeFrame,
+        sweep: &SweepOptions,
+    ) -> Result<()> {
+        let pipelines = &self.compute_planes[&f.features];
+        let n = f.planes.count;
+        let drop_before = sweep.drop_barrier_before_plane;
+        let timed = sweep.pass_timings && f.forward;
+        if !f.forward {
+            let pipeline = if sweep.floor {
+                &pipelines.floor
+            } else if sweep.skeleton {
+                &pipelines.skeleton
+            } else {
+                &pipelines.sweep
+            };
+            rec.bind_compute(pipeline, &self.compute_set);
+            for i in 0..n {
+                // The layer the previous plane wrote is read, the one it read is written:
+                // one barrier over the six images.
+                if drop_before == Some(i) {
+                    for s in &self.states {
+                        rec.assume_without_barrier(&s.image, 0..2, Access::ComputeStorage);
+                    }
+                } else {
+                    rec.transition_many(&Self::storage(&self.states));
+                }
+                let area = f.regions[i as usize];
+                let push = self.push(i, f.planes.depth(i), f.unit, area);
+                rec.dispatch_bound(pipeline, bytemuck::bytes_of(&push), groups(area))?;
+                self.compute_dumps(rec, f, i);
+            }
+            return Ok(());
+        }
+
+        let [splat, resolve] = self
+            .compute_splat
+            .as_ref()
+            .expect("made with the compute planes");
+        let light = if f.soft {
+            &pipelines.light_soft
+        } else {
+            &pipelines.light
+        };
+        let view = &pipelines.view;
+        // The light rays' dispatch covers the rows of the ray images that hold rays.
+        let rows = f
+            .grid_rays
+            .div_ceil(f.ray_image[0])
+            .clamp(1, f.ray_image[1]);
+        let ray_area = Area {
+            x: 0,
+            y: 0,
+            width: f.ray_image[0],
+            height: rows,
+        };
+        let screen = Area::full(self.width, self.height);
+        rec.bind_compute(light, &self.compute_set);
+        for i in 0..=n {
+            // Stage A: the viewing rays of plane i - 1 and the light rays of plane i.
+            let view_prev = i.checked_sub(1);
+            let light_now = i < n;
+            let dumps_prev = view_prev.is_some_and(|p| f.dumps.iter().any(|d| d.1 == p));
+            let mut batch = Vec::new();
+            if let Some(p) = view_prev {
+                if drop_before != Some(p) {
+                    batch.extend(Self::storage(&self.states));
+                } else {
+                    for s in &self.states {
+                        rec.assume_without_barrier(&s.image, 0..2, Access::ComputeStorage);
+                    }
+                }
+                batch.extend(Self::storage(&self.irradiance));
+            }
+            if light_now && !dumps_prev {
+                batch.extend(Self::storage(&self.rays));
+            }
+            rec.transition_many(&batch);
+            if let Some(p) = view_prev {
+                if timed {
+                    rec.begin_scope("sweep: viewing rays");
+                }
+                let area = f.regions[p as usize];
+                let push = self.push(p, f.planes.depth(p), f.unit, area);
+                rec.bind_compute_pipeline(view);
+                rec.dispatch_bound(view, bytemuck::bytes_of(&push), groups(area))?;
+                if timed {
+                    rec.end_scope();
+                }
+                if dumps_prev {
+                    self.compute_dumps(rec, f, p);
+                    if light_now {
+                        rec.transition_many(&Self::storage(&self.rays));
+                    }
+                }
+            }
+            if !light_now {
+                break;
+            }
+            let depth = f.planes.depth(i);
+            if timed {
+                rec.begin_scope("sweep: light rays");
+            }
+            rec.bind_compute_pipeline(light);
+            let push = self.push(i, depth, f.unit, ray_area);
+            rec.dispatch_bound(light, bytemuck::bytes_of(&push), groups(ray_area))?;
+            if timed {
+                rec.end_scope();
+                rec.begin_scope("sweep: splat");
+            }
+            // Stage B: the rays just written deposit their flux into the sums (which the
+            // previous plane's resolve zeroed). The splat reads the write layer: its push
+            // names it as the read layer.
+            rec.transition_many(&Self::storage(&self.rays));
+            rec.compute_storage_barrier(&self.splat_sums);
+            let push = ComputePush {
+                read_layer: i % 2,
+                ..self.push(i, depth, f.unit, ray_area)
+            };
+            rec.bind_compute_pipeline(splat);
+            rec.dispatch_bound(
+                splat,
+                bytemuck::bytes_of(&push),
+                [f.grid_rays.div_ceil(64), 1, 1],
+            )?;
+            // Stage C: the sums become irradiance layer i % 2 (after the viewing rays of
+            // plane i - 1 read it as plane i - 2's).
+            rec.compute_storage_barrier(&self.splat_sums);
+            rec.transition_many(&Self::storage(&self.irradiance));
+            let push = ComputePush {
+                read_layer: i % 2,
+                ..self.push(i, depth, f.unit, screen)
+            };
+            rec.bind_compute_pipeline(resolve);
+            rec.dispatch_bound(resolve, bytemuck::bytes_of(&push), groups(screen))?;
+            if timed {
+                rec.end_scope();
+            }
+        }
+        Ok(())
+    }
+}
