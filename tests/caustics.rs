@@ -9,6 +9,7 @@ use common::*;
 use glam::Vec3;
 use refrakt::render::{
     Camera, Frame, Light, LightTransport, Planes, RenderOptions, StateBuffer, SweepOptions,
+    SweepPath,
 };
 use refrakt::transfer::{Piecewise, TransferFunctions};
 use refrakt::vk::Context;
@@ -41,7 +42,13 @@ fn power_is_conserved_through_a_focus() {
         let tf = glass(1.5);
         let cam = face_on(3.0, 50.0);
         let planes = Planes::for_box(&cam, Vec3::splat(0.5), 1.0 / n as f32).unwrap();
-        for softness in [0.0f32, 1.0] {
+        // Both sweep paths (issue 31): the fragment path's point sprites and the compute
+        // path's gather.
+        for (softness, path) in [
+            (0.0f32, SweepPath::Fragment),
+            (1.0, SweepPath::Fragment),
+            (0.0, SweepPath::Compute),
+        ] {
             let mut opts = RenderOptions {
                 width: 96,
                 height: 96,
@@ -50,6 +57,10 @@ fn power_is_conserved_through_a_focus() {
             opts.sweep = SweepOptions {
                 light_transport: LightTransport::Forward,
                 light: headlight(&cam, softness),
+                levers: refrakt::render::Levers {
+                    sweep: path,
+                    ..Default::default()
+                },
                 dumps: (0..planes.count)
                     .map(|p| (StateBuffer::LightColour, p))
                     .collect(),
@@ -57,7 +68,7 @@ fn power_is_conserved_through_a_focus() {
             };
             let f = sweep(ctx, &vol, &tf, &cam, &opts);
             let stats = f.sweep.as_ref().unwrap();
-            println!("softness {softness}: clamps {:?}", stats.clamps);
+            println!("softness {softness}, {path:?}: clamps {:?}", stats.clamps);
             let mut worst = 0.0f64;
             let mut peak = 0.0f32;
             for p in 0..planes.count {

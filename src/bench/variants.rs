@@ -539,6 +539,7 @@ mod tests {
                     } else {
                         Splat::Raster
                     },
+                    sweep: crate::render::SweepPath::Auto,
                 };
                 let n = variant_name(l);
                 assert_eq!(Levers::parse(&n).unwrap(), l, "{n}");

@@ -16,10 +16,17 @@
 //! ```text
 //!   barrier | viewing rays of plane i-1   (state, irradiance of planes i-2 and i-1)
 //!           | light rays of plane i       (rays only: independent of the view)
-//!   barrier | splat of plane i            (rays -> integer sums)
-//!   barrier | resolve of plane i          (sums -> irradiance layer i % 2, which the
-//!                                          viewing rays of plane i-1 have read)
+//!   barrier | deposits of plane i         (rays -> each ray's box and amplitude, each
+//!                                          block of 8 x 8 rays' bounding box)
+//!   barrier | gather of plane i           (deposits -> irradiance layer i % 2, which
+//!                                          the viewing rays of plane i-1 have read)
 //! ```
+//!
+//! The splat is a tile-binned gather (glsl/light_gather.glsl): each 8 × 8 tile of pixels
+//! finds the blocks of rays whose boxes overlap it, each pixel sums their deposits over
+//! its area in 32.32 fixed point in registers. No atomics on the sums (the atomic
+//! compute splat's integer atomics cost more than the point sprites on lavapipe), the
+//! same integer sums, so bit for bit the atomic splat's irradiance.
 //!
 //! and the viewing rays of the last plane after the loop. The backward transport is one
 //! dispatch per plane with one barrier before it.
@@ -36,8 +43,8 @@ pub(crate) struct ComputeFrame<'a> {
     /// The forward transport's passes (not for the baselines).
     pub(crate) forward: bool,
     pub(crate) soft: bool,
-    /// Light rays in the grid, and the ray images' size.
-    pub(crate) grid_rays: u32,
+    /// The light rays' grid (columns, rows), and the ray images' size.
+    pub(crate) grid: [u32; 2],
     pub(crate) ray_image: [u32; 2],
     /// The splat's fixed-point unit.
     pub(crate) unit: f32,
@@ -129,7 +136,7 @@ impl SweepPass {
             return Ok(());
         }
 
-        let [splat, resolve] = self
+        let [deposit, gather] = self
             .compute_splat
             .as_ref()
             .expect("made with the compute planes");
@@ -140,8 +147,7 @@ impl SweepPass {
         };
         let view = &pipelines.view;
         // The light rays' dispatch covers the rows of the ray images that hold rays.
-        let rows = f
-            .grid_rays
+        let rows = (f.grid[0] * f.grid[1])
             .div_ceil(f.ray_image[0])
             .clamp(1, f.ray_image[1]);
         let ray_area = Area {
@@ -204,31 +210,26 @@ impl SweepPass {
                 rec.end_scope();
                 rec.begin_scope("sweep: splat");
             }
-            // Stage B: the rays just written deposit their flux into the sums (which the
-            // previous plane's resolve zeroed). The splat reads the write layer: its push
-            // names it as the read layer.
+            // Stage B: the rays just written make their deposits (after the previous
+            // plane's gather read the last ones). The deposit and the gather read the
+            // write layer: their push names it as the read layer.
             rec.transition_many(&Self::storage(&self.rays));
-            rec.compute_storage_barrier(&self.splat_sums);
+            rec.compute_storage_barrier(&self.deposits);
+            rec.compute_storage_barrier(&self.blocks);
             let push = ComputePush {
                 read_layer: i % 2,
                 ..self.push(i, depth, f.unit, ray_area)
             };
-            rec.bind_compute_pipeline(splat);
-            rec.dispatch_bound(
-                splat,
-                bytemuck::bytes_of(&push),
-                [f.grid_rays.div_ceil(64), 1, 1],
-            )?;
-            // Stage C: the sums become irradiance layer i % 2 (after the viewing rays of
+            rec.bind_compute_pipeline(deposit);
+            let block_groups = [f.grid[0].div_ceil(8), f.grid[1].div_ceil(8), 1];
+            rec.dispatch_bound(deposit, bytemuck::bytes_of(&push), block_groups)?;
+            // Stage C: the gather into irradiance layer i % 2 (after the viewing rays of
             // plane i - 1 read it as plane i - 2's).
-            rec.compute_storage_barrier(&self.splat_sums);
+            rec.compute_storage_barrier(&self.deposits);
+            rec.compute_storage_barrier(&self.blocks);
             rec.transition_many(&Self::storage(&self.irradiance));
-            let push = ComputePush {
-                read_layer: i % 2,
-                ..self.push(i, depth, f.unit, screen)
-            };
-            rec.bind_compute_pipeline(resolve);
-            rec.dispatch_bound(resolve, bytemuck::bytes_of(&push), groups(screen))?;
+            rec.bind_compute_pipeline(gather);
+            rec.dispatch_bound(gather, bytemuck::bytes_of(&push), groups(screen))?;
             if timed {
                 rec.end_scope();
             }

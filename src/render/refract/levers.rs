@@ -51,14 +51,26 @@ pub enum SweepPath {
 }
 
 impl SweepPath {
-    /// The path `Auto` stands for on a device of this type: what `bench variants`
-    /// measured fastest there (docs/BENCH.md, "Compute or fragment"). CPU (lavapipe):
-    /// measured. GPUs: compute, from the structure of the hardware (a draw per plane runs
-    /// on the graphics-capable SMs only: 4 of 132 on an H100), until `scripts/gpu-bench.sh`
-    /// has measured both there.
-    pub fn for_device(self, device_type: crate::vk::PhysicalDeviceType) -> SweepPath {
+    /// The path `Auto` stands for on a device of this type with this light transport
+    /// (`forward`): what `bench variants` measured fastest there (docs/BENCH.md,
+    /// "Compute or fragment"). CPU (lavapipe, measured): the backward transport as
+    /// compute, the forward one as draws (its splat: the point sprites cost less there
+    /// than either compute splat, whose integer sums llvmpipe runs slowly). GPUs: compute
+    /// for both, from the structure of the hardware (draws run on the graphics-capable
+    /// SMs only: 4 of 132 on an H100), until `scripts/gpu-bench.sh` has measured both.
+    pub fn for_device(
+        self,
+        device_type: crate::vk::PhysicalDeviceType,
+        forward: bool,
+    ) -> SweepPath {
         match self {
-            SweepPath::Auto if device_type == crate::vk::PhysicalDeviceType::CPU => CPU_SWEEP_PATH,
+            SweepPath::Auto if device_type == crate::vk::PhysicalDeviceType::CPU => {
+                if forward {
+                    SweepPath::Fragment
+                } else {
+                    SweepPath::Compute
+                }
+            }
             SweepPath::Auto => SweepPath::Compute,
             explicit => explicit,
         }
@@ -72,9 +84,6 @@ impl SweepPath {
         }
     }
 }
-
-/// What `SweepPath::Auto` runs on a CPU device (lavapipe), as measured there.
-pub const CPU_SWEEP_PATH: SweepPath = SweepPath::Compute;
 
 /// One combination of the levers. `Levers::default()` (what renders unless told
 /// otherwise) has every lever on that renders the plain implementation's image

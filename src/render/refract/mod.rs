@@ -581,7 +581,7 @@ mod record;
 mod region;
 
 use compute::ComputeFrame;
-pub use levers::{Levers, Region, Splat, SweepPath, CPU_SWEEP_PATH};
+pub use levers::{Levers, Region, Splat, SweepPath};
 pub(crate) use params::EnvInputs;
 use params::*;
 pub(crate) use pass::{Features, StateImage, SweepPass, TrafficInputs};

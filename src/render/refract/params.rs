@@ -211,7 +211,6 @@ mod tests {
             shaders::SWEEP_COMP,
             shaders::SWEEP_LIGHT_FORWARD_COMP,
             shaders::SWEEP_VIEW_FORWARD_COMP,
-            shaders::SWEEP_RESOLVE_COMP,
             shaders::SWEEP_FLOOR_COMP,
         ] {
             check_block(spirv, "Push", &push, size, false).unwrap();

@@ -86,9 +86,13 @@ pub(crate) struct SweepPass {
     /// The compute sweep's plane pipelines per feature set, made on the first frame that
     /// runs the compute path with those features.
     pub(crate) compute_planes: HashMap<Features, ComputePlanes>,
-    /// The compute sweep's splat and resolve (feature-independent), made with the first
-    /// compute plane pipelines.
+    /// The compute sweep's splat, a tile-binned gather (glsl/light_gather.glsl): the
+    /// deposit and gather pipelines (feature-independent), made with the first compute
+    /// plane pipelines.
     pub(crate) compute_splat: Option<[ComputePipeline; 2]>,
+    /// Its buffers: each light ray's deposit (three vec4), each block of 8 × 8 rays' box.
+    pub(crate) deposits: Buffer,
+    pub(crate) blocks: Buffer,
     pub(crate) composite: ComputePipeline,
     pub(crate) output: FrameTarget,
     pub(crate) env_params: Buffer,
@@ -466,6 +470,26 @@ impl SweepPass {
         compute_bindings[11] = Binding::StorageImage(&irradiance[1].image);
         compute_bindings[13] = Binding::StorageImage(&rays[0].image);
         compute_bindings[14] = Binding::StorageImage(&rays[1].image);
+        // 19-20: the gather splat's deposits and block boxes (glsl/light_gather.glsl),
+        // sized for the ray images' capacity C: C deposits; blocks of 8 × 8 over any grid
+        // of at most C rays, (cols + 7)(rows + 7) / 64 <= (8 C + 56) / 64.
+        let capacity = ray_size[0] as u64 * ray_size[1] as u64;
+        let deposits = Buffer::new(
+            ctx,
+            capacity * 48,
+            vk::usage::STORAGE_BUFFER,
+            vk::Memory::Gpu,
+            "light deposits",
+        )?;
+        let blocks = Buffer::new(
+            ctx,
+            ((8 * capacity + 56) / 64 + 1) * 16,
+            vk::usage::STORAGE_BUFFER,
+            vk::Memory::Gpu,
+            "light deposit blocks",
+        )?;
+        compute_bindings.push(Binding::Storage(&deposits));
+        compute_bindings.push(Binding::Storage(&blocks));
         let compute_set = DescriptorSet::new(ctx, &compute_bindings, "sweep (compute)")?;
         let output = FrameTarget::new(ctx, width, height, "sweep frame")?;
         let env_params = Buffer::uniform::<EnvParams>(ctx, "environment params")?;
@@ -582,6 +606,8 @@ impl SweepPass {
             compute_set,
             compute_planes: HashMap::new(),
             compute_splat: None,
+            deposits,
+            blocks,
             composite,
             output,
             env_params,
@@ -605,7 +631,7 @@ impl SweepPass {
     }
 
     /// Make the compute sweep's plane pipelines for `features` if this pass has none yet,
-    /// and its splat and resolve with the first.
+    /// and its deposit and gather with the first.
     pub(crate) fn ensure_compute_planes(
         &mut self,
         ctx: &Context,
@@ -624,17 +650,17 @@ impl SweepPass {
             self.compute_splat = Some([
                 ComputePipeline::new(
                     ctx,
-                    shaders::SWEEP_SPLAT_COMP,
+                    shaders::SWEEP_DEPOSIT_COMP,
                     &self.compute_set,
                     push,
-                    "light splat (compute sweep)",
+                    "light deposits (compute sweep)",
                 )?,
                 ComputePipeline::new(
                     ctx,
-                    shaders::SWEEP_RESOLVE_COMP,
+                    shaders::SWEEP_GATHER_COMP,
                     &self.compute_set,
                     push,
-                    "light splat resolve (compute sweep)",
+                    "light gather (compute sweep)",
                 )?,
             ]);
         }

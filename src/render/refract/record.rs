@@ -19,7 +19,10 @@ impl SweepPass {
         let features = Features::of(sweep, self.have_field, inputs.eta_films);
         // Draws or dispatches per plane (issue 31): `auto` is what measured fastest on
         // this class of device.
-        let compute = sweep.levers.sweep.for_device(ctx.info().device_type) == SweepPath::Compute;
+        let compute = sweep.levers.sweep.for_device(
+            ctx.info().device_type,
+            sweep.light_transport == LightTransport::Forward,
+        ) == SweepPath::Compute;
         if compute {
             self.ensure_compute_planes(ctx, features)?;
         } else {
@@ -246,7 +249,7 @@ impl SweepPass {
                     regions: &regions,
                     forward: forward_on && !baseline,
                     soft,
-                    grid_rays: grid_dims[0] * grid_dims[1],
+                    grid: grid_dims,
                     ray_image,
                     unit,
                     dumps: &dump_buffers,

@@ -1,0 +1,66 @@
+// The compute sweep's splat as a tile-binned gather (issue 31): no atomics on the sums.
+// sweep_deposit.comp computes each light ray's deposit (light_splat_ray.glsl: the same
+// box and amplitude as the point sprites and the atomic compute splat) into `deposits`
+// and the bounding box of each block of 8 x 8 neighbouring rays into `blocks`;
+// sweep_gather.comp then lets each 8 x 8 tile of pixels find the blocks that overlap it
+// and each pixel sum the deposits of their rays. The sum is the atomic splat's: every
+// deposit truncated to 32.32 fixed point (light_splat_fixed.glsl) and added as a 64-bit
+// integer, here in registers (integer addition is associative: the result does not
+// depend on the order, and is bit for bit the atomic splat's).
+#ifndef REFRAKT_LIGHT_GATHER_GLSL
+#define REFRAKT_LIGHT_GATHER_GLSL
+
+// Per ray r (of the grid, r = j * columns + i): amplitude (rgb per pixel² of overlap,
+// a = luminance), footprint (centre and widths in pixels; zero widths: no deposit),
+// direction (xyz, unit).
+layout(std430, set = 0, binding = 19) buffer Deposits {
+    vec4 deposits[];
+};
+// Per block of 8 x 8 rays: the union of its rays' boxes (lo.xy, hi.xy in pixels), empty
+// (lo > hi) when none of them carries light.
+layout(std430, set = 0, binding = 20) buffer Blocks {
+    vec4 blocks[];
+};
+
+const int GATHER_BLOCK = 8;   // rays per block side
+#define SPLAT_GATHER_CHANNELS 7
+// The gather's list of blocks per tile, and the buckets it is filled in (a bucket holds
+// at most GATHER_LIST blocks: at most GATHER_LIST * GATHER_BUCKETS blocks of 64 rays,
+// render::refract::MAX_GATHER_RAYS).
+#define GATHER_LIST 2048u
+#define GATHER_BUCKETS 128u
+
+ivec2 gather_blocks() {
+    return (ivec2(P.light_rays.xy) + GATHER_BLOCK - 1) / GATHER_BLOCK;
+}
+
+// A 64-bit fixed-point sum in registers: (lo, hi) words as light_splat_fixed.glsl has them.
+void add_fixed_reg(inout uvec2 sum, float v) {
+    // Branch-free (llvmpipe runs both sides of a branch): 0 adds nothing, a negative
+    // value its two's complement.
+    float m = abs(v);
+    float f = floor(m);
+    uint hi = uint(f);
+    uint lo = uint((m - f) * 4294967296.0);
+    bool negative = v < 0.0;
+    uint hi_n = ~hi + (lo == 0u ? 1u : 0u);
+    uint lo_n = 0u - lo;
+    hi = negative ? hi_n : hi;
+    lo = negative ? lo_n : lo;
+    uint carry;
+    sum.x = uaddCarry(sum.x, lo, carry);
+    sum.y = sum.y + hi + carry;
+}
+
+float fixed_to_float(uvec2 sum) {
+    uint lo = sum.x, hi = sum.y;
+    bool negative = int(hi) < 0;
+    if (negative) {
+        hi = ~hi + (lo == 0u ? 1u : 0u);
+        lo = 0u - lo;
+    }
+    float m = float(hi) + float(lo) * (1.0 / 4294967296.0);
+    return negative ? -m : m;
+}
+
+#endif
