@@ -7,19 +7,8 @@
 
 #include "sweep_plane_io.glsl"
 
-PLANE_OUTPUT(0, out_light_colour);
-PLANE_OUTPUT(1, out_light_direction);
-PLANE_OUTPUT(2, out_view_position);
-PLANE_OUTPUT(3, out_view_direction);
-PLANE_OUTPUT(4, out_colour_opacity);
-PLANE_OUTPUT(5, out_medium);
-#define STORE_OUTPUTS(at) \
-    imageStore(light_colour, at, out_light_colour); \
-    imageStore(light_direction, at, out_light_direction); \
-    imageStore(view_position, at, out_view_position); \
-    imageStore(view_direction, at, out_view_direction); \
-    imageStore(colour_opacity, at, out_colour_opacity); \
-    imageStore(medium, at, out_medium);
+SIX_STATE_OUTPUTS;
+#define STORE_OUTPUTS(at) STORE_SIX_STATES(at)
 
 // Read like the plane shaders read their own pixel (per the `arrays` lever).
 #define CARRY(name) READ_PIXEL(name, pc.read_layer, p)

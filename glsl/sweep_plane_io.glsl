@@ -41,6 +41,24 @@ layout(push_constant) uniform Push {
 #define PLANE_MAIN main
 #endif
 
+// The six state outputs of a shader that writes all of them (the backward sweep, the
+// floor, the skeleton), and their stores: `SIX_STATE_OUTPUTS;` declares them, and such a
+// shader defines STORE_OUTPUTS(at) as STORE_SIX_STATES(at).
+#define SIX_STATE_OUTPUTS \
+    PLANE_OUTPUT(0, out_light_colour); \
+    PLANE_OUTPUT(1, out_light_direction); \
+    PLANE_OUTPUT(2, out_view_position); \
+    PLANE_OUTPUT(3, out_view_direction); \
+    PLANE_OUTPUT(4, out_colour_opacity); \
+    PLANE_OUTPUT(5, out_medium)
+#define STORE_SIX_STATES(at) \
+    imageStore(light_colour, at, out_light_colour); \
+    imageStore(light_direction, at, out_light_direction); \
+    imageStore(view_position, at, out_view_position); \
+    imageStore(view_direction, at, out_view_direction); \
+    imageStore(colour_opacity, at, out_colour_opacity); \
+    imageStore(medium, at, out_medium);
+
 // The compute entry point: the invocation's pixel, the plane's work, its stores
 // (STORE_OUTPUTS, which the including shader defines from its outputs).
 #if SWEEP_COMPUTE

@@ -86,13 +86,7 @@ impl SweepPass {
             if *at != plane {
                 continue;
             }
-            let image = match (f.forward, b) {
-                (true, StateBuffer::LightColour) => &self.irradiance[0].image,
-                (true, StateBuffer::LightDirection) => &self.irradiance[1].image,
-                (true, StateBuffer::LightRays) => &self.rays[0].image,
-                (true, StateBuffer::LightRayDirections) => &self.rays[1].image,
-                _ => &self.states[b.index()].image,
-            };
+            let image = self.dump_image(f.forward, *b);
             rec.copy_image_to_buffer(image, write, buf);
             rec.transition(image, 0..2, Access::ComputeStorage);
         }

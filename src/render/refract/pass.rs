@@ -667,6 +667,19 @@ impl SweepPass {
         Ok(())
     }
 
+    /// The image a dump of `b` copies: with the forward transport (`forward`) what a
+    /// plane's light is, is the splatted irradiance, and the rays are in images of their
+    /// own.
+    pub(crate) fn dump_image(&self, forward: bool, b: StateBuffer) -> &Image {
+        match (forward, b) {
+            (true, StateBuffer::LightColour) => &self.irradiance[0].image,
+            (true, StateBuffer::LightDirection) => &self.irradiance[1].image,
+            (true, StateBuffer::LightRays) => &self.rays[0].image,
+            (true, StateBuffer::LightRayDirections) => &self.rays[1].image,
+            _ => &self.states[b.index()].image,
+        }
+    }
+
     /// The same layers of all six state images, bound for the same use.
     pub(crate) fn state_layers(
         &self,

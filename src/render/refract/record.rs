@@ -433,16 +433,7 @@ impl SweepPass {
                     if *plane != i {
                         continue;
                     }
-                    // With the forward transport what a plane's light is, is the splatted
-                    // irradiance; the rays are in images of their own.
-                    let image = match (splat.is_some(), b) {
-                        (true, StateBuffer::LightColour) => &self.irradiance[0].image,
-                        (true, StateBuffer::LightDirection) => &self.irradiance[1].image,
-                        (true, StateBuffer::LightRays) => &self.rays[0].image,
-                        (true, StateBuffer::LightRayDirections) => &self.rays[1].image,
-                        _ => &self.states[b.index()].image,
-                    };
-                    rec.copy_image_to_buffer(image, write, buf);
+                    rec.copy_image_to_buffer(self.dump_image(splat.is_some(), *b), write, buf);
                 }
             }
         }
