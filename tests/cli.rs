@@ -79,7 +79,7 @@ fn render_writes_png_and_exr_with_timings() {
             });
             assert!(timed, "no timed '{pass}' line in:\n{out}");
         }
-        for needle in [" planes, spacing ", " ms per plane"] {
+        for needle in [" planes as ", ", spacing ", " ms per plane"] {
             assert!(out.contains(needle), "no '{needle}' in:\n{out}");
         }
         assert!(out.contains(p), "output path not printed:\n{out}");

@@ -8,7 +8,7 @@ use anyhow::{bail, Result};
 
 use refrakt::output;
 use refrakt::render::{
-    upload, Camera, LightTransport, Model, Renderer, StateBuffer, MAX_LIGHT_RAYS,
+    upload, Camera, LightTransport, Model, Renderer, StateBuffer, SweepPath, MAX_LIGHT_RAYS,
 };
 use refrakt::scene::LoadedScene;
 use refrakt::vk::{self, Context, ContextDesc};
@@ -202,8 +202,12 @@ pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
     if let Some(stats) = &frame.sweep {
         let planes = stats.planes.count;
         println!(
-            "sweep: {planes} planes, spacing {:.5}, {:.0} % of the viewport shaded per plane \
-             (mean), {:.1} MiB of state-buffer traffic per plane",
+            "sweep: {planes} planes as {}, spacing {:.5}, {:.0} % of the viewport shaded per \
+             plane (mean), {:.1} MiB of state-buffer traffic per plane",
+            match stats.path {
+                SweepPath::Compute => "compute dispatches",
+                _ => "draws",
+            },
             stats.planes.spacing,
             100.0 * stats.shaded_fraction,
             stats.bytes_per_plane as f64 / (1 << 20) as f64

@@ -526,6 +526,9 @@ pub struct SweepStats {
     pub shaded_fraction: f64,
     /// How light travelled.
     pub light_transport: LightTransport,
+    /// How the planes ran: `Fragment` or `Compute`, what `SweepPath::Auto` resolved to
+    /// on this device and transport.
+    pub path: SweepPath,
     /// Forward transport: the light rays' grid on the launch plane (one spacing before
     /// plane 0): view x, y of ray (0, 0)'s cell corner, cell width and height; ray (i, j)
     /// starts at the centre of its cell.

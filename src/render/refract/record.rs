@@ -476,6 +476,11 @@ impl SweepPass {
                 }),
                 shaded_fraction,
                 light_transport: sweep.light_transport,
+                path: if compute {
+                    SweepPath::Compute
+                } else {
+                    SweepPath::Fragment
+                },
                 light_grid: grid,
                 light_rays: [grid_dims[0], grid_dims[1], ray_image[0], ray_image[1]],
                 light_spacing: [
