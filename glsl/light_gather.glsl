@@ -24,11 +24,12 @@ layout(std430, set = 0, binding = 20) buffer Blocks {
 
 const int GATHER_BLOCK = 8;   // rays per block side
 #define SPLAT_GATHER_CHANNELS 7
-// The gather's list of blocks per tile, and the buckets it is filled in (a bucket holds
-// at most GATHER_LIST blocks: at most GATHER_LIST * GATHER_BUCKETS blocks of 64 rays,
-// render::refract::MAX_GATHER_RAYS).
-#define GATHER_LIST 2048u
-#define GATHER_BUCKETS 128u
+// GATHER_LIST (the gather's list of blocks per tile) and GATHER_BUCKETS (the buckets it
+// is filled in; a bucket holds at most GATHER_LIST blocks) come from build.rs
+// (src/render/limits.rs), which the host checks the ray grid against.
+#ifndef GATHER_LIST
+#error "GATHER_LIST comes from build.rs (src/render/limits.rs)"
+#endif
 
 ivec2 gather_blocks() {
     return (ivec2(P.light_rays.xy) + GATHER_BLOCK - 1) / GATHER_BLOCK;

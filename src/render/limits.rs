@@ -7,3 +7,9 @@
 /// (the cosine: ~84.3°): they must reach the next plane (thesis ch. 7). Directions are
 /// bent no further, and the light may not be set further from the view.
 pub const MIN_FORWARD: f32 = 0.1;
+
+// The compute sweep's gather splat (glsl/sweep_gather.comp): a tile's list of blocks of
+// 8 x 8 light rays in shared memory, filled in buckets of at most that many blocks, so
+// at most GATHER_LIST * GATHER_BUCKETS blocks (16.7 M rays) per frame.
+pub const GATHER_LIST: u32 = 2048;
+pub const GATHER_BUCKETS: u32 = 128;

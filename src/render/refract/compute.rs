@@ -51,6 +51,24 @@ pub(crate) struct ComputeFrame<'a> {
     pub(crate) dumps: &'a [(StateBuffer, u32, Buffer)],
 }
 
+/// The gather's list never overflows up to GATHER_LIST × GATHER_BUCKETS blocks of 8 × 8
+/// rays (glsl/sweep_gather.comp): a grid of more is refused before anything is recorded.
+pub(crate) fn check_gather(grid: [u32; 2]) -> Result<()> {
+    use crate::render::limits::{GATHER_BUCKETS, GATHER_LIST};
+    let blocks = grid[0].div_ceil(8) as u64 * grid[1].div_ceil(8) as u64;
+    let max_blocks = GATHER_LIST as u64 * GATHER_BUCKETS as u64;
+    ensure!(
+        blocks <= max_blocks,
+        "the compute sweep's splat takes at most {} light rays ({max_blocks} blocks of 8 x 8); \
+         this frame has {} x {}: use fewer light rays per pixel (--light-rays), a wider \
+         --light-spacing, a smaller viewport, or --variant sweep=fragment",
+        max_blocks * 64,
+        grid[0],
+        grid[1]
+    );
+    Ok(())
+}
+
 /// Workgroups of 8 × 8 covering `area`.
 fn groups(area: Area) -> [u32; 3] {
     [area.width.div_ceil(8), area.height.div_ceil(8), 1]
@@ -229,5 +247,27 @@ impl SweepPass {
             }
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::limits::{GATHER_BUCKETS, GATHER_LIST};
+
+    /// The guard admits exactly the grids whose blocks the gather's buckets hold.
+    #[test]
+    fn the_gather_refuses_grids_its_list_cannot_hold() {
+        let full = [8 * GATHER_LIST, 8 * GATHER_BUCKETS];
+        assert!(check_gather(full).is_ok());
+        // One more column starts a new column of blocks.
+        let e = check_gather([full[0] + 1, full[1]])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("--light-rays") && e.contains("16385 x 1024"),
+            "{e}"
+        );
+        assert!(check_gather([1, 1]).is_ok());
     }
 }

@@ -75,6 +75,9 @@ impl SweepPass {
             sweep.light_spacing,
             ray_image[0] as u64 * ray_image[1] as u64,
         );
+        if compute && forward_on && !(sweep.floor || sweep.skeleton) {
+            super::compute::check_gather(grid_dims)?;
+        }
         let soft = sweep.light.softness > 0.0;
         let (diffusion_w, diffusion_stride) = diffusion(
             sweep.light.softness * info.ref_step,
