@@ -572,7 +572,9 @@ mod tests {
                 "field=on",
                 "arrays=off",
                 "specialize=off",
-                "splat=compute"
+                "splat=compute",
+                "sweep=fragment",
+                "sweep=compute",
             ]
         );
     }
