@@ -10,7 +10,7 @@
 use anyhow::{ensure, Context as _, Result};
 use ash::vk;
 
-use super::pipeline::{pipeline_layout, shader_module, PipelineCore};
+use super::pipeline::{pipeline_layout, shader_module, specialization_entries, PipelineCore};
 use super::{Access, Context, DescriptorSet, LayerView};
 
 pub struct RenderPass {
@@ -235,13 +235,7 @@ impl GraphicsPipeline {
             constants,
         } = *desc;
         let device = ctx.device();
-        let entries: Vec<vk::SpecializationMapEntry> = (0..constants.len() as u32)
-            .map(|i| vk::SpecializationMapEntry {
-                constant_id: i,
-                offset: 4 * i,
-                size: 4,
-            })
-            .collect();
+        let entries = specialization_entries(constants);
         let spec = vk::SpecializationInfo::default()
             .map_entries(&entries)
             .data(bytemuck::cast_slice(constants));

@@ -278,13 +278,7 @@ impl ComputePipeline {
                 return Err(e);
             }
         };
-        let entries: Vec<vk::SpecializationMapEntry> = (0..constants.len() as u32)
-            .map(|i| vk::SpecializationMapEntry {
-                constant_id: i,
-                offset: 4 * i,
-                size: 4,
-            })
-            .collect();
+        let entries = specialization_entries(constants);
         let spec = vk::SpecializationInfo::default()
             .map_entries(&entries)
             .data(bytemuck::cast_slice(constants));
@@ -306,6 +300,17 @@ impl ComputePipeline {
             core: PipelineCore::finish(ctx, result, layout, push_size, name, "compute")?,
         })
     }
+}
+
+/// The map of 32-bit specialization constants: `constants[i]` is `constant_id = i`.
+pub(crate) fn specialization_entries(constants: &[u32]) -> Vec<vk::SpecializationMapEntry> {
+    (0..constants.len() as u32)
+        .map(|i| vk::SpecializationMapEntry {
+            constant_id: i,
+            offset: 4 * i,
+            size: 4,
+        })
+        .collect()
 }
 
 /// Every pipeline layout declares one push-constant range visible to all stages refrakt uses.
