@@ -57,6 +57,7 @@ fn main() {
         options.add_macro_definition("MIN_FORWARD", Some(&format!("{MIN_FORWARD:?}")));
         options.add_macro_definition("GATHER_LIST", Some(&format!("{GATHER_LIST}u")));
         options.add_macro_definition("GATHER_BUCKETS", Some(&format!("{GATHER_BUCKETS}u")));
+        options.add_macro_definition("VALUE_BRICK", Some(&format!("{VALUE_BRICK}")));
         let include_root = glsl_dir.clone();
         options.set_include_callback(move |requested, _ty, requester, _depth| {
             let full = include_root.join(requested);

@@ -13,12 +13,12 @@
 // Per ray r (of the grid, r = j * columns + i): amplitude (rgb per pixel² of overlap,
 // a = luminance), footprint (centre and widths in pixels; zero widths: no deposit),
 // direction (xyz, unit).
-layout(std430, set = 0, binding = 19) buffer Deposits {
+layout(std430, set = 0, binding = 20) buffer Deposits {
     vec4 deposits[];
 };
 // Per block of 8 x 8 rays: the union of its rays' boxes (lo.xy, hi.xy in pixels), empty
 // (lo > hi) when none of them carries light.
-layout(std430, set = 0, binding = 20) buffer Blocks {
+layout(std430, set = 0, binding = 21) buffer Blocks {
     vec4 blocks[];
 };
 

@@ -184,6 +184,47 @@ bool chain_decode(float code, out float light, out float depth) {
     return code > 0.0;
 }
 
+#if PASS == 1
+// Empty space for the light rays (render::value_ranges): per brick of VALUE_BRICK^3
+// voxels, the least and greatest value a sample within one brick of it can read.
+layout(set = 0, binding = 19) uniform sampler3D value_ranges;
+
+// Whether a light ray's straight step from p along unit direction d to the next plane
+// meets nothing that turns or dims it differently in one sub-step than in LIGHT_SUBSTEPS:
+// every value it can read (the dilated range of the brick it starts in; the step moves
+// at most one brick along each axis; a step that is not wholly inside the box also meets
+// the outside's value 0, value_at_tex) is the same, or the transfer functions give all of
+// them no opacity, a white medium and one eta (layer 2 of the preintegration table holds
+// the extremes of eta between two values). Then nothing refracts it (refract_step keeps
+// |v| = eta), and the attenuation (none, or a homogeneous medium's) composes exactly over
+// the whole step (eq. 4.4). The table's bilinear filtering mixes neighbouring ranges in,
+// which can only make the test fail where it could have passed.
+layout(constant_id = 8) const bool CLEAR_SPACE = true;   // the `clear` lever
+bool straight_in_clear_space(vec3 p, vec3 d, float ds) {
+    if (!CLEAR_SPACE || !(d.z >= MIN_FORWARD)) return false;
+    vec3 dims = P.volume_dims.xyz;
+    vec3 t0 = to_tex(p), t1 = to_tex(p + d * (ds / d.z));
+    vec3 run = abs(t1 - t0) * dims;   // voxels per axis
+    if (any(greaterThan(run, vec3(float(VALUE_BRICK))))) return false;
+    ivec3 grid = textureSize(value_ranges, 0);
+    ivec3 b = clamp(ivec3(floor(t0 * dims / float(VALUE_BRICK))), ivec3(0), grid - 1);
+    vec2 r = texelFetch(value_ranges, b, 0).xy;
+    // The box is convex: a step with both ends inside stays inside; one with both ends
+    // beyond the same face of it meets only the outside.
+    vec3 lo = min(t0, t1), hi = max(t0, t1);
+    bool inside = all(greaterThanEqual(lo, vec3(0.0))) && all(lessThanEqual(hi, vec3(1.0)));
+    bool outside = any(lessThan(hi, vec3(0.0))) || any(greaterThan(lo, vec3(1.0)));
+    if (outside) return true;
+    if (!inside) r = vec2(min(r.x, 0.0), max(r.y, 0.0));
+    if (r.y <= r.x) return true;   // one value throughout
+    vec2 c = preint_coord(r.x, r.y);
+    vec4 eta = textureLod(preint, vec3(c, 2.0), 0.0);      // max eta, -, min eta, -
+    float opacity = textureLod(preint, vec3(c, 0.0), 0.0).a;
+    vec3 m = textureLod(preint, vec3(c, 1.0), 0.0).rgb;
+    return opacity <= 0.0 && all(greaterThanEqual(m, vec3(1.0))) && eta.x - eta.z <= 0.0;
+}
+#endif
+
 #if SWEEP_COMPUTE && PASS == 0
 // Where the light reaching pixel `px` of this plane left the previous one: the backward
 // step's origin, computed as plane_main computes it for its own pixel (same arithmetic,
@@ -254,7 +295,6 @@ void PLANE_MAIN() {
     vec3 v_new = lv.xyz;
     float f_step = value_at_tex(to_tex(p_step));
     bool leaves = false;
-    float dz = ds / float(LIGHT_SUBSTEPS);
     // A film on the ray's way (see "A film" in the viewing rays): the values 2.5
     // reference steps before and beyond this plane step, along the ray, are the plateaus
     // either side; where eta between them peaks (or dips) past both, the ray crosses a
@@ -268,7 +308,13 @@ void PLANE_MAIN() {
     float v_after = value_at_tex(to_tex(p_step + (ds / max(d_in.z, MIN_FORWARD) + reach) * d_in));
     float e_before = eta_of(v_before), e_after = eta_of(v_after);
     vec3 film = film_between(v_before, v_after, e_before, e_after);
-    for (int k = 0; k < LIGHT_SUBSTEPS; ++k) {
+    // In clear or homogeneous space one sub-step is the same step (see
+    // straight_in_clear_space). A loop's trip count, not a branch: llvmpipe runs both
+    // sides of a branch but leaves a loop once all its lanes are done, and light rays
+    // side by side cross the same space (on a GPU the warp's lanes agree likewise).
+    int substeps = straight_in_clear_space(p_step, d_in, ds) ? 1 : LIGHT_SUBSTEPS;
+    float dz = ds / float(substeps);
+    for (int k = 0; k < substeps; ++k) {
         vec3 d = normalize(v_new);
         if (!(d.z >= MIN_FORWARD)) {
             leaves = true;

@@ -218,6 +218,7 @@ fn default_variants_are_the_reference_the_default_and_each_lever_off() {
             "field=on",
             "arrays=off",
             "specialize=off",
+            "clear=off",
             "splat=compute",
             "sweep=fragment",
             "sweep=compute",
@@ -236,7 +237,7 @@ fn default_variants_are_the_reference_the_default_and_each_lever_off() {
     }
     let row = &r.rows[0];
     assert_eq!(row.dataset, "kiwi");
-    assert_eq!(row.variants.len(), 9);
+    assert_eq!(row.variants.len(), 10);
     assert!(row.variants.iter().all(|v| v.frames_ms.len() == 1));
     assert_eq!(row.variants[0].image.psnr_db, None);
 }

@@ -141,6 +141,21 @@ fn check(case: &Case) {
             "{} {:?} sd {} field=on vs reference (not bounded): display max {:.4} mean {:.2e}",
             case.scene, case.transport, case.sample_distance, d.max, d.mean
         );
+        // The clear-space step (tests/clear_space.rs holds its rays to the four sub-steps'
+        // within float rounding) rounds differently, and where the optics are chaotic (a
+        // noisy refractive medium, rays at a total-reflection threshold) rounding moves
+        // single pixels: measured here up to 0.48 of display range at one pixel of the
+        // grazing shell, mean 2e-3. The other levers are held to the bound on top of it.
+        let clear_only = Levers {
+            clear: true,
+            ..Levers::REFERENCE
+        };
+        let (clear_reference, _) = render(&mut renderer, &scene, case, clear_only);
+        let d = display_diff(&reference, &clear_reference, &tone);
+        eprintln!(
+            "{} {:?} sd {} clear=on vs reference (not bounded): display max {:.4} mean {:.2e}",
+            case.scene, case.transport, case.sample_distance, d.max, d.mean
+        );
         let close = [
             (
                 &reference,
@@ -149,9 +164,9 @@ fn check(case: &Case) {
                     ..Levers::REFERENCE
                 },
             ),
-            (&reference, Levers::default()),
+            (&clear_reference, Levers::default()),
             (
-                &reference,
+                &clear_reference,
                 Levers {
                     splat: Splat::Compute,
                     ..Levers::default()
@@ -161,6 +176,7 @@ fn check(case: &Case) {
                 &field_reference,
                 Levers {
                     field: true,
+                    clear: false,
                     ..Levers::default()
                 },
             ),

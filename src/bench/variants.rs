@@ -528,9 +528,10 @@ mod tests {
     #[test]
     fn names_read_back_to_their_levers() {
         for region in [Region::Full, Region::Rect] {
-            for bits in 0..16u32 {
+            for bits in 0..32u32 {
                 let l = Levers {
                     region,
+                    clear: bits & 16 != 0,
                     field: bits & 1 != 0,
                     arrays: bits & 2 != 0,
                     specialize: bits & 4 != 0,
@@ -572,6 +573,7 @@ mod tests {
                 "field=on",
                 "arrays=off",
                 "specialize=off",
+                "clear=off",
                 "splat=compute",
                 "sweep=fragment",
                 "sweep=compute",

@@ -13,3 +13,7 @@ pub const MIN_FORWARD: f32 = 0.1;
 // at most GATHER_LIST * GATHER_BUCKETS blocks (16.7 M rays) per frame.
 pub const GATHER_LIST: u32 = 2048;
 pub const GATHER_BUCKETS: u32 = 128;
+
+// The light rays' empty-space test (render::value_ranges, glsl/value_range*.comp): the
+// volume in bricks of VALUE_BRICK^3 voxels, each with the range of values around it.
+pub const VALUE_BRICK: u32 = 4;

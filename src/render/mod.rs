@@ -23,6 +23,7 @@ pub mod sat3d;
 pub mod single;
 mod tonemap;
 pub mod upload;
+pub mod value_ranges;
 
 use std::collections::HashMap;
 
@@ -52,8 +53,9 @@ pub use tonemap::ToneMapPass;
 /// (volume, transfer functions, environment, light), outside a frame's "render" scope:
 /// what a transfer-function or light change costs is the sum of these in the first frame
 /// after it (nested scopes, like the SAT's per-axis ones, are not listed).
-pub const REBUILD_SCOPES: [&str; 10] = [
+pub const REBUILD_SCOPES: [&str; 11] = [
     "gradient volume",
+    "value ranges",
     "environment SAT",
     "preintegration",
     "field texture",
@@ -75,6 +77,9 @@ pub struct Renderer {
     gradient_status: gradient::GradientStatus,
     gradient_budget: Option<u64>,
     gradient_timings: Timings,
+    /// The value ranges per brick (render::value_ranges): the sweep's empty-space test for
+    /// the light rays, built with the gradient volume (a few KB, always fits).
+    value_ranges: Option<value_ranges::ValueRanges>,
     /// The field texture (value, ∇η) for the sweep's `field` lever: made with the gradient
     /// volume when it fits beside it, rebuilt with the transfer functions.
     field: Option<field::FieldTexture>,
@@ -188,6 +193,7 @@ impl Renderer {
             gradient_status: gradient::GradientStatus::Unbuilt,
             gradient_budget: None,
             gradient_timings: Timings::default(),
+            value_ranges: None,
             field: None,
             field_checked: false,
             field_dirty: false,
@@ -333,6 +339,21 @@ impl Renderer {
         }
     }
 
+    /// The value ranges read back (render::value_ranges), once a refractive frame built
+    /// them: each brick's own (min, max) and the dilated ones the sweep reads, bricks x
+    /// fastest (for tests and diagnostics).
+    pub fn read_value_ranges(&self) -> Result<Option<[Vec<[f32; 2]>; 2]>> {
+        let Some(r) = &self.value_ranges else {
+            return Ok(None);
+        };
+        let read = |image: &Image| -> Result<Vec<[f32; 2]>> {
+            let bytes = self.ctx.read_image(image, 0)?;
+            let texels: &[[f32; 4]] = bytemuck::cast_slice(&bytes);
+            Ok(texels.iter().map(|t| [t[0], t[1]]).collect())
+        };
+        Ok(Some([read(r.bricks())?, read(r.image())?]))
+    }
+
     /// Everything [`Renderer::render`] and [`Renderer::record`] would refuse for these
     /// arguments, checked without recording anything: camera, options, the step limit and,
     /// for the sweep, the light's side, the camera outside the box and dump planes.
@@ -438,6 +459,10 @@ impl Renderer {
         {
             return Ok(());
         }
+        let (ranges, t) =
+            value_ranges::ValueRanges::build(&self.ctx, &self.volume_tex, &self.linear)?;
+        self.value_ranges = Some(ranges);
+        self.gradient_timings = t;
         let (needed, device_budget) =
             gradient::GradientVolume::memory(&self.ctx, self.volume_tex.extent());
         let budget = self.gradient_budget.unwrap_or(device_budget);
@@ -448,7 +473,7 @@ impl Renderer {
         let (g, t) = gradient::GradientVolume::build(&self.ctx, &self.volume_tex, &self.linear)?;
         self.gradient = Some(g);
         self.gradient_status = gradient::GradientStatus::Built;
-        self.gradient_timings = t;
+        self.gradient_timings.extend(t);
         Ok(())
     }
 
@@ -631,6 +656,7 @@ impl Renderer {
             info: self.volume_info,
             volume: &self.volume_tex,
             gradient: self.gradient.as_ref().map(|g| g.image()),
+            value_ranges: self.value_ranges.as_ref().map(|r| r.image()),
             field: self.field.as_ref().map(|f| f.image()),
             extinction: self.extinction.as_ref(),
             transmittance: self.transmittance.as_ref(),

@@ -36,6 +36,9 @@ pub(crate) struct Inputs<'a> {
     pub volume: &'a Image,
     /// The smoothed gradient volume, if a model that needs it asked for it and it fits.
     pub gradient: Option<&'a Image>,
+    /// The value ranges per brick (render::value_ranges), built with the gradient volume
+    /// for the models that need that.
+    pub value_ranges: Option<&'a Image>,
     /// The field texture (value, ∇η; render::field), if the sweep may use it.
     pub field: Option<&'a Image>,
     /// The extinction volume and its 3D SAT, if the model needs them (ambient models).

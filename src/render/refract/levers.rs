@@ -115,10 +115,21 @@ pub struct Levers {
     /// Draws or dispatches per plane.
     #[serde(default = "auto_path")]
     pub sweep: SweepPath,
+    /// Clear space: a forward light ray crosses a plane step in one Snell sub-step
+    /// instead of four where every value it can meet is the same, or clear with one η
+    /// (render::value_ranges). The same ray within float rounding; rounding can still
+    /// flip a ray at a threshold (total reflection, a grazing exit) where the optics
+    /// are ill-conditioned.
+    #[serde(default = "on")]
+    pub clear: bool,
 }
 
 fn auto_path() -> SweepPath {
     SweepPath::Auto
+}
+
+fn on() -> bool {
+    true
 }
 
 impl Default for Levers {
@@ -130,6 +141,7 @@ impl Default for Levers {
             specialize: true,
             splat: Splat::Raster,
             sweep: SweepPath::Auto,
+            clear: true,
         }
     }
 }
@@ -143,12 +155,13 @@ impl Levers {
         specialize: false,
         splat: Splat::Raster,
         sweep: SweepPath::Fragment,
+        clear: false,
     };
 
     /// The keys of [`Levers::parse`], with their values, for help texts.
     pub const SYNTAX: &'static str =
         "region=full|rect, field=off|on, arrays=off|on, specialize=off|on, splat=raster|compute, \
-         sweep=auto|fragment|compute";
+         sweep=auto|fragment|compute, clear=off|on";
 
     /// `default`, `reference`, or comma-separated `key=value` pairs applied to the
     /// default (e.g. `region=full,field=off`); a pair may also follow `reference,` to
@@ -197,6 +210,7 @@ impl Levers {
                 "field" => levers.field = on(value)?,
                 "arrays" => levers.arrays = on(value)?,
                 "specialize" => levers.specialize = on(value)?,
+                "clear" => levers.clear = on(value)?,
                 "splat" => {
                     levers.splat = match value {
                         "raster" => Splat::Raster,
@@ -235,6 +249,7 @@ impl Levers {
             |l: &mut Levers| l.field = !l.field,
             |l: &mut Levers| l.arrays = !l.arrays,
             |l: &mut Levers| l.specialize = !l.specialize,
+            |l: &mut Levers| l.clear = !l.clear,
             |l: &mut Levers| {
                 l.splat = match l.splat {
                     Splat::Raster => Splat::Compute,
@@ -265,7 +280,7 @@ impl fmt::Display for Levers {
         let on = |b: bool| if b { "on" } else { "off" };
         write!(
             f,
-            "region={},field={},arrays={},specialize={},splat={},sweep={}",
+            "region={},field={},arrays={},specialize={},splat={},sweep={},clear={}",
             match self.region {
                 Region::Full => "full",
                 Region::Rect => "rect",
@@ -277,7 +292,8 @@ impl fmt::Display for Levers {
                 Splat::Raster => "raster",
                 Splat::Compute => "compute",
             },
-            self.sweep.name()
+            self.sweep.name(),
+            on(self.clear)
         )
     }
 }
@@ -290,10 +306,11 @@ mod tests {
     fn parse_round_trips_and_applies_to_the_default() {
         let all = [Region::Full, Region::Rect];
         for region in all {
-            for bits in 0..48u32 {
+            for bits in 0..96u32 {
                 let l = Levers {
                     sweep: [SweepPath::Auto, SweepPath::Fragment, SweepPath::Compute]
-                        [(bits / 16) as usize],
+                        [(bits / 16 % 3) as usize],
+                    clear: bits >= 48,
                     region,
                     field: bits & 1 != 0,
                     arrays: bits & 2 != 0,
@@ -347,8 +364,8 @@ mod tests {
     fn each_flipped_differs_in_exactly_one_lever() {
         let base = Levers::default();
         let flipped = base.each_flipped();
-        // Four on/off levers and the region, and from `auto` both explicit paths.
-        assert_eq!(flipped.len(), 7);
+        // Five on/off levers and the region, and from `auto` both explicit paths.
+        assert_eq!(flipped.len(), 8);
         for v in flipped {
             let diffs = [
                 v.region != base.region,
@@ -357,6 +374,7 @@ mod tests {
                 v.specialize != base.specialize,
                 v.splat != base.splat,
                 v.sweep != base.sweep,
+                v.clear != base.clear,
             ];
             assert_eq!(diffs.iter().filter(|d| **d).count(), 1, "{v}");
         }

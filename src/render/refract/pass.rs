@@ -115,6 +115,8 @@ pub(crate) struct Features {
     pub(crate) arrays: bool,
     pub(crate) field: bool,
     pub(crate) films: bool,
+    /// The `clear` lever: one light sub-step through clear space (render::value_ranges).
+    pub(crate) clear: bool,
 }
 
 impl Features {
@@ -126,6 +128,7 @@ impl Features {
         arrays: true,
         field: true,
         films: true,
+        clear: true,
     };
 
     /// `have_field`: whether the field texture exists (it may not fit in memory);
@@ -135,6 +138,7 @@ impl Features {
         let shader = Self {
             arrays: levers.arrays,
             field: levers.field && have_field,
+            clear: levers.clear,
             ..Self::ALL
         };
         if !levers.specialize {
@@ -150,8 +154,8 @@ impl Features {
         }
     }
 
-    /// Constant 0 (the gradient volume is bound), then 1-7.
-    fn constants(self, have_gradient: bool) -> [u32; 8] {
+    /// Constant 0 (the gradient volume is bound), then 1-8.
+    fn constants(self, have_gradient: bool) -> [u32; 9] {
         [
             have_gradient as u32,
             self.specular as u32,
@@ -161,6 +165,7 @@ impl Features {
             self.arrays as u32,
             self.field as u32,
             self.films as u32,
+            self.clear as u32,
         ]
     }
 }
@@ -183,7 +188,7 @@ impl PlanePipelines {
         ctx: &Context,
         passes: [&RenderPass; 3],
         set: &DescriptorSet,
-        constants: [u32; 8],
+        constants: [u32; 9],
         forward: bool,
     ) -> Result<Self> {
         let plane = |fragment, pass, name: &str| {
@@ -246,7 +251,7 @@ pub(crate) struct ComputePlanes {
 }
 
 impl ComputePlanes {
-    fn new(ctx: &Context, set: &DescriptorSet, constants: [u32; 8]) -> Result<Self> {
+    fn new(ctx: &Context, set: &DescriptorSet, constants: [u32; 9]) -> Result<Self> {
         let push = std::mem::size_of::<ComputePush>() as u32;
         let make = |spirv, name: &str| {
             ComputePipeline::with_constants(ctx, spirv, set, push, &constants, name)
@@ -298,6 +303,7 @@ impl SweepPass {
             ctx,
             volume,
             gradient,
+            value_ranges,
             field,
             tf,
             preint,
@@ -459,6 +465,11 @@ impl SweepPass {
         let have_field = field.is_some();
         // 18: the compute splat's sums (the `splat` lever).
         plane_bindings.push(Binding::Storage(&splat_sums));
+        // 19: the value ranges per brick (render::value_ranges; the light rays' empty-space
+        // test in glsl/sweep_plane.glsl), built with the gradient volume.
+        let value_ranges = value_ranges
+            .ok_or_else(|| anyhow::anyhow!("the refractive sweep needs the value ranges"))?;
+        plane_bindings.push(Binding::Texture(value_ranges, sampler));
         let sweep_set = DescriptorSet::new(ctx, &plane_bindings, "sweep")?;
         // The compute sweep's set: the same bindings, with every image a plane writes
         // (states 4-9, irradiance 10-11, rays 13-14) a storage image.
@@ -470,7 +481,7 @@ impl SweepPass {
         compute_bindings[11] = Binding::StorageImage(&irradiance[1].image);
         compute_bindings[13] = Binding::StorageImage(&rays[0].image);
         compute_bindings[14] = Binding::StorageImage(&rays[1].image);
-        // 19-20: the gather splat's deposits and block boxes (glsl/light_gather.glsl),
+        // 20-21: the gather splat's deposits and block boxes (glsl/light_gather.glsl),
         // sized for the ray images' capacity C: C deposits; blocks of 8 × 8 over any grid
         // of at most C rays, (cols + 7)(rows + 7) / 64 <= (8 C + 56) / 64.
         let capacity = ray_size[0] as u64 * ray_size[1] as u64;

@@ -189,6 +189,7 @@ impl SweepPass {
         let mut uses: Vec<Use> = [
             inputs.volume,
             inputs.gradient.unwrap_or(inputs.volume),
+            inputs.value_ranges.unwrap_or(inputs.volume),
             inputs.field.unwrap_or(inputs.volume),
             inputs.tf,
             inputs.preint,
