@@ -12,10 +12,9 @@
 mod common;
 
 use common::*;
-use refrakt::output::to_srgb8;
 use refrakt::render::{
-    Camera, Frame, Levers, LightTransport, Model, Planes, RenderOptions, Renderer, Splat,
-    StateBuffer, SweepPath,
+    Camera, Levers, LightTransport, Model, Planes, RenderOptions, Renderer, Splat, StateBuffer,
+    SweepPath,
 };
 use refrakt::scene::Scene;
 use refrakt::transfer::TransferFunctions;
@@ -26,31 +25,6 @@ fn path(sweep: SweepPath) -> Levers {
         sweep,
         ..Levers::default()
     }
-}
-
-/// Largest and mean display difference (tone mapped, sRGB 8 bit), colour channels.
-fn display_diff(a: &Frame, b: &Frame, scene: &Scene) -> (f32, f32) {
-    let tone = scene.tone_map().unwrap();
-    let (a, b) = (to_srgb8(a, &tone), to_srgb8(b, &tone));
-    let (mut max, mut sum, mut n) = (0.0f32, 0.0f64, 0usize);
-    for (k, (x, y)) in a.iter().zip(&b).enumerate() {
-        if k % 4 == 3 {
-            continue;
-        }
-        let d = (*x as f32 - *y as f32).abs() / 255.0;
-        max = max.max(d);
-        sum += d as f64;
-        n += 1;
-    }
-    (max, (sum / n as f64) as f32)
-}
-
-/// Largest difference of any linear RGBA value, relative where the value exceeds 1.
-fn linear_max(a: &[[f32; 4]], b: &[[f32; 4]]) -> f32 {
-    a.iter()
-        .zip(b)
-        .flat_map(|(p, q)| (0..4).map(move |c| (p[c] - q[c]).abs() / p[c].abs().max(1.0)))
-        .fold(0.0, f32::max)
 }
 
 /// The glass sphere on its floor (a caustic, a shadow, Fresnel reflections, the sky)
@@ -91,7 +65,8 @@ fn compute_and_fragment_sweeps_render_the_same_glass_sphere_on_its_floor() {
             let compute = frame(path(SweepPath::Compute));
             let lit = fragment.pixels.iter().filter(|p| p[3] > 0.05).count();
             assert!(lit > 200, "the frame shows the volume ({lit} pixels)");
-            let (max, mean) = display_diff(&fragment, &compute, &scene);
+            let common::DisplayDiff { max, mean } =
+                display_diff(&fragment, &compute, &scene.tone_map().unwrap());
             let lin = linear_max(&fragment.pixels, &compute.pixels);
             eprintln!(
                 "{transport:?} sd {sd} softness {softness}: display max {max:.4} mean \

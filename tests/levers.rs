@@ -8,47 +8,10 @@
 
 mod common;
 
-use common::with_context;
-use refrakt::output::to_srgb8;
+use common::{display_diff, linear_max, with_context};
 use refrakt::render::{Camera, Frame, Levers, LightTransport, Model, Region, Renderer, Splat};
 use refrakt::scene::Scene;
 use refrakt::tone::ToneMap;
-
-struct Diff {
-    max: f32,
-    mean: f32,
-}
-
-/// Display values (tone mapped, sRGB, 8 bit as the PNG writer makes them) compared.
-fn display_diff(a: &Frame, b: &Frame, tone: &ToneMap) -> Diff {
-    let (a, b) = (to_srgb8(a, tone), to_srgb8(b, tone));
-    let mut max = 0.0f32;
-    let mut sum = 0.0f64;
-    let mut n = 0usize;
-    for (k, (x, y)) in a.iter().zip(&b).enumerate() {
-        if k % 4 == 3 {
-            continue;
-        }
-        let d = (*x as f32 - *y as f32).abs() / 255.0;
-        max = max.max(d);
-        sum += d as f64;
-        n += 1;
-    }
-    Diff {
-        max,
-        mean: (sum / n as f64) as f32,
-    }
-}
-
-/// Largest difference of any linear RGBA value, relative to the value where it exceeds 1
-/// (HDR light: float rounding of differently compiled code scales with it).
-fn linear_max(a: &Frame, b: &Frame) -> f32 {
-    a.pixels
-        .iter()
-        .zip(&b.pixels)
-        .flat_map(|(p, q)| (0..4).map(move |c| (p[c] - q[c]).abs() / p[c].abs().max(1.0)))
-        .fold(0.0, f32::max)
-}
 
 struct Case {
     scene: &'static str,
@@ -104,7 +67,7 @@ fn check(case: &Case) {
         ];
         for levers in exact {
             let (f, _) = render(&mut renderer, &scene, case, levers);
-            let d = linear_max(&reference, &f);
+            let d = linear_max(&reference.pixels, &f.pixels);
             assert!(d <= 1e-5, "{}, {levers}: linear max |Δ| {d}", case.scene);
         }
         // The compute splat sums the same deposits in 32.32 fixed point instead of f32
@@ -121,7 +84,7 @@ fn check(case: &Case) {
             "{}: the compute splat is not reproducible",
             case.scene
         );
-        let d = linear_max(&reference, &first);
+        let d = linear_max(&reference.pixels, &first.pixels);
         eprintln!(
             "{} {:?} sd {} {compute}: linear max |Δ| {d:.3e}",
             case.scene, case.transport, case.sample_distance

@@ -201,3 +201,40 @@ pub fn single_scattering_block(k: f64, h: f64, towards: [f64; 3], g: f64) -> f64
     let d = 1.0 + g * g - 2.0 * g * cos;
     integral * (1.0 - g * g) / (d * d.sqrt())
 }
+
+/// Largest and mean difference of two frames' display values (tone mapped, sRGB, 8 bit as
+/// the PNG writer makes them), colour channels, as fractions of the display range.
+pub struct DisplayDiff {
+    pub max: f32,
+    pub mean: f32,
+}
+
+pub fn display_diff(a: &Frame, b: &Frame, tone: &refrakt::tone::ToneMap) -> DisplayDiff {
+    let (a, b) = (
+        refrakt::output::to_srgb8(a, tone),
+        refrakt::output::to_srgb8(b, tone),
+    );
+    let (mut max, mut sum, mut n) = (0.0f32, 0.0f64, 0usize);
+    for (k, (x, y)) in a.iter().zip(&b).enumerate() {
+        if k % 4 == 3 {
+            continue;
+        }
+        let d = (*x as f32 - *y as f32).abs() / 255.0;
+        max = max.max(d);
+        sum += d as f64;
+        n += 1;
+    }
+    DisplayDiff {
+        max,
+        mean: (sum / n as f64) as f32,
+    }
+}
+
+/// Largest difference of any linear RGBA value, relative to the value where it exceeds 1
+/// (HDR light: float rounding of differently compiled code scales with it).
+pub fn linear_max(a: &[[f32; 4]], b: &[[f32; 4]]) -> f32 {
+    a.iter()
+        .zip(b)
+        .flat_map(|(p, q)| (0..4).map(move |c| (p[c] - q[c]).abs() / p[c].abs().max(1.0)))
+        .fold(0.0, f32::max)
+}

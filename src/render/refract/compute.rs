@@ -225,9 +225,10 @@ impl SweepPass {
             // Stage B: the rays just written make their deposits (after the previous
             // plane's gather read the last ones). The deposit and the gather read the
             // write layer: their push names it as the read layer.
-            rec.transition_many(&Self::storage(&self.rays));
-            rec.compute_storage_barrier(&self.deposits);
-            rec.compute_storage_barrier(&self.blocks);
+            rec.compute_storage_barriers(
+                &Self::storage(&self.rays),
+                &[&self.deposits, &self.blocks],
+            );
             let push = ComputePush {
                 read_layer: i % 2,
                 ..self.push(i, depth, f.unit, ray_area)
@@ -237,9 +238,10 @@ impl SweepPass {
             rec.dispatch_bound(deposit, bytemuck::bytes_of(&push), block_groups)?;
             // Stage C: the gather into irradiance layer i % 2 (after the viewing rays of
             // plane i - 1 read it as plane i - 2's).
-            rec.compute_storage_barrier(&self.deposits);
-            rec.compute_storage_barrier(&self.blocks);
-            rec.transition_many(&Self::storage(&self.irradiance));
+            rec.compute_storage_barriers(
+                &Self::storage(&self.irradiance),
+                &[&self.deposits, &self.blocks],
+            );
             rec.bind_compute_pipeline(gather);
             rec.dispatch_bound(gather, bytemuck::bytes_of(&push), groups(screen))?;
             if timed {

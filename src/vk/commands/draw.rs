@@ -227,16 +227,35 @@ impl Recorder<'_> {
     /// atomics) before every later one: passes that accumulate into a buffer and the pass
     /// that reads and clears it, back to back.
     pub fn compute_storage_barrier(&mut self, buffer: &Buffer) {
+        self.compute_storage_barriers(&[], &[buffer]);
+    }
+
+    /// The image transitions of [`Recorder::transition_many`] and the storage barrier of
+    /// [`Recorder::compute_storage_barrier`] for each of `buffers`, in one
+    /// vkCmdPipelineBarrier2 (a driver may drain its queue once per call).
+    pub fn compute_storage_barriers(
+        &mut self,
+        images: &[(&Image, Range<u32>, Access)],
+        buffers: &[&Buffer],
+    ) {
+        let mut image_barriers_out = Vec::new();
+        for (image, layers, to) in images {
+            image_barriers(image, layers.clone(), *to, &mut image_barriers_out);
+        }
         let rw = vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE;
         let compute = vk::PipelineStageFlags2::COMPUTE_SHADER;
-        let barrier = [buffer_barrier(buffer, compute, rw, compute, rw)];
-        // SAFETY: recording; the buffer is alive.
-        unsafe {
-            self.device().cmd_pipeline_barrier2(
-                self.cmd,
-                &vk::DependencyInfo::default().buffer_memory_barriers(&barrier),
-            )
-        };
+        let buffer_barriers: Vec<_> = buffers
+            .iter()
+            .map(|b| buffer_barrier(b, compute, rw, compute, rw))
+            .collect();
+        if image_barriers_out.is_empty() && buffer_barriers.is_empty() {
+            return;
+        }
+        let dep = vk::DependencyInfo::default()
+            .image_memory_barriers(&image_barriers_out)
+            .buffer_memory_barriers(&buffer_barriers);
+        // SAFETY: recording; the barriers reference live images and buffers.
+        unsafe { self.device().cmd_pipeline_barrier2(self.cmd, &dep) };
     }
 
     /// Copy a storage buffer that shaders wrote into a host-visible `dst` (made with
