@@ -113,6 +113,14 @@ fn tiny_thesis_bench_has_the_documented_structure() {
         assert!((row.sweep_over_floor.unwrap() - ratio(&row.floor)).abs() < 1e-9);
         assert!((row.sweep_over_skeleton.unwrap() - ratio(&row.skeleton)).abs() < 1e-9);
         assert!(row.bytes_per_plane_pixel > 0.0);
+        // Each state texel read and written once is part of what the shaders fetch.
+        assert!(
+            row.compulsory_bytes_per_plane_pixel > 0.0
+                && row.compulsory_bytes_per_plane_pixel < row.bytes_per_plane_pixel,
+            "{} compulsory of {} B/plane-pixel",
+            row.compulsory_bytes_per_plane_pixel,
+            row.bytes_per_plane_pixel
+        );
     }
 
     // CSV: a header and one record per frame (warm-up included) of each variant.

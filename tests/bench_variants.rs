@@ -444,6 +444,7 @@ fn thesis_report(scale: f64, rows: &[(&str, &str, Vec<f64>)]) -> Report {
                 ms_per_plane: 1.0,
                 plane_pixels_per_s: 1.0,
                 bytes_per_plane_pixel: 400.0,
+                compulsory_bytes_per_plane_pixel: 192.0,
                 effective_gb_per_s: 1.0,
                 ea: None,
                 floor: None,

@@ -143,6 +143,10 @@ pub struct Row {
     /// State-buffer bytes read and written per plane pixel (attachment loads and stores,
     /// sampled reads including the filter taps).
     pub bytes_per_plane_pixel: f64,
+    /// The compulsory part: each state texel a plane needs read once and written once
+    /// (`SweepStats::compulsory_bytes_per_plane`).
+    #[serde(default)]
+    pub compulsory_bytes_per_plane_pixel: f64,
     /// bytes_per_plane_pixel × plane_pixels_per_s.
     pub effective_gb_per_s: f64,
     pub ea: Option<Variant>,
@@ -273,9 +277,9 @@ fn orbit(camera: &Camera, k: u32) -> Camera {
     }
 }
 
-/// A timed variant with the sweep's plane count and bytes per plane (of its last frame;
-/// None for a model without a sweep).
-type Timed = (Variant, Option<u32>, Option<u64>);
+/// A timed variant with the sweep's plane count and bytes per plane, fetched and
+/// compulsory (of its last frame; None for a model without a sweep).
+type Timed = (Variant, Option<u32>, Option<(u64, u64)>);
 
 /// One variant's frames as they come (warm-up apart), summarised by [`Collector::finish`].
 #[derive(Default)]
@@ -285,7 +289,7 @@ struct Collector {
     sweep: Vec<f64>,
     passes: Passes,
     planes: Option<u32>,
-    bytes: Option<u64>,
+    bytes: Option<(u64, u64)>,
 }
 
 impl Collector {
@@ -304,7 +308,7 @@ impl Collector {
         if let Some(s) = &f.sweep {
             self.sweep.push(get("sweep"));
             self.planes = Some(s.planes.count);
-            self.bytes = Some(s.bytes_per_plane);
+            self.bytes = Some((s.bytes_per_plane, s.compulsory_bytes_per_plane));
         }
         Ok(())
     }
@@ -492,7 +496,7 @@ pub fn thesis(ctx: &Context, s: &ThesisSettings) -> Result<Report> {
         .into_iter();
         let (refract, planes, bytes) = runs.next().context("the sweep was not timed")?;
         let planes = planes.context("the sweep reported no planes")?;
-        let bytes = bytes.unwrap_or(0);
+        let (bytes, compulsory) = bytes.unwrap_or((0, 0));
         let ea = runs.next().map(|r| r.0);
         let floor = runs.next().map(|r| r.0);
         let skeleton = runs.next().map(|r| r.0);
@@ -524,6 +528,7 @@ pub fn thesis(ctx: &Context, s: &ThesisSettings) -> Result<Report> {
             ms_per_plane: refract.passes.sweep_ms / planes as f64,
             plane_pixels_per_s,
             bytes_per_plane_pixel,
+            compulsory_bytes_per_plane_pixel: compulsory as f64 / pixels,
             effective_gb_per_s: bytes_per_plane_pixel * plane_pixels_per_s / 1e9,
             sweep_over_ea: ea.as_ref().map(|e| refract.stats.mean / e.stats.mean),
             sweep_over_floor: floor.as_ref().map(|f| refract.stats.mean / f.stats.mean),

@@ -310,7 +310,7 @@ pub fn variants(ctx: &Context, s: &VariantsSettings) -> Result<VariantsReport> {
                 passes: t.passes,
                 sweep_ms: t.sweep_ms,
                 ratio: 0.0,
-                bytes_per_plane_pixel: bytes.unwrap_or(0) as f64 / pixels,
+                bytes_per_plane_pixel: bytes.map_or(0, |b| b.0) as f64 / pixels,
                 image,
             });
         }

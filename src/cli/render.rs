@@ -203,14 +203,16 @@ pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
         let planes = stats.planes.count;
         println!(
             "sweep: {planes} planes as {}, spacing {:.5}, {:.0} % of the viewport shaded per \
-             plane (mean), {:.1} MiB of state-buffer traffic per plane",
+             plane (mean), {:.1} MiB of state-buffer traffic per plane ({:.1} MiB compulsory: \
+             each state texel read and written once)",
             match stats.path {
                 SweepPath::Compute => "compute dispatches",
                 _ => "draws",
             },
             stats.planes.spacing,
             100.0 * stats.shaded_fraction,
-            stats.bytes_per_plane as f64 / (1 << 20) as f64
+            stats.bytes_per_plane as f64 / (1 << 20) as f64,
+            stats.compulsory_bytes_per_plane as f64 / (1 << 20) as f64
         );
         if let Some(ms) = frame.timings.get("sweep") {
             println!("  {:.3} ms per plane", ms / planes as f64);

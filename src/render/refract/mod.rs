@@ -521,6 +521,10 @@ pub struct SweepStats {
     /// shaded pixels, every texel the plane shaders fetch (four per bilinear read, both
     /// layers where the `arrays` lever is off), and the forward transport's light rays.
     pub bytes_per_plane: u64,
+    /// The part of it no sweep over this state can avoid: each state texel the plane
+    /// needs, read once and written once (issue 31's bytes model). Algorithm 1 itself
+    /// needs 19 scalars per plane-pixel; this counts the present layout's texels.
+    pub compulsory_bytes_per_plane: u64,
     /// Mean fraction of the viewport each plane shades (1 with `Region::Full`; the
     /// `region` lever's rectangles otherwise).
     pub shaded_fraction: f64,

@@ -756,6 +756,21 @@ impl SweepPass {
         }
         texels * STATE_BYTES_PER_PIXEL
     }
+
+    /// The compulsory part of a plane's state traffic (see
+    /// [`SweepStats::compulsory_bytes_per_plane`]): each state texel the plane needs, read
+    /// once and written once, in the state's present layout (RGBA32F texels). Backward:
+    /// the six state images per shaded pixel. Forward: the four viewing-ray images and
+    /// the irradiance's two per shaded pixel (read), the irradiance written over the
+    /// viewport by the splat, and each light ray's two texels.
+    pub fn compulsory_bytes_per_plane(&self, f: TrafficInputs) -> u64 {
+        let texels = if f.forward {
+            f.shaded_pixels * (4 * 2 + 2) + f.viewport_pixels * 2 + f.light_rays * 2 * 2
+        } else {
+            f.shaded_pixels * 6 * 2
+        };
+        texels * STATE_BYTES_PER_PIXEL
+    }
 }
 
 /// What [`SweepPass::bytes_per_plane`] counts for.

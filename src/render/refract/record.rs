@@ -465,19 +465,21 @@ impl SweepPass {
         if let Some(buf) = &clamp_readback {
             rec.copy_storage_to_host(&self.counters, buf);
         }
+        let traffic = TrafficInputs {
+            features,
+            forward: forward_on && !baseline,
+            soft,
+            shaded_pixels: (shaded_fraction * self.width as f64 * self.height as f64).round()
+                as u64,
+            light_rays: grid_dims[0] as u64 * grid_dims[1] as u64,
+            compute_splat,
+            viewport_pixels: self.width as u64 * self.height as u64,
+        };
         Ok(SweepRecording {
             stats: SweepStats {
                 planes,
-                bytes_per_plane: self.bytes_per_plane(TrafficInputs {
-                    features,
-                    forward: forward_on && !baseline,
-                    soft,
-                    shaded_pixels: (shaded_fraction * self.width as f64 * self.height as f64)
-                        .round() as u64,
-                    light_rays: grid_dims[0] as u64 * grid_dims[1] as u64,
-                    compute_splat,
-                    viewport_pixels: self.width as u64 * self.height as u64,
-                }),
+                bytes_per_plane: self.bytes_per_plane(traffic),
+                compulsory_bytes_per_plane: self.compulsory_bytes_per_plane(traffic),
                 shaded_fraction,
                 light_transport: sweep.light_transport,
                 path: if compute {
