@@ -446,6 +446,25 @@ void PLANE_MAIN() {
     vec4 vd4 = READ_PIXEL(view_direction, R, pixel);
     vec4 CA = READ_PIXEL(colour_opacity, R, pixel);
     vec4 M4 = READ_PIXEL(medium, R, pixel);
+#if PASS == 2
+    // A finished viewing ray (issue 31): once its opacity reached termination_alpha at
+    // plane k (marked below, medium.w = -(k + 1): the skin chain is of no use to it any
+    // more) nothing of the volume changes its pixel, so it stops: its state is copied to
+    // the other layer once, at plane k + 1, and from k + 2 on both layers hold it and the
+    // plane leaves the pixel alone (the render pass loads the layer; the compute path
+    // stores nothing). What still depends on it is the environment seen behind the
+    // volume through the remaining 1 - A <= 1 - termination_alpha (the composite's
+    // C + (1 - A) M env): looked up in the direction the ray had when it finished, where
+    // the planes past it could still have turned it.
+    if (M4.w < 0.0) {
+        if (float(pc.plane) + M4.w >= 1.0) SKIP_PLANE;
+        out_view_position = vp4;
+        out_view_direction = vd4;
+        out_colour_opacity = CA;
+        out_medium = M4;
+        return;
+    }
+#endif
     vec3 vp = vp4.xyz;
     vec3 vd = vd4.xyz;
     // A pixel's first plane in the drawn region (render::refract::region): its ray is
@@ -844,6 +863,9 @@ void PLANE_MAIN() {
 #if PASS == 0
     out_light_colour = vec4(light, 0.0);
     out_light_direction = vec4(light_dir, 0.0);
+#endif
+#if PASS == 2
+    if (A >= P.termination_alpha) chain_code = -(float(pc.plane) + 1.0);   // finished
 #endif
     out_view_position = vec4(vp_next, f_v);
     out_view_direction = vec4(vd, eta_here);

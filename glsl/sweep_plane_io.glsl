@@ -26,7 +26,9 @@ layout(push_constant) uniform Push {
     ivec2 extent;    // pixels (or ray texels) it covers
 } pc;
 ivec2 g_pixel;
+bool g_keep_layer = false;   // SKIP_PLANE: store nothing, the write layer stays as it is
 #define FRAG_XY (vec2(g_pixel) + 0.5)
+#define SKIP_PLANE { g_keep_layer = true; return; }
 #define PLANE_OUTPUT(loc, name) vec4 name
 #define PLANE_MAIN plane_main
 #else
@@ -37,6 +39,8 @@ layout(push_constant) uniform Push {
     uint pad;
 } pc;
 #define FRAG_XY gl_FragCoord.xy
+// The render pass loads the write layer: a discarded pixel keeps what it holds.
+#define SKIP_PLANE discard
 #define PLANE_OUTPUT(loc, name) layout(location = loc) out vec4 name
 #define PLANE_MAIN main
 #endif
@@ -68,6 +72,7 @@ layout(push_constant) uniform Push {
         if (any(greaterThanEqual(gid, pc.extent))) return; \
         g_pixel = pc.origin + gid; \
         plane_main(); \
+        if (g_keep_layer) return; \
         ivec3 at = ivec3(g_pixel, 1u - pc.read_layer); \
         STORE_OUTPUTS(at) \
     }
