@@ -62,6 +62,16 @@ vec3 surface_gradient(vec3 p) {
     return surface_gradient_tex(t);
 }
 
+// The light's direction from the forward splat's luminance-weighted direction sum (w: the
+// weight): the launch direction where no light arrived. The sum's channels are rounded
+// apart (32.32 fixed point on the compute paths), so a weight can survive where the
+// direction rounded to zero: normalising that gave NaN pixels (measured, with the cells
+// deposit's many small shares).
+vec3 splatted_direction(vec4 sum) {
+    return sum.w > 0.0 && dot(sum.xyz, sum.xyz) > 0.0 ? normalize(sum.xyz)
+                                                      : normalize(P.light_dir.xyz);
+}
+
 void count_clamp(uint which) {
     atomicAdd(counters.clamps[which], 1u);
 }
