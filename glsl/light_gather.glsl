@@ -1,6 +1,6 @@
 // The compute sweep's splat as a tile-binned gather (issue 31): no atomics on the sums.
 // sweep_deposit.comp computes each light ray's deposit (light_splat_ray.glsl: the same
-// box and amplitude as the point sprites and the atomic compute splat) into `deposits`
+// deposit as the point sprites and the atomic compute splat) into `deposits`
 // and the bounding box of each block of 8 x 8 neighbouring rays into `blocks`;
 // sweep_gather.comp then lets each 8 x 8 tile of pixels find the blocks that overlap it
 // and each pixel sum the deposits of their rays. The sum is the atomic splat's: every
@@ -10,12 +10,46 @@
 #ifndef REFRAKT_LIGHT_GATHER_GLSL
 #define REFRAKT_LIGHT_GATHER_GLSL
 
-// Per ray r (of the grid, r = j * columns + i): amplitude (rgb per pixel² of overlap,
-// a = luminance), footprint (centre and widths in pixels; zero widths: no deposit),
-// direction (xyz, unit).
+// Per ray r (of the grid, r = j * columns + i): its RayDeposit (light_splat_ray.glsl) in
+// DEPOSIT_VEC4S vec4s from 10 r: corner fluxes A, B, footprint (an empty one, zero
+// width: no deposit), corners A B, corners C D, direction (xyz), box amplitude, box,
+// corner fluxes C, D.
 layout(std430, set = 0, binding = 20) buffer Deposits {
     vec4 deposits[];
 };
+const int DEPOSIT_VEC4S = 10;
+
+void store_deposit(int r, RayDeposit d) {
+    int k = DEPOSIT_VEC4S * r;
+    deposits[k] = d.flux_a;
+    deposits[k + 1] = d.flux_b;
+    deposits[k + 2] = d.footprint;
+    deposits[k + 3] = d.corners_ab;
+    deposits[k + 4] = d.corners_cd;
+    deposits[k + 5] = vec4(d.direction, 0.0);
+    deposits[k + 6] = d.box_amplitude;
+    deposits[k + 7] = d.box;
+    deposits[k + 8] = d.flux_c;
+    deposits[k + 9] = d.flux_d;
+}
+
+vec4 stored_footprint(int r) { return deposits[DEPOSIT_VEC4S * r + 2]; }
+
+RayDeposit load_deposit(int r) {
+    int k = DEPOSIT_VEC4S * r;
+    RayDeposit d;
+    d.flux_a = deposits[k];
+    d.flux_b = deposits[k + 1];
+    d.footprint = deposits[k + 2];
+    d.corners_ab = deposits[k + 3];
+    d.corners_cd = deposits[k + 4];
+    d.direction = deposits[k + 5].xyz;
+    d.box_amplitude = deposits[k + 6];
+    d.box = deposits[k + 7];
+    d.flux_c = deposits[k + 8];
+    d.flux_d = deposits[k + 9];
+    return d;
+}
 // Per block of 8 x 8 rays: the union of its rays' boxes (lo.xy, hi.xy in pixels), empty
 // (lo > hi) when none of them carries light.
 layout(std430, set = 0, binding = 21) buffer Blocks {

@@ -1,7 +1,7 @@
 #version 460
 // Forward light transport, second half of a plane (the `splat=compute` lever): one
 // invocation per light ray adds its deposit (light_splat_ray.glsl) to the fixed-point sums
-// of the pixels its box overlaps (light_splat_fixed.glsl); light_splat_resolve.comp turns
+// of the pixels its deposit overlaps (light_splat_fixed.glsl); light_splat_resolve.comp turns
 // the sums into the plane's irradiance. Same deposits as the point sprites of
 // light_splat.vert/.frag, without rasterising a sprite per ray and blending two RGBA32F
 // attachments (84 % of the forward sweep on an H100, 45 % on lavapipe, measured).
@@ -29,26 +29,23 @@ void main() {
     if (!ray_deposit(index, pc.read_layer, pc.depth, d)) return;
     ivec2 size = ivec2(P.camera.zw);
     uint pixels = uint(size.x * size.y);
-    vec2 lo = d.footprint.xy - 0.5 * d.footprint.zw;
-    vec2 hi = d.footprint.xy + 0.5 * d.footprint.zw;
     // Pixels outside the viewport receive nothing (as sprites are clipped there).
-    ivec2 first = max(ivec2(floor(lo)), ivec2(0));
-    ivec2 last = min(ivec2(floor(hi)), size - 1);
-    vec4 a = d.amplitude / pc.unit;
+    ivec2 first = max(ivec2(floor(d.footprint.xy)), ivec2(0));
+    ivec2 last = min(ivec2(floor(d.footprint.zw)), size - 1);
     for (int y = first.y; y <= last.y; ++y) {
         for (int x = first.x; x <= last.x; ++x) {
-            float w = deposit_overlap(d.footprint, vec2(x, y));
-            if (w <= 0.0) continue;
+            vec3 e;
+            vec4 dir;
+            deposit_at(d, vec2(x, y), pc.unit, e, dir);
+            if (!(dir.w > 0.0) && !(max(e.r, max(e.g, e.b)) > 0.0)) continue;
             uint p = uint(y * size.x + x);
-            vec3 e = a.rgb * w;
-            vec3 dir = d.direction * (a.a * w);
             add_fixed(splat_slot(0u, p, pixels), e.r);
             add_fixed(splat_slot(1u, p, pixels), e.g);
             add_fixed(splat_slot(2u, p, pixels), e.b);
             add_fixed(splat_slot(3u, p, pixels), dir.x);
             add_fixed(splat_slot(4u, p, pixels), dir.y);
             add_fixed(splat_slot(5u, p, pixels), dir.z);
-            add_fixed(splat_slot(6u, p, pixels), a.a * w);
+            add_fixed(splat_slot(6u, p, pixels), dir.w);
         }
     }
 }

@@ -28,15 +28,11 @@ void main() {
         int r = ray_index(ij);
         RayDeposit d;
         if (ray_deposit(r, pc.read_layer, pc.depth, d)) {
-            deposits[3 * r] = d.amplitude;
-            deposits[3 * r + 1] = d.footprint;
-            deposits[3 * r + 2] = vec4(d.direction, 0.0);
-            mine = vec4(d.footprint.xy - 0.5 * d.footprint.zw, d.footprint.xy + 0.5 * d.footprint.zw);
+            mine = d.footprint;
         } else {
-            deposits[3 * r] = vec4(0.0);
-            deposits[3 * r + 1] = vec4(0.0);
-            deposits[3 * r + 2] = vec4(0.0);
+            clear_deposit(d);   // no deposit: an empty footprint
         }
+        store_deposit(r, d);
     }
     // The block's box: a tree reduction over the workgroup.
     box[t] = mine;

@@ -1,6 +1,6 @@
 #version 460
 // The compute sweep's splat, second half (light_gather.glsl): each 8 x 8 tile of pixels
-// lists the blocks of rays whose boxes overlap it, and each pixel sums the deposits of
+// lists the blocks of rays whose deposits overlap it, and each pixel sums the deposits of
 // those blocks' rays over its own area, in 32.32 fixed point, into this plane's
 // irradiance and light direction (layer `read_layer`, the layer the rays were written
 // to).
@@ -88,26 +88,22 @@ void main() {
                 ivec2 ij = corner + ivec2(q % GATHER_BLOCK, q / GATHER_BLOCK);
                 if (ij.x >= grid.x || ij.y >= grid.y) continue;
                 int r = ij.y * columns + ij.x;
-                vec4 footprint = deposits[3 * r + 1];
-                // A ray whose box misses the tile is skipped by the whole workgroup (on a
-                // GPU: most of a block's rays; a box is a few pixels, a block's 16).
-                vec2 box_lo = footprint.xy - 0.5 * footprint.zw;
-                vec2 box_hi = footprint.xy + 0.5 * footprint.zw;
-                if (any(greaterThanEqual(box_lo, tile_hi)) || any(lessThanEqual(box_hi, tile_lo))) continue;
-                float a = deposit_overlap(footprint, vec2(pixel));
-                if (a <= 0.0) continue;
-                vec4 amp = deposits[3 * r] / pc.unit;
-                vec3 dir = deposits[3 * r + 2].xyz;
-                // As light_splat.comp adds them, channel by channel.
-                vec3 e = amp.rgb * a;
-                vec3 d = dir * (amp.a * a);
+                vec4 footprint = stored_footprint(r);
+                // A ray whose deposit misses the tile is skipped by the whole workgroup
+                // (on a GPU: most of a block's rays; a deposit is a few pixels, a block's
+                // 16).
+                if (any(greaterThanEqual(footprint.xy, tile_hi)) || any(lessThanEqual(footprint.zw, tile_lo))) continue;
+                if (deposit_overlap(footprint, vec2(pixel)) <= 0.0) continue;
+                vec3 e;
+                vec4 d;
+                deposit_at(load_deposit(r), vec2(pixel), pc.unit, e, d);
                 add_fixed_reg(sum[0], e.r);
                 add_fixed_reg(sum[1], e.g);
                 add_fixed_reg(sum[2], e.b);
                 add_fixed_reg(sum[3], d.x);
                 add_fixed_reg(sum[4], d.y);
                 add_fixed_reg(sum[5], d.z);
-                add_fixed_reg(sum[6], amp.a * a);
+                add_fixed_reg(sum[6], d.w);
             }
         }
         barrier();

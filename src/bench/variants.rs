@@ -541,6 +541,11 @@ mod tests {
                         Splat::Raster
                     },
                     sweep: crate::render::SweepPath::Auto,
+                    deposit: if bits % 3 == 0 {
+                        crate::render::Deposit::Boxes
+                    } else {
+                        crate::render::Deposit::Cells
+                    },
                 };
                 let n = variant_name(l);
                 assert_eq!(Levers::parse(&n).unwrap(), l, "{n}");

@@ -44,8 +44,8 @@ pub use sat::SummedAreaTable;
 
 pub use preintegration::{PreintegrationTable, TABLE_SIZE};
 pub use refract::{
-    Clamps, Dump, Levers, Light, LightTransport, Planes, Region, Splat, StateBuffer, SweepOptions,
-    SweepPath, SweepStats, MAX_ETA_SCALE, MAX_LIGHT_RAYS,
+    Clamps, Deposit, Dump, Levers, Light, LightTransport, Planes, Region, Splat, StateBuffer,
+    SweepOptions, SweepPath, SweepStats, MAX_ETA_SCALE, MAX_LIGHT_RAYS,
 };
 pub use tonemap::ToneMapPass;
 

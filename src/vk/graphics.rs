@@ -191,7 +191,7 @@ pub struct GraphicsDesc<'a> {
     pub set: &'a DescriptorSet,
     pub push_size: u32,
     pub primitives: Primitives,
-    /// The fragment shader's specialization constants: `constants[i]` is the 32-bit value
+    /// Both shaders' specialization constants: `constants[i]` is the 32-bit value
     /// of `constant_id = i` (a bool is 0 or 1). The driver compiles the pipeline with them
     /// folded in, so a branch on one costs nothing (llvmpipe runs both sides of a branch
     /// on a uniform otherwise).
@@ -256,7 +256,8 @@ impl GraphicsPipeline {
             vk::PipelineShaderStageCreateInfo::default()
                 .stage(vk::ShaderStageFlags::VERTEX)
                 .module(vs)
-                .name(c"main"),
+                .name(c"main")
+                .specialization_info(&spec),
             vk::PipelineShaderStageCreateInfo::default()
                 .stage(vk::ShaderStageFlags::FRAGMENT)
                 .module(fs)

@@ -148,10 +148,7 @@ impl SweepPass {
             return Ok(());
         }
 
-        let [deposit, gather] = self
-            .compute_splat
-            .as_ref()
-            .expect("made with the compute planes");
+        let (deposit, gather) = (&pipelines.deposit, &pipelines.gather);
         let light = if f.soft {
             &pipelines.light_soft
         } else {

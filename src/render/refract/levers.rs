@@ -34,6 +34,34 @@ pub enum Splat {
     Compute,
 }
 
+/// What a forward light ray deposits on a plane (glsl/light_splat_ray.glsl). Not a speed
+/// lever like the others: the two render different images. `Boxes` is still the default
+/// (and [`Levers::REFERENCE`]'s): `Cells` leaves a flat floor lit at 80° from the sweep
+/// axis striped 1.4 % row to row where the thin surface's light is interpolated across
+/// cells coarser than 8 pixels (tests/image_quality.rs bounds it at 1 %; docs/NOTES.md,
+/// "Light as a wavefront"). Both stay selectable so that they can be timed and compared
+/// in one process (`bench variants --variant deposit=cells`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Deposit {
+    /// The wavefront (issue 32): each cell of four neighbouring rays spreads its flux
+    /// over the two triangles it spans on the plane, exact area coverage per pixel, so
+    /// irradiance = flux / area by construction.
+    Cells,
+    /// Each ray spreads its own flux over a box its cell's size centred on itself (the
+    /// deposit before issue 32: a lattice where rays are sparser than pixels).
+    Boxes,
+}
+
+impl Deposit {
+    fn name(self) -> &'static str {
+        match self {
+            Deposit::Cells => "cells",
+            Deposit::Boxes => "boxes",
+        }
+    }
+}
+
 /// How the planes of the sweep run (issue 31).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -122,6 +150,13 @@ pub struct Levers {
     /// are ill-conditioned.
     #[serde(default = "on")]
     pub clear: bool,
+    /// What a forward light ray deposits (not a speed lever: see [`Deposit`]).
+    #[serde(default = "boxes")]
+    pub deposit: Deposit,
+}
+
+fn boxes() -> Deposit {
+    Deposit::Boxes
 }
 
 fn auto_path() -> SweepPath {
@@ -142,6 +177,7 @@ impl Default for Levers {
             splat: Splat::Raster,
             sweep: SweepPath::Auto,
             clear: true,
+            deposit: Deposit::Boxes,
         }
     }
 }
@@ -156,12 +192,13 @@ impl Levers {
         splat: Splat::Raster,
         sweep: SweepPath::Fragment,
         clear: false,
+        deposit: Deposit::Boxes,
     };
 
     /// The keys of [`Levers::parse`], with their values, for help texts.
     pub const SYNTAX: &'static str =
         "region=full|rect, field=off|on, arrays=off|on, specialize=off|on, splat=raster|compute, \
-         sweep=auto|fragment|compute, clear=off|on";
+         sweep=auto|fragment|compute, clear=off|on, deposit=cells|boxes";
 
     /// `default`, `reference`, or comma-separated `key=value` pairs applied to the
     /// default (e.g. `region=full,field=off`); a pair may also follow `reference,` to
@@ -216,6 +253,13 @@ impl Levers {
                         "raster" => Splat::Raster,
                         "compute" => Splat::Compute,
                         _ => bail!("splat={value}: expected raster or compute"),
+                    }
+                }
+                "deposit" => {
+                    levers.deposit = match value {
+                        "cells" => Deposit::Cells,
+                        "boxes" => Deposit::Boxes,
+                        _ => bail!("deposit={value}: expected cells or boxes"),
                     }
                 }
                 "sweep" => {
@@ -280,7 +324,7 @@ impl fmt::Display for Levers {
         let on = |b: bool| if b { "on" } else { "off" };
         write!(
             f,
-            "region={},field={},arrays={},specialize={},splat={},sweep={},clear={}",
+            "region={},field={},arrays={},specialize={},splat={},sweep={},clear={},deposit={}",
             match self.region {
                 Region::Full => "full",
                 Region::Rect => "rect",
@@ -293,7 +337,8 @@ impl fmt::Display for Levers {
                 Splat::Compute => "compute",
             },
             self.sweep.name(),
-            on(self.clear)
+            on(self.clear),
+            self.deposit.name()
         )
     }
 }
@@ -311,6 +356,11 @@ mod tests {
                     sweep: [SweepPath::Auto, SweepPath::Fragment, SweepPath::Compute]
                         [(bits / 16 % 3) as usize],
                     clear: bits >= 48,
+                    deposit: if bits % 5 == 0 {
+                        Deposit::Boxes
+                    } else {
+                        Deposit::Cells
+                    },
                     region,
                     field: bits & 1 != 0,
                     arrays: bits & 2 != 0,
@@ -350,6 +400,7 @@ mod tests {
             ("region=polygon", "full or rect"),
             ("splat=gather", "raster or compute"),
             ("sweep=vertex", "auto, fragment or compute"),
+            ("deposit=points", "cells or boxes"),
             ("field=maybe", "on or off"),
             ("speed=11", "unknown lever 'speed'"),
             ("field", "not key=value"),

@@ -86,11 +86,8 @@ pub(crate) struct SweepPass {
     /// The compute sweep's plane pipelines per feature set, made on the first frame that
     /// runs the compute path with those features.
     pub(crate) compute_planes: HashMap<Features, ComputePlanes>,
-    /// The compute sweep's splat, a tile-binned gather (glsl/light_gather.glsl): the
-    /// deposit and gather pipelines (feature-independent), made with the first compute
-    /// plane pipelines.
-    pub(crate) compute_splat: Option<[ComputePipeline; 2]>,
-    /// Its buffers: each light ray's deposit (three vec4), each block of 8 × 8 rays' box.
+    /// The compute splat's buffers (glsl/light_gather.glsl): each light ray's deposit (ten
+    /// vec4), each block of 8 × 8 rays' box.
     pub(crate) deposits: Buffer,
     pub(crate) blocks: Buffer,
     pub(crate) composite: ComputePipeline,
@@ -99,7 +96,8 @@ pub(crate) struct SweepPass {
 }
 
 /// The features a frame uses that the plane shaders can leave out, and the shader levers:
-/// specialization constants 1-7 (glsl/sweep_common.glsl, sweep_buffers.glsl). The first
+/// specialization constants 1-9 (glsl/sweep_common.glsl, sweep_buffers.glsl,
+/// light_splat_ray.glsl). The first
 /// four are on exactly when their runtime condition can hold, so switching one off changes
 /// no image (tested) and costs nothing; `arrays` and `field` choose how the shaders read
 /// the state and the field (`Levers`). `films` is on when the η function has an interior
@@ -117,6 +115,8 @@ pub(crate) struct Features {
     pub(crate) films: bool,
     /// The `clear` lever: one light sub-step through clear space (render::value_ranges).
     pub(crate) clear: bool,
+    /// The `deposit` lever: the forward light rays deposit cells, not boxes.
+    pub(crate) cells: bool,
 }
 
 impl Features {
@@ -129,6 +129,7 @@ impl Features {
         field: true,
         films: true,
         clear: true,
+        cells: true,
     };
 
     /// `have_field`: whether the field texture exists (it may not fit in memory);
@@ -139,6 +140,7 @@ impl Features {
             arrays: levers.arrays,
             field: levers.field && have_field,
             clear: levers.clear,
+            cells: levers.deposit == super::Deposit::Cells,
             ..Self::ALL
         };
         if !levers.specialize {
@@ -154,8 +156,8 @@ impl Features {
         }
     }
 
-    /// Constant 0 (the gradient volume is bound), then 1-8.
-    fn constants(self, have_gradient: bool) -> [u32; 9] {
+    /// Constant 0 (the gradient volume is bound), then 1-9.
+    fn constants(self, have_gradient: bool) -> [u32; 10] {
         [
             have_gradient as u32,
             self.specular as u32,
@@ -166,12 +168,13 @@ impl Features {
             self.field as u32,
             self.films as u32,
             self.clear as u32,
+            self.cells as u32,
         ]
     }
 }
 
 /// The plane pipelines that read the specialization constants: the backward sweep's
-/// and the forward transport's light-ray and viewing-ray passes.
+/// and the forward transport's light-ray, splat and viewing-ray passes.
 pub(crate) struct PlanePipelines {
     pub(crate) sweep: GraphicsPipeline,
     /// The benchmark floor (`SweepOptions::floor`), reading the state as `sweep` does.
@@ -183,12 +186,12 @@ pub(crate) struct PlanePipelines {
 }
 
 impl PlanePipelines {
-    /// `passes`: the backward sweep's, the light rays', the viewing rays'.
+    /// `passes`: the backward sweep's, the light rays', the viewing rays', the splat's.
     fn new(
         ctx: &Context,
-        passes: [&RenderPass; 3],
+        passes: [&RenderPass; 4],
         set: &DescriptorSet,
-        constants: [u32; 9],
+        constants: [u32; 10],
         forward: bool,
     ) -> Result<Self> {
         let plane = |fragment, pass, name: &str| {
@@ -204,7 +207,7 @@ impl PlanePipelines {
             };
             GraphicsPipeline::new(ctx, &desc, name)
         };
-        let [sweep_pass, light_pass, view_pass] = passes;
+        let [sweep_pass, light_pass, view_pass, splat_pass] = passes;
         Ok(Self {
             sweep: plane(shaders::SWEEP_FRAG, sweep_pass, "sweep plane")?,
             floor: plane(shaders::SWEEP_FLOOR_FRAG, sweep_pass, "sweep floor plane")?,
@@ -230,6 +233,29 @@ impl PlanePipelines {
                         view_pass,
                         "sweep viewing rays",
                     )?,
+                    splat: GraphicsPipeline::new(
+                        ctx,
+                        &GraphicsDesc {
+                            primitives: Primitives::AdditivePoints,
+                            constants: &constants,
+                            ..GraphicsDesc::fullscreen(
+                                shaders::LIGHT_SPLAT_VERT,
+                                shaders::LIGHT_SPLAT_FRAG,
+                                splat_pass,
+                                set,
+                                std::mem::size_of::<PlanePush>() as u32,
+                            )
+                        },
+                        "light splat",
+                    )?,
+                    splat_compute: ComputePipeline::with_constants(
+                        ctx,
+                        shaders::LIGHT_SPLAT_COMP,
+                        set,
+                        std::mem::size_of::<PlanePush>() as u32,
+                        &constants,
+                        "light splat (compute)",
+                    )?,
                 })
             } else {
                 None
@@ -248,10 +274,14 @@ pub(crate) struct ComputePlanes {
     pub(crate) light: ComputePipeline,
     pub(crate) light_soft: ComputePipeline,
     pub(crate) view: ComputePipeline,
+    /// The splat, a tile-binned gather (glsl/light_gather.glsl): each ray's deposit,
+    /// then each pixel's sum.
+    pub(crate) deposit: ComputePipeline,
+    pub(crate) gather: ComputePipeline,
 }
 
 impl ComputePlanes {
-    fn new(ctx: &Context, set: &DescriptorSet, constants: [u32; 9]) -> Result<Self> {
+    fn new(ctx: &Context, set: &DescriptorSet, constants: [u32; 10]) -> Result<Self> {
         let push = std::mem::size_of::<ComputePush>() as u32;
         let make = |spirv, name: &str| {
             ComputePipeline::with_constants(ctx, spirv, set, push, &constants, name)
@@ -275,6 +305,11 @@ impl ComputePlanes {
                 shaders::SWEEP_VIEW_FORWARD_COMP,
                 "sweep viewing rays (compute)",
             )?,
+            deposit: make(
+                shaders::SWEEP_DEPOSIT_COMP,
+                "light deposits (compute sweep)",
+            )?,
+            gather: make(shaders::SWEEP_GATHER_COMP, "light gather (compute sweep)")?,
         })
     }
 }
@@ -283,15 +318,17 @@ pub(crate) struct ForwardPlanes {
     pub(crate) light: GraphicsPipeline,
     pub(crate) light_soft: GraphicsPipeline,
     pub(crate) view: GraphicsPipeline,
+    /// The point sprites (`splat=raster`).
+    pub(crate) splat: GraphicsPipeline,
+    /// The `splat=compute` lever: deposits into [`SweepPass::splat_sums`], resolved by
+    /// [`ForwardPipelines::splat_resolve`] (glsl/light_splat.comp, _resolve.comp).
+    pub(crate) splat_compute: ComputePipeline,
 }
 
 /// The forward transport's pipelines that do not depend on the features, on the plane
 /// set's layout so that switching between them leaves the descriptor set bound.
 pub(crate) struct ForwardPipelines {
-    pub(crate) splat: GraphicsPipeline,
-    /// The `splat=compute` lever: deposits into [`SweepPass::splat_sums`], then a resolve
-    /// of the sums into the irradiance images (glsl/light_splat.comp, _resolve.comp).
-    pub(crate) splat_compute: ComputePipeline,
+    /// The `splat=compute` lever's resolve of the sums into the irradiance images.
     pub(crate) splat_resolve: ComputePipeline,
     /// Largest splat half-width the device's point sizes allow.
     pub(crate) max_half_width: f32,
@@ -487,7 +524,7 @@ impl SweepPass {
         let capacity = ray_size[0] as u64 * ray_size[1] as u64;
         let deposits = Buffer::new(
             ctx,
-            capacity * 48,
+            capacity * 160,
             vk::usage::STORAGE_BUFFER,
             vk::Memory::Gpu,
             "light deposits",
@@ -537,27 +574,6 @@ impl SweepPass {
         let forward = if forward_capable {
             let largest_point = ctx.info().limits.point_size_range[1];
             Some(ForwardPipelines {
-                splat: GraphicsPipeline::new(
-                    ctx,
-                    &GraphicsDesc {
-                        primitives: Primitives::AdditivePoints,
-                        ..GraphicsDesc::fullscreen(
-                            shaders::LIGHT_SPLAT_VERT,
-                            shaders::LIGHT_SPLAT_FRAG,
-                            &splat_pass,
-                            &sweep_set,
-                            std::mem::size_of::<PlanePush>() as u32,
-                        )
-                    },
-                    "light splat",
-                )?,
-                splat_compute: ComputePipeline::new(
-                    ctx,
-                    shaders::LIGHT_SPLAT_COMP,
-                    &sweep_set,
-                    std::mem::size_of::<PlanePush>() as u32,
-                    "light splat (compute)",
-                )?,
                 splat_resolve: ComputePipeline::new(
                     ctx,
                     shaders::LIGHT_SPLAT_RESOLVE_COMP,
@@ -565,8 +581,8 @@ impl SweepPass {
                     16,
                     "light splat resolve",
                 )?,
-                // Both splats deposit the same boxes, so the point sprites' limit holds for
-                // the compute one too.
+                // Every splat deposits the same, so the point sprites' limit holds for the
+                // compute ones too.
                 max_half_width: MAX_SPLAT_HALF_WIDTH.min(((largest_point - 2.0) / 2.0).floor()),
             })
         } else {
@@ -574,7 +590,7 @@ impl SweepPass {
         };
         let all = PlanePipelines::new(
             ctx,
-            [&render_pass, &light_pass, &view_pass],
+            [&render_pass, &light_pass, &view_pass, &splat_pass],
             &sweep_set,
             Features::ALL.constants(have_gradient),
             forward_capable,
@@ -616,7 +632,6 @@ impl SweepPass {
             counters,
             compute_set,
             compute_planes: HashMap::new(),
-            compute_splat: None,
             deposits,
             blocks,
             composite,
@@ -631,7 +646,12 @@ impl SweepPass {
         if !self.planes.contains_key(&features) {
             let planes = PlanePipelines::new(
                 ctx,
-                [&self.render_pass, &self.light_pass, &self.view_pass],
+                [
+                    &self.render_pass,
+                    &self.light_pass,
+                    &self.view_pass,
+                    &self.splat_pass,
+                ],
                 &self.sweep_set,
                 features.constants(self.have_gradient),
                 self.forward.is_some(),
@@ -641,8 +661,7 @@ impl SweepPass {
         Ok(())
     }
 
-    /// Make the compute sweep's plane pipelines for `features` if this pass has none yet,
-    /// and its deposit and gather with the first.
+    /// Make the compute sweep's plane pipelines for `features` if this pass has none yet.
     pub(crate) fn ensure_compute_planes(
         &mut self,
         ctx: &Context,
@@ -655,25 +674,6 @@ impl SweepPass {
                 features.constants(self.have_gradient),
             )?;
             self.compute_planes.insert(features, planes);
-        }
-        if self.compute_splat.is_none() {
-            let push = std::mem::size_of::<ComputePush>() as u32;
-            self.compute_splat = Some([
-                ComputePipeline::new(
-                    ctx,
-                    shaders::SWEEP_DEPOSIT_COMP,
-                    &self.compute_set,
-                    push,
-                    "light deposits (compute sweep)",
-                )?,
-                ComputePipeline::new(
-                    ctx,
-                    shaders::SWEEP_GATHER_COMP,
-                    &self.compute_set,
-                    push,
-                    "light gather (compute sweep)",
-                )?,
-            ]);
         }
         Ok(())
     }

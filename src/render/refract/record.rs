@@ -324,6 +324,7 @@ impl SweepPass {
                         rec.end_render_pass();
                     }
                     Some(f) => {
+                        let fp = forward_planes.expect("made with the forward transport");
                         let timed = sweep.pass_timings;
                         if timed {
                             rec.begin_scope("sweep: light rays");
@@ -360,13 +361,13 @@ impl SweepPass {
                                         (&self.irradiance[1].image, write),
                                     ],
                                 )?;
-                                rec.bind_pipeline(&f.splat);
+                                rec.bind_pipeline(&fp.splat);
                                 let splat_push = PlanePush {
                                     read_layer: write,
                                     ..push
                                 };
                                 rec.draw(
-                                    &f.splat,
+                                    &fp.splat,
                                     bytemuck::bytes_of(&splat_push),
                                     grid_dims[0] * grid_dims[1],
                                 )?;
@@ -378,7 +379,7 @@ impl SweepPass {
                                 let rays = grid_dims[0] * grid_dims[1];
                                 let splat_push = [i, write, push.depth.to_bits(), unit.to_bits()];
                                 rec.dispatch(
-                                    &f.splat_compute,
+                                    &fp.splat_compute,
                                     &self.sweep_set,
                                     bytemuck::bytes_of(&splat_push),
                                     [rays.div_ceil(64), 1, 1],
