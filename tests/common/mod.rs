@@ -238,3 +238,25 @@ pub fn linear_max(a: &[[f32; 4]], b: &[[f32; 4]]) -> f32 {
         .flat_map(|(p, q)| (0..4).map(move |c| (p[c] - q[c]).abs() / p[c].abs().max(1.0)))
         .fold(0.0, f32::max)
 }
+
+/// Over (row, mean) points: the RMS of the differences between consecutive rows after a
+/// least-squares quadratic trend over the rows is removed, relative to the mean level;
+/// the level; the largest such difference relative to the level.
+pub fn detrended_row_to_row(rows: &[(f64, f64)]) -> (f64, f64, f64) {
+    let (mut m, mut rhs) = (glam::DMat3::ZERO, glam::DVec3::ZERO);
+    for &(x, v) in rows {
+        let b = glam::DVec3::new(1.0, x, x * x);
+        m += glam::DMat3::from_cols(b * b.x, b * b.y, b * b.z);
+        rhs += b * v;
+    }
+    let c = m.inverse() * rhs;
+    let level = rows.iter().map(|p| p.1).sum::<f64>() / rows.len() as f64;
+    let res: Vec<f64> = rows
+        .iter()
+        .map(|&(x, v)| v - (c.x + c.y * x + c.z * x * x))
+        .collect();
+    let d: Vec<f64> = res.windows(2).map(|p| p[1] - p[0]).collect();
+    let rms = (d.iter().map(|d| d * d).sum::<f64>() / d.len() as f64).sqrt();
+    let max = d.iter().fold(0.0f64, |a, d| a.max(d.abs()));
+    (rms / level, level, max / level)
+}
