@@ -380,22 +380,6 @@ struct FloorLight {
     bright_pixels: usize,
 }
 
-fn smoothed(img: &[[f32; 4]], w: usize, h: usize) -> Vec<f64> {
-    let mut out = vec![0.0; w * h];
-    for y in 1..h - 1 {
-        for x in 1..w - 1 {
-            let mut s = 0.0;
-            for dy in 0..3 {
-                for dx in 0..3 {
-                    s += img[(y + dy - 1) * w + x + dx - 1][0] as f64;
-                }
-            }
-            out[y * w + x] = s / 9.0;
-        }
-    }
-    out
-}
-
 /// The shadow is where the floor's light differs from the unshadowed light by more than
 /// 10 % (dark rim and caustic alike): its centroid, and the semi-axes of the uniform
 /// ellipse with the same second moments. The caustic: the brightest point of the 3×3

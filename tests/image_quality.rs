@@ -97,21 +97,7 @@ fn floor_banding_lit(
     let mut r = Renderer::new(ctx, &vol, &tf).unwrap();
     let f = r.render(Model::Refract, &cam, &opts).unwrap();
     // Row means over the central half of the columns, for rows showing the floor.
-    let mut rows = Vec::new();
-    for y in 0..h {
-        let (mut s, mut c) = (0.0f64, 0);
-        for x in w / 4..3 * w / 4 {
-            let p = f.pixel(x, y);
-            if p[3] > 0.99 {
-                s += p[0] as f64;
-                c += 1;
-            }
-        }
-        if c == w / 2 {
-            rows.push((y as f64, s / c as f64));
-        }
-    }
-    assert!(rows.len() > 40, "too few floor rows ({})", rows.len());
+    let rows = floor_rows(&f);
     // Column means over the same rows: light that fails to tile the plane (splats
     // narrower than the light rays' spacing) stripes the floor along the columns instead.
     let (y0, y1) = (rows[0].0 as u32, rows[rows.len() - 1].0 as u32 + 1);

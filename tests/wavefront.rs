@@ -73,21 +73,7 @@ fn floor_lattice(
     let mut r = Renderer::new(ctx, &vol, &tf).unwrap();
     let f = r.render(Model::Refract, &cam, &opts).unwrap();
     let launched = f.sweep.as_ref().unwrap().light_spacing[1];
-    let mut rows = Vec::new();
-    for y in 0..h {
-        let (mut s, mut c) = (0.0f64, 0);
-        for x in w / 4..3 * w / 4 {
-            let p = f.pixel(x, y);
-            if p[3] > 0.99 {
-                s += p[0] as f64;
-                c += 1;
-            }
-        }
-        if c == w / 2 {
-            rows.push((y as f64, s / c as f64));
-        }
-    }
-    assert!(rows.len() > 40, "too few floor rows ({})", rows.len());
+    let rows = floor_rows(&f);
     let (y0, y1) = (rows[0].0 as u32, rows[rows.len() - 1].0 as u32 + 1);
     let cols: Vec<(f64, f64)> = (w / 4..3 * w / 4)
         .map(|x| {
@@ -191,22 +177,7 @@ fn a_weak_smooth_lens_lights_smoothly() {
                     .unwrap()
                     .pixels
                 });
-                let smooth = |img: &[[f32; 4]]| -> Vec<f64> {
-                    let mut out = vec![0.0; w * h];
-                    for y in 1..h - 1 {
-                        for x in 1..w - 1 {
-                            let mut s = 0.0;
-                            for dy in 0..3 {
-                                for dx in 0..3 {
-                                    s += img[(y + dy - 1) * w + x + dx - 1][0] as f64;
-                                }
-                            }
-                            out[y * w + x] = s / 9.0;
-                        }
-                    }
-                    out
-                };
-                let (a, b) = (smooth(swept), smooth(traced));
+                let (a, b) = (smoothed(swept, w, h), smoothed(traced, w, h));
                 // Where the blob changes the light: the tracer's (smoothed) irradiance 5 %
                 // or more from the unobstructed level.
                 let mut errors = Vec::new();

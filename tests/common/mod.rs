@@ -260,3 +260,42 @@ pub fn detrended_row_to_row(rows: &[(f64, f64)]) -> (f64, f64, f64) {
     let max = d.iter().fold(0.0f64, |a, d| a.max(d.abs()));
     (rms / level, level, max / level)
 }
+
+/// Row means of channel 0 over the central half of the columns, for the rows whose every
+/// such pixel is opaque (alpha > 0.99: a floor filling them); at least 40 such rows.
+pub fn floor_rows(f: &Frame) -> Vec<(f64, f64)> {
+    let (w, h) = (f.width, f.height);
+    let mut rows = Vec::new();
+    for y in 0..h {
+        let (mut s, mut c) = (0.0f64, 0);
+        for x in w / 4..3 * w / 4 {
+            let p = f.pixel(x, y);
+            if p[3] > 0.99 {
+                s += p[0] as f64;
+                c += 1;
+            }
+        }
+        if c == w / 2 {
+            rows.push((y as f64, s / c as f64));
+        }
+    }
+    assert!(rows.len() > 40, "too few floor rows ({})", rows.len());
+    rows
+}
+
+/// Channel 0 of a `w` × `h` image box-filtered 3 × 3 (the border left at 0).
+pub fn smoothed(img: &[[f32; 4]], w: usize, h: usize) -> Vec<f64> {
+    let mut out = vec![0.0; w * h];
+    for y in 1..h - 1 {
+        for x in 1..w - 1 {
+            let mut s = 0.0;
+            for dy in 0..3 {
+                for dx in 0..3 {
+                    s += img[(y + dy - 1) * w + x + dx - 1][0] as f64;
+                }
+            }
+            out[y * w + x] = s / 9.0;
+        }
+    }
+    out
+}
