@@ -9,15 +9,43 @@ use refrakt::transfer::TransferFunctions;
 use refrakt::vk::{Context, ContextDesc, ValidationLog};
 use refrakt::volume::{Volume, Voxels};
 
+/// One validated context at a time in a test process. CI once died in the preintegration
+/// tests with glibc's "malloc_consolidate(): unaligned fastbin chunk detected" (SIGABRT,
+/// stop 39; 258 tests had passed the run before with the same code): heap corruption
+/// while several tests drove their own instance, device and validation layer from parallel
+/// threads. Debian's 1.3.239 validation layer and loader keep process-wide state (the
+/// layer's per-dispatch-key maps, its state tracker's allocator) whose thread safety
+/// across instances has had races fixed upstream; our own code holds no state shared
+/// between contexts. So a test holds this lock for its context's whole life. lavapipe
+/// still uses every core inside each submit; the CPU-only parts of tests still overlap.
+static CONTEXT_LOCK: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+/// A validated context that holds [`CONTEXT_LOCK`] until it is dropped (after the context:
+/// fields drop in declaration order). Derefs to the context.
+pub struct TestContext {
+    ctx: Context,
+    _lock: std::sync::MutexGuard<'static, ()>,
+}
+
+impl std::ops::Deref for TestContext {
+    type Target = Context;
+    fn deref(&self) -> &Context {
+        &self.ctx
+    }
+}
+
 /// A context with validation and synchronization validation on. Honours REFRAKT_DEVICE so
-/// the suite can be pointed at a real GPU.
-pub fn context() -> Context {
-    Context::new(&ContextDesc {
+/// the suite can be pointed at a real GPU. Holds the process's context lock (a test that
+/// panicked with it poisons nothing: the next test takes it anyway).
+pub fn context() -> TestContext {
+    let lock = CONTEXT_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let ctx = Context::new(&ContextDesc {
         validate: true,
         device: std::env::var("REFRAKT_DEVICE").ok(),
         ..Default::default()
     })
-    .expect("creating a validated Vulkan context (is scripts/setup.sh run?)")
+    .expect("creating a validated Vulkan context (is scripts/setup.sh run?)");
+    TestContext { ctx, _lock: lock }
 }
 
 /// Panics with every message if the layer reported anything. Call after dropping the
