@@ -55,8 +55,11 @@ fn main() {
         options.set_warnings_as_errors();
         // A float literal GLSL reads back exactly (`{:?}` prints the shortest round trip).
         options.add_macro_definition("MIN_FORWARD", Some(&format!("{MIN_FORWARD:?}")));
-        options.add_macro_definition("GATHER_LIST", Some(&format!("{GATHER_LIST}u")));
-        options.add_macro_definition("GATHER_BUCKETS", Some(&format!("{GATHER_BUCKETS}u")));
+        options.add_macro_definition("GATHER_TILE", Some(&format!("{GATHER_TILE}u")));
+        options.add_macro_definition(
+            "GATHER_COARSE_TILE",
+            Some(&format!("{GATHER_COARSE_TILE}u")),
+        );
         options.add_macro_definition("VALUE_BRICK", Some(&format!("{VALUE_BRICK}")));
         let include_root = glsl_dir.clone();
         options.set_include_callback(move |requested, _ty, requester, _depth| {

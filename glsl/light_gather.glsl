@@ -1,14 +1,17 @@
 // The compute sweep's splat as a tile-binned gather (issue 31): no atomics on the sums.
-// sweep_deposit.comp computes each light ray's deposit (light_splat_ray.glsl: the same
-// deposit as the point sprites and the atomic compute splat) into `deposits`
-// and the bounding box of each block of 8 x 8 neighbouring rays into `blocks`;
-// sweep_gather.comp then lets each 8 x 8 tile of pixels find the blocks that overlap it
-// and each pixel sum the deposits of their rays. The sum is the atomic splat's: every
+// Per plane, four dispatches: sweep_deposit.comp computes each light ray's deposit
+// (light_splat_ray.glsl: the same deposit as the point sprites and the atomic compute
+// splat) into `deposits` and counts the ray into the bins of the tiles it overlaps;
+// sweep_bin_scan.comp turns the counts into list offsets; sweep_bin_fill.comp lists each
+// ray in its bins; sweep_gather.comp lets each 8 x 8 tile of pixels read the rays listed
+// for it and each pixel sum their deposits. The sum is the atomic splat's: every
 // deposit truncated to 32.32 fixed point (light_splat_fixed.glsl) and added as a 64-bit
 // integer, here in registers (integer addition is associative: the result does not
 // depend on the order, and is bit for bit the atomic splat's).
 #ifndef REFRAKT_LIGHT_GATHER_GLSL
 #define REFRAKT_LIGHT_GATHER_GLSL
+
+#define SPLAT_GATHER_CHANNELS 7
 
 // Per ray r (of the grid, r = j * columns + i): its RayDeposit (light_splat_ray.glsl) in
 // DEPOSIT_VEC4S vec4s from 10 r: corner fluxes A, B, footprint (an empty one, zero
@@ -50,23 +53,69 @@ RayDeposit load_deposit(int r) {
     d.flux_d = deposits[k + 9];
     return d;
 }
-// Per block of 8 x 8 rays: the union of its rays' boxes (lo.xy, hi.xy in pixels), empty
-// (lo > hi) when none of them carries light.
-layout(std430, set = 0, binding = 21) buffer Blocks {
-    vec4 blocks[];
+// The bins (a counting sort of the rays by the screen tiles their deposits overlap, per
+// plane): every ray whose footprint spans at most 2 x 2 tiles of GATHER_TILE pixels goes
+// into each of those tiles' bins (fine); one that spans more but at most 2 x 2 coarse
+// tiles of GATHER_COARSE_TILE pixels into those coarse tiles' bins; any wider one into
+// the one global bin. A ray is listed at most four times, so a list of 4 entries per ray
+// never overflows, whatever the caustic. The gather of a fine tile reads its own bin, its
+// coarse tile's and the global one.
+//
+// `bins` holds three arrays of bin_count() words: the count (sweep_deposit.comp adds
+// one per listed ray), the offset of each bin's list in `bin_list` (sweep_bin_scan.comp,
+// an exclusive prefix sum, which also zeroes the counts for the next plane and the fill
+// cursors), and the fill cursor (sweep_bin_fill.comp; afterwards the bin's length).
+layout(std430, set = 0, binding = 21) buffer Bins {
+    uint bins[];
+};
+layout(std430, set = 0, binding = 22) buffer BinList {
+    uint bin_list[];
 };
 
-const int GATHER_BLOCK = 8;   // rays per block side
-#define SPLAT_GATHER_CHANNELS 7
-// GATHER_LIST (the gather's list of blocks per tile) and GATHER_BUCKETS (the buckets it
-// is filled in; a bucket holds at most GATHER_LIST blocks) come from build.rs
-// (src/render/limits.rs), which the host checks the ray grid against.
-#ifndef GATHER_LIST
-#error "GATHER_LIST comes from build.rs (src/render/limits.rs)"
+#ifndef GATHER_TILE
+#error "GATHER_TILE comes from build.rs (src/render/limits.rs)"
 #endif
+const int FINE_PER_COARSE = int(GATHER_COARSE_TILE / GATHER_TILE);
 
-ivec2 gather_blocks() {
-    return (ivec2(P.light_rays.xy) + GATHER_BLOCK - 1) / GATHER_BLOCK;
+ivec2 screen_size() { return ivec2(P.camera.zw); }
+ivec2 fine_tiles() { return (screen_size() + int(GATHER_TILE) - 1) / int(GATHER_TILE); }
+ivec2 coarse_tiles() {
+    return (screen_size() + int(GATHER_COARSE_TILE) - 1) / int(GATHER_COARSE_TILE);
+}
+uint fine_bins() { ivec2 n = fine_tiles(); return uint(n.x * n.y); }
+uint coarse_bins() { ivec2 n = coarse_tiles(); return uint(n.x * n.y); }
+uint bin_count() { return fine_bins() + coarse_bins() + 1u; }
+
+const int BIN_NONE = 0, BIN_FINE = 1, BIN_COARSE = 2, BIN_GLOBAL = 3;
+
+// The level a footprint (lo.xy, hi.xy in pixels) is binned at, and the inclusive range of
+// that level's tiles (xy first, zw last) it overlaps with positive area inside the screen
+// (a tile of side s holds the pixels [s t, s t + s), pixel p the square [p, p + 1]:
+// t0 = floor(lo / s), t1 = ceil(hi / s) - 1, exact in floats). BIN_NONE for an empty
+// footprint or one off screen; the global bin's range is (0, 0, 0, 0).
+int footprint_bins(vec4 footprint, out ivec4 range) {
+    range = ivec4(0);
+    vec2 lo = max(footprint.xy, vec2(0.0));
+    vec2 hi = min(footprint.zw, vec2(screen_size()));
+    if (!(lo.x < hi.x && lo.y < hi.y)) return BIN_NONE;
+    ivec2 t0 = ivec2(floor(lo / float(GATHER_TILE)));
+    ivec2 t1 = ivec2(ceil(hi / float(GATHER_TILE))) - 1;
+    if (all(lessThanEqual(t1 - t0, ivec2(1)))) {
+        range = ivec4(t0, t1);
+        return BIN_FINE;
+    }
+    ivec2 c0 = t0 / FINE_PER_COARSE, c1 = t1 / FINE_PER_COARSE;
+    if (all(lessThanEqual(c1 - c0, ivec2(1)))) {
+        range = ivec4(c0, c1);
+        return BIN_COARSE;
+    }
+    return BIN_GLOBAL;
+}
+
+uint bin_of(int level, ivec2 t) {
+    if (level == BIN_FINE) return uint(t.y * fine_tiles().x + t.x);
+    if (level == BIN_COARSE) return fine_bins() + uint(t.y * coarse_tiles().x + t.x);
+    return fine_bins() + coarse_bins();
 }
 
 // A 64-bit fixed-point sum in registers: (lo, hi) words as light_splat_fixed.glsl has them.

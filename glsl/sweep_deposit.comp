@@ -1,6 +1,7 @@
 #version 460
-// The compute sweep's splat, first half (light_gather.glsl): each light ray's deposit on
-// this plane, and the bounding box of each block of 8 x 8 rays. One workgroup per block.
+// The compute sweep's splat, first of four dispatches (light_gather.glsl): each light
+// ray's deposit on this plane, and its count in the bins of the screen tiles its deposit
+// overlaps. One invocation per ray.
 #extension GL_GOOGLE_include_directive : require
 #define SWEEP_COMPUTE 1
 #include "sweep_common.glsl"
@@ -18,34 +19,21 @@ layout(push_constant) uniform Push {
     float unit;
 } pc;
 
-shared vec4 box[64];
-
 void main() {
     ivec2 ij = ivec2(gl_GlobalInvocationID.xy);
-    uint t = gl_LocalInvocationIndex;
-    vec4 mine = vec4(1e30, 1e30, -1e30, -1e30);
-    if (ray_exists(ij)) {
-        int r = ray_index(ij);
-        RayDeposit d;
-        if (ray_deposit(r, pc.read_layer, pc.depth, d)) {
-            mine = d.footprint;
-        } else {
-            clear_deposit(d);   // no deposit: an empty footprint
-        }
-        store_deposit(r, d);
+    if (!ray_exists(ij)) return;
+    int r = ray_index(ij);
+    RayDeposit d;
+    if (!ray_deposit(r, pc.read_layer, pc.depth, d)) {
+        clear_deposit(d);   // no deposit: an empty footprint, in no bin
     }
-    // The block's box: a tree reduction over the workgroup.
-    box[t] = mine;
-    barrier();
-    for (uint s = 32u; s > 0u; s >>= 1) {
-        if (t < s) {
-            vec4 o = box[t + s];
-            box[t] = vec4(min(box[t].xy, o.xy), max(box[t].zw, o.zw));
+    store_deposit(r, d);
+    ivec4 range;
+    int level = footprint_bins(d.footprint, range);
+    if (level == BIN_NONE) return;
+    for (int y = range.y; y <= range.w; ++y) {
+        for (int x = range.x; x <= range.z; ++x) {
+            atomicAdd(bins[bin_of(level, ivec2(x, y))], 1u);
         }
-        barrier();
-    }
-    if (t == 0u) {
-        ivec2 b = ivec2(gl_WorkGroupID.xy);
-        blocks[b.y * gather_blocks().x + b.x] = box[0];
     }
 }

@@ -1,18 +1,20 @@
 #version 460
-// The compute sweep's splat, second half (light_gather.glsl): each 8 x 8 tile of pixels
-// lists the blocks of rays whose deposits overlap it, and each pixel sums the deposits of
-// those blocks' rays over its own area, in 32.32 fixed point, into this plane's
+// The compute sweep's splat, last of four dispatches (light_gather.glsl): each 8 x 8 tile
+// of pixels reads the rays listed in its bin, its coarse tile's bin and the global bin,
+// and each pixel sums the deposits of those rays over its own area, in 32.32 fixed point
+// in registers (the atomic splat's integer sums, bit for bit), into this plane's
 // irradiance and light direction (layer `read_layer`, the layer the rays were written
-// to).
+// to). The candidates are taken 64 at a time into shared memory (index and footprint; a
+// candidate of a coarse or the global bin that misses this tile is dropped there). Every
+// loop's trip count is the same for the whole workgroup: llvmpipe runs a loop's body at
+// least once even with every lane masked.
 //
-// The list lives in shared memory (GATHER_LIST entries). So that it never overflows,
-// whatever the caustic: a first scan counts the overlapping blocks per bucket of
-// consecutive block indices (GATHER_BUCKETS buckets, each at most GATHER_LIST blocks:
-// render/refract checks the ray grid against that), then the buckets are taken in
-// rounds that each fit the list. Usually one round. Every loop's trip count is the
-// same for the whole workgroup: llvmpipe runs a loop's body at least once even with
-// every lane masked, so per-lane trip counts (or many rounds) would cost work that does
-// nothing there.
+// Tried and measured (NVIDIA H200, supernova at the thesis' size, forward transport): one
+// ray per invocation adding its deposit to the tile's fixed-point sums in shared memory
+// with integer atomics evaluates each deposit only where it lands, but took 1229 ms a
+// frame against this loop's 690 ms (the deposits of neighbouring rays contend for the
+// same pixels' words, 7 to 14 atomics per pixel); on llvmpipe it was the faster of the
+// two (docs/BENCH.md, "The gather splat, binned").
 #extension GL_GOOGLE_include_directive : require
 #define SWEEP_COMPUTE 1
 #include "sweep_common.glsl"
@@ -31,83 +33,58 @@ layout(push_constant) uniform Push {
     float unit;       // the fixed-point unit (the light's brightest channel)
 } pc;
 
-shared uint list[GATHER_LIST];
-shared uint count;
-shared uint bucket_count[GATHER_BUCKETS];
-
-bool overlaps(uint b, vec2 lo, vec2 hi) {
-    vec4 bb = blocks[b];
-    // Overlap of positive area, as deposit_overlap counts it.
-    return bb.x < hi.x && bb.z > lo.x && bb.y < hi.y && bb.w > lo.y;
-}
+shared int candidate[64];
+shared vec4 candidate_footprint[64];
 
 void main() {
-    ivec2 size = ivec2(P.camera.zw);
+    ivec2 size = screen_size();
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
     uint t = gl_LocalInvocationIndex;
-    vec2 tile_lo = vec2(gl_WorkGroupID.xy * 8u);
-    vec2 tile_hi = min(tile_lo + 8.0, vec2(size));
-    ivec2 nb = gather_blocks();
-    uint total = uint(nb.x * nb.y);
-    uint per_bucket = (total + GATHER_BUCKETS - 1u) / GATHER_BUCKETS;
-    int columns = int(P.light_rays.x);
-    ivec2 grid = ivec2(P.light_rays.xy);
+    vec2 tile_lo = vec2(gl_WorkGroupID.xy * GATHER_TILE);
+    vec2 tile_hi = min(tile_lo + float(GATHER_TILE), vec2(size));
+    uint n = bin_count();
+    ivec2 tile = ivec2(gl_WorkGroupID.xy);
+    uint fine = bin_of(BIN_FINE, tile);
+    uint coarse = bin_of(BIN_COARSE, tile / FINE_PER_COARSE);
+    uint wide = bin_of(BIN_GLOBAL, ivec2(0));
+    uint n_fine = bins[2u * n + fine], n_coarse = bins[2u * n + coarse];
+    uint n_wide = bins[2u * n + wide];
+    uint total = n_fine + n_coarse + n_wide;
 
-    // Scan 1: overlapping blocks per bucket.
-    for (uint k = t; k < GATHER_BUCKETS; k += 64u) bucket_count[k] = 0u;
-    if (t == 0u) count = 0u;
-    barrier();
-    for (uint b = t; b < total; b += 64u) {
-        if (overlaps(b, tile_lo, tile_hi)) atomicAdd(bucket_count[b / per_bucket], 1u);
-    }
-    barrier();
-    // The rounds: consecutive buckets while they fit the list (every lane computes the
-    // same bounds from shared memory).
     uvec2 sum[SPLAT_GATHER_CHANNELS];
     for (int k = 0; k < SPLAT_GATHER_CHANNELS; ++k) sum[k] = uvec2(0u);
-    uint bucket = 0u;
-    while (bucket < GATHER_BUCKETS) {
-        uint first = bucket;
-        uint n = 0u;
-        while (bucket < GATHER_BUCKETS && n + bucket_count[bucket] <= GATHER_LIST) {
-            n += bucket_count[bucket];
-            ++bucket;
+    for (uint base = 0u; base < total; base += 64u) {
+        uint k = base + t;
+        int r = -1;
+        vec4 footprint = vec4(0.0);
+        if (k < total) {
+            uint slot = k < n_fine ? bins[n + fine] + k
+                      : k < n_fine + n_coarse ? bins[n + coarse] + (k - n_fine)
+                      : bins[n + wide] + (k - n_fine - n_coarse);
+            r = int(bin_list[slot]);
+            footprint = stored_footprint(r);
+            // Overlap of positive area with the tile, as deposit_overlap counts it.
+            if (!(footprint.x < tile_hi.x && footprint.z > tile_lo.x && footprint.y < tile_hi.y
+                  && footprint.w > tile_lo.y)) r = -1;
         }
-        // Scan 2: the blocks of these buckets that overlap the tile, in any order (the
-        // sums are integers).
-        uint lo = first * per_bucket, hi = min(bucket * per_bucket, total);
-        for (uint b = lo + t; b < hi; b += 64u) {
-            if (overlaps(b, tile_lo, tile_hi)) list[atomicAdd(count, 1u)] = b;
-        }
+        candidate[t] = r;
+        candidate_footprint[t] = footprint;
         barrier();
-        uint listed = count;
-        for (uint k = 0u; k < listed; ++k) {
-            uint b = list[k];
-            ivec2 corner = ivec2(int(b) % nb.x, int(b) / nb.x) * GATHER_BLOCK;
-            for (int q = 0; q < GATHER_BLOCK * GATHER_BLOCK; ++q) {
-                ivec2 ij = corner + ivec2(q % GATHER_BLOCK, q / GATHER_BLOCK);
-                if (ij.x >= grid.x || ij.y >= grid.y) continue;
-                int r = ij.y * columns + ij.x;
-                vec4 footprint = stored_footprint(r);
-                // A ray whose deposit misses the tile is skipped by the whole workgroup
-                // (on a GPU: most of a block's rays; a deposit is a few pixels, a block's
-                // 16).
-                if (any(greaterThanEqual(footprint.xy, tile_hi)) || any(lessThanEqual(footprint.zw, tile_lo))) continue;
-                if (deposit_overlap(footprint, vec2(pixel)) <= 0.0) continue;
-                vec3 e;
-                vec4 d;
-                deposit_at(load_deposit(r), vec2(pixel), pc.unit, e, d);
-                add_fixed_reg(sum[0], e.r);
-                add_fixed_reg(sum[1], e.g);
-                add_fixed_reg(sum[2], e.b);
-                add_fixed_reg(sum[3], d.x);
-                add_fixed_reg(sum[4], d.y);
-                add_fixed_reg(sum[5], d.z);
-                add_fixed_reg(sum[6], d.w);
-            }
+        for (int q = 0; q < 64; ++q) {
+            int c = candidate[q];
+            if (c < 0) continue;
+            if (deposit_overlap(candidate_footprint[q], vec2(pixel)) <= 0.0) continue;
+            vec3 e;
+            vec4 d;
+            deposit_at(load_deposit(c), vec2(pixel), pc.unit, e, d);
+            add_fixed_reg(sum[0], e.r);
+            add_fixed_reg(sum[1], e.g);
+            add_fixed_reg(sum[2], e.b);
+            add_fixed_reg(sum[3], d.x);
+            add_fixed_reg(sum[4], d.y);
+            add_fixed_reg(sum[5], d.z);
+            add_fixed_reg(sum[6], d.w);
         }
-        barrier();
-        if (t == 0u) count = 0u;
         barrier();
     }
     if (any(greaterThanEqual(pixel, size))) return;

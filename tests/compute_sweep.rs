@@ -13,8 +13,8 @@ mod common;
 
 use common::*;
 use refrakt::render::{
-    Camera, Levers, LightTransport, Model, Planes, RenderOptions, Renderer, Splat, StateBuffer,
-    SweepPath,
+    Camera, Deposit, Levers, LightTransport, Model, Planes, RenderOptions, Renderer, Splat,
+    StateBuffer, SweepPath,
 };
 use refrakt::scene::Scene;
 use refrakt::transfer::TransferFunctions;
@@ -91,64 +91,98 @@ fn compute_and_fragment_sweeps_render_the_same_glass_sphere_on_its_floor() {
 /// the frame. Two frames of the compute path are bit-identical (order-independent sums).
 #[test]
 fn the_gather_splat_deposits_exactly_the_atomic_splats_sums() {
+    with_context(|ctx| gather_matches_atomic(ctx, [48, 40], 1.0, Deposit::Boxes));
+}
+
+/// The gather's bins (glsl/light_gather.glsl): a ray whose deposit spans at most 2 × 2
+/// tiles of 8 pixels is listed in those tiles' bins, a wider one in the bins of 64-pixel
+/// tiles. Rays 4 pixels apart (the widest spacing allowed) with the light from the side
+/// spread far apart again behind the ball's focus and tear at its shadow's edge, so many
+/// deposits there span three or more 8-pixel tiles and go through the coarse bins
+/// (checked by breaking them: a gather that skips its coarse bin fails this test, at
+/// plane 22 of the first case, and the one above); on a screen of 3 × 3 coarse tiles
+/// whose borders the deposits straddle, with both deposits. The sums must still be the
+/// atomic splat's, bit for bit.
+#[test]
+fn the_gather_splat_bins_narrow_and_wide_deposits_exactly() {
     with_context(|ctx| {
-        let vol = ball(32, 0.3);
-        let tf = glass(1.5);
-        let cam = face_on(2.5, 40.0);
-        let mut opts = RenderOptions {
-            width: 48,
-            height: 40,
-            ..Default::default()
-        };
-        opts.sweep.light_transport = LightTransport::Forward;
-        // Light from the side: the rays' cells shear, a caustic forms behind the ball.
-        opts.sweep.light = refrakt::render::Light {
-            towards: glam::Vec3::new(0.4, 0.3, 1.0).normalize(),
-            colour: [1.0, 0.8, 0.6],
-            softness: 0.0,
-        };
-        opts.sweep.dumps = [6u32, 14, 22, 30]
-            .iter()
-            .flat_map(|&p| {
-                [
-                    (StateBuffer::LightColour, p),
-                    (StateBuffer::LightDirection, p),
-                ]
-            })
-            .collect();
-        let mut r = Renderer::new(ctx, &vol, &tf).unwrap();
-        let mut frame = |levers: Levers| {
-            opts.sweep.levers = levers;
-            r.render(Model::Refract, &cam, &opts).unwrap()
-        };
-        let atomic = frame(Levers {
-            splat: Splat::Compute,
-            ..path(SweepPath::Fragment)
-        });
-        let gather = frame(path(SweepPath::Compute));
-        let again = frame(path(SweepPath::Compute));
-        assert_eq!(atomic.dumps.len(), 8);
-        let mut lit = 0;
-        for (a, g) in atomic.dumps.iter().zip(&gather.dumps) {
-            assert_eq!((a.buffer, a.plane), (g.buffer, g.plane));
-            lit += a.pixels.iter().filter(|p| p[0] > 0.0).count();
-            assert!(
-                a.pixels == g.pixels,
-                "{:?} at plane {}: the gather's sums differ from the atomic splat's \
-                 (linear max |Δ| {})",
-                a.buffer,
-                a.plane,
-                linear_max(&a.pixels, &g.pixels)
-            );
+        for (spacing, deposit) in [(4.0, Deposit::Boxes), (4.0, Deposit::Cells)] {
+            gather_matches_atomic(ctx, [136, 130], spacing, deposit);
         }
-        assert!(lit > 1000, "the dumps hold light ({lit} lit texels)");
-        assert!(
-            gather.pixels == again.pixels,
-            "the compute sweep is not reproducible"
-        );
-        let d = linear_max(&atomic.pixels, &gather.pixels);
-        assert!(d <= 1e-6, "frames differ by {d}");
     });
+}
+
+fn gather_matches_atomic(
+    ctx: &refrakt::vk::Context,
+    size: [u32; 2],
+    spacing: f32,
+    deposit: Deposit,
+) {
+    let vol = ball(32, 0.3);
+    let tf = glass(1.5);
+    let cam = face_on(2.5, 40.0);
+    let mut opts = RenderOptions {
+        width: size[0],
+        height: size[1],
+        ..Default::default()
+    };
+    opts.sweep.light_transport = LightTransport::Forward;
+    opts.sweep.light_spacing = spacing;
+    // Light from the side: the rays' cells shear, a caustic forms behind the ball.
+    opts.sweep.light = refrakt::render::Light {
+        towards: glam::Vec3::new(0.4, 0.3, 1.0).normalize(),
+        colour: [1.0, 0.8, 0.6],
+        softness: 0.0,
+    };
+    opts.sweep.dumps = [6u32, 14, 22, 30]
+        .iter()
+        .flat_map(|&p| {
+            [
+                (StateBuffer::LightColour, p),
+                (StateBuffer::LightDirection, p),
+            ]
+        })
+        .collect();
+    let mut r = Renderer::new(ctx, &vol, &tf).unwrap();
+    let mut frame = |levers: Levers| {
+        opts.sweep.levers = Levers { deposit, ..levers };
+        r.render(Model::Refract, &cam, &opts).unwrap()
+    };
+    let atomic = frame(Levers {
+        splat: Splat::Compute,
+        ..path(SweepPath::Fragment)
+    });
+    let gather = frame(path(SweepPath::Compute));
+    let again = frame(path(SweepPath::Compute));
+    let what = format!(
+        "{}x{}, rays {spacing} px apart, {deposit:?}",
+        size[0], size[1]
+    );
+    assert_eq!(atomic.dumps.len(), 8);
+    let mut lit = 0;
+    for (a, g) in atomic.dumps.iter().zip(&gather.dumps) {
+        assert_eq!((a.buffer, a.plane), (g.buffer, g.plane));
+        lit += a.pixels.iter().filter(|p| p[0] > 0.0).count();
+        assert!(
+            a.pixels == g.pixels,
+            "{what}: {:?} at plane {}: the gather's sums differ from the atomic splat's \
+             (linear max |Δ| {})",
+            a.buffer,
+            a.plane,
+            linear_max(&a.pixels, &g.pixels)
+        );
+    }
+    let texels = (size[0] * size[1]) as usize;
+    assert!(
+        lit > texels,
+        "{what}: the dumps hold light ({lit} lit texels)"
+    );
+    assert!(
+        gather.pixels == again.pixels,
+        "{what}: the compute sweep is not reproducible"
+    );
+    let d = linear_max(&atomic.pixels, &gather.pixels);
+    assert!(d <= 1e-6, "{what}: frames differ by {d}");
 }
 
 /// Dropping the barrier before one plane's dispatches is a hazard the synchronization

@@ -8,11 +8,12 @@
 /// bent no further, and the light may not be set further from the view.
 pub const MIN_FORWARD: f32 = 0.1;
 
-// The compute sweep's gather splat (glsl/sweep_gather.comp): a tile's list of blocks of
-// 8 x 8 light rays in shared memory, filled in buckets of at most that many blocks, so
-// at most GATHER_LIST * GATHER_BUCKETS blocks (16.7 M rays) per frame.
-pub const GATHER_LIST: u32 = 2048;
-pub const GATHER_BUCKETS: u32 = 128;
+// The compute sweep's gather splat (glsl/light_gather.glsl): rays are binned by the screen
+// tiles of GATHER_TILE pixels (the gather's workgroup side) their deposits overlap, or,
+// when a deposit spans more than 2 x 2 of those, by coarse tiles of GATHER_COARSE_TILE
+// pixels (a multiple of GATHER_TILE), or else into one bin every tile reads.
+pub const GATHER_TILE: u32 = 8;
+pub const GATHER_COARSE_TILE: u32 = 64;
 
 // The light rays' empty-space test (render::value_ranges, glsl/value_range*.comp): the
 // volume in bricks of VALUE_BRICK^3 voxels, each with the range of values around it.

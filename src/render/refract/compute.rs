@@ -11,20 +11,23 @@
 //! `Access::ComputeStorage` and the recorder puts a barrier wherever a dispatch follows
 //! a write of an image it uses. A pipeline barrier waits for all earlier dispatches, so
 //! the passes are ordered to let independent work share the interval between two
-//! barriers. Forward transport, per plane i (three barriers a plane):
+//! barriers. Forward transport, per plane i (five barriers a plane):
 //!
 //! ```text
 //!   barrier | viewing rays of plane i-1   (state, irradiance of planes i-2 and i-1)
 //!           | light rays of plane i       (rays only: independent of the view)
-//!   barrier | deposits of plane i         (rays -> each ray's box and amplitude, each
-//!                                          block of 8 x 8 rays' bounding box)
+//!   barrier | deposits of plane i         (rays -> each ray's deposit, counted into
+//!                                          the bins of the screen tiles it overlaps)
+//!   barrier | bin offsets                 (one workgroup: a prefix sum of the counts)
+//!   barrier | bin lists                   (each ray listed in its bins)
 //!   barrier | gather of plane i           (deposits -> irradiance layer i % 2, which
 //!                                          the viewing rays of plane i-1 have read)
 //! ```
 //!
-//! The splat is a tile-binned gather (glsl/light_gather.glsl): each 8 × 8 tile of pixels
-//! finds the blocks of rays whose boxes overlap it, each pixel sums their deposits over
-//! its area in 32.32 fixed point in registers. No atomics on the sums (the atomic
+//! The splat is a tile-binned gather (glsl/light_gather.glsl): the rays are sorted by
+//! counting into bins of 8 × 8-pixel tiles (64-pixel tiles, or one bin for all, for wide
+//! deposits); each tile's pixels sum the deposits of the rays listed for it over their
+//! area in 32.32 fixed point in registers. No atomics on the sums (the atomic
 //! compute splat's integer atomics cost more than the point sprites on lavapipe), the
 //! same integer sums, so bit for bit the atomic splat's irradiance.
 //!
@@ -51,23 +54,9 @@ pub(crate) struct ComputeFrame<'a> {
     pub(crate) dumps: &'a [(StateBuffer, u32, Buffer)],
 }
 
-/// The gather's list never overflows up to GATHER_LIST × GATHER_BUCKETS blocks of 8 × 8
-/// rays (glsl/sweep_gather.comp): a grid of more is refused before anything is recorded.
-pub(crate) fn check_gather(grid: [u32; 2]) -> Result<()> {
-    use crate::render::limits::{GATHER_BUCKETS, GATHER_LIST};
-    let blocks = grid[0].div_ceil(8) as u64 * grid[1].div_ceil(8) as u64;
-    let max_blocks = GATHER_LIST as u64 * GATHER_BUCKETS as u64;
-    ensure!(
-        blocks <= max_blocks,
-        "the compute sweep's splat takes at most {} light rays ({max_blocks} blocks of 8 x 8); \
-         this frame has {} x {}: use fewer light rays per pixel (--light-rays), a wider \
-         --light-spacing, a smaller viewport, or --variant sweep=fragment",
-        max_blocks * 64,
-        grid[0],
-        grid[1]
-    );
-    Ok(())
-}
+// The gather's workgroup is one tile of 8 × 8 pixels (glsl/sweep_gather.comp).
+const _: () = assert!(crate::render::limits::GATHER_TILE == 8);
+const _: () = assert!(crate::render::limits::GATHER_COARSE_TILE % 8 == 0);
 
 /// Workgroups of 8 × 8 covering `area`.
 fn groups(area: Area) -> [u32; 3] {
@@ -148,7 +137,6 @@ impl SweepPass {
             return Ok(());
         }
 
-        let (deposit, gather) = (&pipelines.deposit, &pipelines.gather);
         let light = if f.soft {
             &pipelines.light_soft
         } else {
@@ -219,54 +207,36 @@ impl SweepPass {
                 rec.end_scope();
                 rec.begin_scope("sweep: splat");
             }
-            // Stage B: the rays just written make their deposits (after the previous
-            // plane's gather read the last ones). The deposit and the gather read the
+            // Stage B: the rays just written make their deposits and count themselves into
+            // the tile bins (after the previous plane's gather read the last deposits and
+            // lists; the previous scan zeroed the counts). The splat's dispatches read the
             // write layer: their push names it as the read layer.
-            rec.compute_storage_barriers(
-                &Self::storage(&self.rays),
-                &[&self.deposits, &self.blocks],
-            );
+            let splat_buffers = [&self.deposits, &self.bins, &self.bin_list];
+            rec.compute_storage_barriers(&Self::storage(&self.rays), &splat_buffers);
             let push = ComputePush {
                 read_layer: i % 2,
                 ..self.push(i, depth, f.unit, ray_area)
             };
-            rec.bind_compute_pipeline(deposit);
-            let block_groups = [f.grid[0].div_ceil(8), f.grid[1].div_ceil(8), 1];
-            rec.dispatch_bound(deposit, bytemuck::bytes_of(&push), block_groups)?;
+            let ray_groups = [f.grid[0].div_ceil(8), f.grid[1].div_ceil(8), 1];
+            let p = &pipelines;
+            rec.bind_compute_pipeline(&p.deposit);
+            rec.dispatch_bound(&p.deposit, bytemuck::bytes_of(&push), ray_groups)?;
+            // The bins' list offsets, then the lists.
+            rec.compute_storage_barriers(&[], &splat_buffers);
+            rec.bind_compute_pipeline(&p.bin_scan);
+            rec.dispatch_bound(&p.bin_scan, bytemuck::bytes_of(&push), [1, 1, 1])?;
+            rec.compute_storage_barriers(&[], &splat_buffers);
+            rec.bind_compute_pipeline(&p.bin_fill);
+            rec.dispatch_bound(&p.bin_fill, bytemuck::bytes_of(&push), ray_groups)?;
             // Stage C: the gather into irradiance layer i % 2 (after the viewing rays of
             // plane i - 1 read it as plane i - 2's).
-            rec.compute_storage_barriers(
-                &Self::storage(&self.irradiance),
-                &[&self.deposits, &self.blocks],
-            );
-            rec.bind_compute_pipeline(gather);
-            rec.dispatch_bound(gather, bytemuck::bytes_of(&push), groups(screen))?;
+            rec.compute_storage_barriers(&Self::storage(&self.irradiance), &splat_buffers);
+            rec.bind_compute_pipeline(&p.gather);
+            rec.dispatch_bound(&p.gather, bytemuck::bytes_of(&push), groups(screen))?;
             if timed {
                 rec.end_scope();
             }
         }
         Ok(())
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::render::limits::{GATHER_BUCKETS, GATHER_LIST};
-
-    /// The guard admits exactly the grids whose blocks the gather's buckets hold.
-    #[test]
-    fn the_gather_refuses_grids_its_list_cannot_hold() {
-        let full = [8 * GATHER_LIST, 8 * GATHER_BUCKETS];
-        assert!(check_gather(full).is_ok());
-        // One more column starts a new column of blocks.
-        let e = check_gather([full[0] + 1, full[1]])
-            .unwrap_err()
-            .to_string();
-        assert!(
-            e.contains("--light-rays") && e.contains("16385 x 1024"),
-            "{e}"
-        );
-        assert!(check_gather([1, 1]).is_ok());
     }
 }

@@ -87,9 +87,10 @@ pub(crate) struct SweepPass {
     /// runs the compute path with those features.
     pub(crate) compute_planes: HashMap<Features, ComputePlanes>,
     /// The compute splat's buffers (glsl/light_gather.glsl): each light ray's deposit (ten
-    /// vec4), each block of 8 × 8 rays' box.
+    /// vec4); the tile bins' counts, list offsets and fill cursors; the bins' lists.
     pub(crate) deposits: Buffer,
-    pub(crate) blocks: Buffer,
+    pub(crate) bins: Buffer,
+    pub(crate) bin_list: Buffer,
     pub(crate) composite: ComputePipeline,
     pub(crate) output: FrameTarget,
     pub(crate) env_params: Buffer,
@@ -267,6 +268,15 @@ impl PlanePipelines {
 /// The compute sweep's plane pipelines for one feature set (the same shaders as
 /// [`PlanePipelines`], glsl/*.comp), all on [`SweepPass::compute_set`] with
 /// [`ComputePush`].
+/// The gather splat's bins for a `width` × `height` screen (glsl/light_gather.glsl): one
+/// per tile of GATHER_TILE pixels, one per coarse tile of GATHER_COARSE_TILE pixels, and
+/// the one for deposits wider than 2 × 2 coarse tiles.
+pub(crate) fn gather_bins(width: u32, height: u32) -> u64 {
+    use crate::render::limits::{GATHER_COARSE_TILE, GATHER_TILE};
+    let tiles = |side: u32| width.div_ceil(side) as u64 * height.div_ceil(side) as u64;
+    tiles(GATHER_TILE) + tiles(GATHER_COARSE_TILE) + 1
+}
+
 pub(crate) struct ComputePlanes {
     pub(crate) sweep: ComputePipeline,
     pub(crate) floor: ComputePipeline,
@@ -274,9 +284,11 @@ pub(crate) struct ComputePlanes {
     pub(crate) light: ComputePipeline,
     pub(crate) light_soft: ComputePipeline,
     pub(crate) view: ComputePipeline,
-    /// The splat, a tile-binned gather (glsl/light_gather.glsl): each ray's deposit,
-    /// then each pixel's sum.
+    /// The splat, a tile-binned gather (glsl/light_gather.glsl): each ray's deposit and
+    /// its count in the tile bins, the bins' offsets, the bins' lists, each pixel's sum.
     pub(crate) deposit: ComputePipeline,
+    pub(crate) bin_scan: ComputePipeline,
+    pub(crate) bin_fill: ComputePipeline,
     pub(crate) gather: ComputePipeline,
 }
 
@@ -308,6 +320,14 @@ impl ComputePlanes {
             deposit: make(
                 shaders::SWEEP_DEPOSIT_COMP,
                 "light deposits (compute sweep)",
+            )?,
+            bin_scan: make(
+                shaders::SWEEP_BIN_SCAN_COMP,
+                "light bin offsets (compute sweep)",
+            )?,
+            bin_fill: make(
+                shaders::SWEEP_BIN_FILL_COMP,
+                "light bin lists (compute sweep)",
             )?,
             gather: make(shaders::SWEEP_GATHER_COMP, "light gather (compute sweep)")?,
         })
@@ -518,9 +538,9 @@ impl SweepPass {
         compute_bindings[11] = Binding::StorageImage(&irradiance[1].image);
         compute_bindings[13] = Binding::StorageImage(&rays[0].image);
         compute_bindings[14] = Binding::StorageImage(&rays[1].image);
-        // 20-21: the gather splat's deposits and block boxes (glsl/light_gather.glsl),
-        // sized for the ray images' capacity C: C deposits; blocks of 8 × 8 over any grid
-        // of at most C rays, (cols + 7)(rows + 7) / 64 <= (8 C + 56) / 64.
+        // 20-22: the gather splat's deposits, tile bins and bin lists (glsl/light_gather.glsl),
+        // sized for the ray images' capacity C: C deposits; a ray is listed in at most four
+        // bins, so 4 C list entries; three words per bin (count, offset, cursor).
         let capacity = ray_size[0] as u64 * ray_size[1] as u64;
         let deposits = Buffer::new(
             ctx,
@@ -529,15 +549,23 @@ impl SweepPass {
             vk::Memory::Gpu,
             "light deposits",
         )?;
-        let blocks = Buffer::new(
+        let bins = Buffer::new(
             ctx,
-            ((8 * capacity + 56) / 64 + 1) * 16,
+            gather_bins(width, height) * 3 * 4,
+            vk::usage::STORAGE_BUFFER | vk::usage::BUFFER_TRANSFER_DST,
+            vk::Memory::Gpu,
+            "light deposit bins",
+        )?;
+        let bin_list = Buffer::new(
+            ctx,
+            capacity * 4 * 4,
             vk::usage::STORAGE_BUFFER,
             vk::Memory::Gpu,
-            "light deposit blocks",
+            "light deposit bin lists",
         )?;
         compute_bindings.push(Binding::Storage(&deposits));
-        compute_bindings.push(Binding::Storage(&blocks));
+        compute_bindings.push(Binding::Storage(&bins));
+        compute_bindings.push(Binding::Storage(&bin_list));
         let compute_set = DescriptorSet::new(ctx, &compute_bindings, "sweep (compute)")?;
         let output = FrameTarget::new(ctx, width, height, "sweep frame")?;
         let env_params = Buffer::uniform::<EnvParams>(ctx, "environment params")?;
@@ -633,7 +661,8 @@ impl SweepPass {
             compute_set,
             compute_planes: HashMap::new(),
             deposits,
-            blocks,
+            bins,
+            bin_list,
             composite,
             output,
             env_params,

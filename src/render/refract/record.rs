@@ -75,9 +75,6 @@ impl SweepPass {
             sweep.light_spacing,
             ray_image[0] as u64 * ray_image[1] as u64,
         );
-        if compute && forward_on && !(sweep.floor || sweep.skeleton) {
-            super::compute::check_gather(grid_dims)?;
-        }
         let soft = sweep.light.softness > 0.0;
         let (diffusion_w, diffusion_stride) = diffusion(
             sweep.light.softness * info.ref_step,
@@ -214,6 +211,11 @@ impl SweepPass {
             rec.clear_storage(&self.counters);
             if compute_splat {
                 rec.clear_storage(&self.splat_sums);
+            }
+            if compute && forward_on {
+                // The gather's bin counts start each frame at zero (each plane's bin
+                // scan zeroes them for the next).
+                rec.clear_storage(&self.bins);
             }
             // The setup covers the screen and the ray images (rays_per_pixel times taller).
             let setup_groups = [ray_image[0].div_ceil(8), ray_image[1].div_ceil(8), 1];
