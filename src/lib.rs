@@ -12,6 +12,7 @@ pub mod shaders {
 pub mod bench;
 pub mod camera;
 pub mod environment;
+pub mod files;
 pub mod light;
 pub mod output;
 pub mod photons;

@@ -82,32 +82,36 @@ pub fn to_srgb8(frame: &Frame, tone: &ToneMap) -> Vec<u8> {
         .collect()
 }
 
-/// Write a frame: PNG tone mapped and sRGB encoded, EXR linear HDR.
+/// Write a frame: PNG tone mapped and sRGB encoded, EXR linear HDR. Encoded in memory,
+/// then written atomically (crate::files): a failure leaves what was at `path`.
 pub fn write(frame: &Frame, path: &Path, tone: &ToneMap) -> Result<()> {
     match format_for(path)? {
         ImageFormat::Png => {
-            image::save_buffer(
-                path,
-                &to_srgb8(frame, tone),
-                frame.width,
-                frame.height,
-                image::ExtendedColorType::Rgba8,
-            )
-            .with_context(|| format!("writing {}", path.display()))?;
+            let bytes = encode_png(&to_srgb8(frame, tone), frame.width, frame.height)
+                .with_context(|| format!("{}: cannot encode the PNG", path.display()))?;
+            crate::files::write_atomically(path, &bytes)
         }
-        ImageFormat::Exr => write_pixels(frame.width, frame.height, &frame.pixels, path)?,
+        ImageFormat::Exr => write_pixels(frame.width, frame.height, &frame.pixels, path),
     }
-    Ok(())
 }
 
-/// Write raw RGBA f32 pixels (any meaning: colours, directions, positions) as EXR.
+/// 8-bit RGBA bytes as a PNG file's content.
+pub fn encode_png(rgba8: &[u8], width: u32, height: u32) -> Result<Vec<u8>> {
+    use image::ImageEncoder as _;
+    let mut bytes = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut bytes).write_image(
+        rgba8,
+        width,
+        height,
+        image::ExtendedColorType::Rgba8,
+    )?;
+    Ok(bytes)
+}
+
+/// Write raw RGBA f32 pixels (any meaning: colours, directions, positions) as EXR,
+/// atomically.
 pub fn write_pixels(width: u32, height: u32, pixels: &[[f32; 4]], path: &Path) -> Result<()> {
-    let w = width as usize;
-    exr::prelude::write_rgba_file(path, w, height as usize, |x, y| {
-        let p = pixels[y * w + x];
-        (p[0], p[1], p[2], p[3])
-    })
-    .map_err(|e| anyhow::anyhow!("writing {}: {e}", path.display()))
+    write_pixels_with_attributes(width, height, pixels, path, &[])
 }
 
 /// A value for an EXR header attribute written by [`write_pixels_with_attributes`].
@@ -154,8 +158,10 @@ pub fn write_pixels_with_attributes(
         };
         image.layer_data.attributes.other.insert(text(name)?, value);
     }
+    let mut bytes = std::io::Cursor::new(Vec::new());
     image
         .write()
-        .to_file(path)
-        .map_err(|e| anyhow::anyhow!("writing {}: {e}", path.display()))
+        .to_buffered(&mut bytes)
+        .map_err(|e| anyhow::anyhow!("{}: cannot encode the EXR: {e}", path.display()))?;
+    crate::files::write_atomically(path, bytes.get_ref())
 }

@@ -689,8 +689,8 @@ pub fn models_markdown(r: &ModelsReport) -> String {
 /// applicable change (kind `tf-change`, `ls-change`, `pf-change`: ms is the rebuild
 /// scopes' sum), each with its whole context, as `bench thesis --csv`.
 pub fn write_models_csv(r: &ModelsReport, path: &Path) -> Result<()> {
-    let mut w = csv::Writer::from_path(path)
-        .with_context(|| format!("{}: cannot create the CSV file", path.display()))?;
+    // Written into memory, then to the file atomically (crate::files).
+    let mut w = csv::Writer::from_writer(Vec::new());
     w.write_record([
         "schema",
         "dataset",
@@ -749,9 +749,10 @@ pub fn write_models_csv(r: &ModelsReport, path: &Path) -> Result<()> {
             }
         }
     }
-    w.flush()
-        .with_context(|| format!("{}: writing the CSV file", path.display()))?;
-    Ok(())
+    let bytes = w
+        .into_inner()
+        .map_err(|e| anyhow::anyhow!("{}: writing the CSV file: {e}", path.display()))?;
+    crate::files::write_atomically(path, &bytes)
 }
 
 /// Median rendering ms per model per row as an SVG bar chart (log scale).

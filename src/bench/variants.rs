@@ -452,8 +452,8 @@ pub fn variants_markdown(r: &VariantsReport) -> String {
 /// One CSV record per frame (warm-up included) of every row and variant, each with its
 /// whole context, as `bench thesis --csv`.
 pub fn write_variants_csv(r: &VariantsReport, path: &Path) -> Result<()> {
-    let mut w = csv::Writer::from_path(path)
-        .with_context(|| format!("{}: cannot create the CSV file", path.display()))?;
+    // Written into memory, then to the file atomically (crate::files).
+    let mut w = csv::Writer::from_writer(Vec::new());
     w.write_record([
         "schema",
         "dataset",
@@ -515,9 +515,10 @@ pub fn write_variants_csv(r: &VariantsReport, path: &Path) -> Result<()> {
             }
         }
     }
-    w.flush()
-        .with_context(|| format!("{}: writing the CSV file", path.display()))?;
-    Ok(())
+    let bytes = w
+        .into_inner()
+        .map_err(|e| anyhow::anyhow!("{}: writing the CSV file: {e}", path.display()))?;
+    crate::files::write_atomically(path, &bytes)
 }
 
 #[cfg(test)]

@@ -118,8 +118,8 @@ pub fn markdown(r: &Report) -> String {
 /// One CSV record per measured or warm-up frame of every variant, each carrying the whole
 /// context (device, commit, settings), so a file is self-describing and files concatenate.
 pub fn write_csv(r: &Report, path: &Path) -> Result<()> {
-    let mut w = csv::Writer::from_path(path)
-        .with_context(|| format!("{}: cannot create the CSV file", path.display()))?;
+    // Written into memory, then to the file atomically (crate::files).
+    let mut w = csv::Writer::from_writer(Vec::new());
     w.write_record([
         "schema",
         "dataset",
@@ -174,9 +174,10 @@ pub fn write_csv(r: &Report, path: &Path) -> Result<()> {
             }
         }
     }
-    w.flush()
-        .with_context(|| format!("{}: writing the CSV file", path.display()))?;
-    Ok(())
+    let bytes = w
+        .into_inner()
+        .map_err(|e| anyhow::anyhow!("{}: writing the CSV file: {e}", path.display()))?;
+    crate::files::write_atomically(path, &bytes)
 }
 
 /// Any report (thesis, variants) as pretty JSON.
@@ -215,8 +216,7 @@ pub(crate) fn meta_columns(meta: &Meta) -> [String; 6] {
 
 pub fn write_json<T: Serialize>(r: &T, path: &Path) -> Result<()> {
     let text = serde_json::to_string_pretty(r)?;
-    std::fs::write(path, text + "\n")
-        .with_context(|| format!("{}: cannot write the JSON file", path.display()))
+    crate::files::write_atomically(path, (text + "\n").as_bytes())
 }
 
 /// Checks an output path before hours of benchmarking, not after.
@@ -290,7 +290,9 @@ pub(crate) fn plot_grouped_bars(
     let top = all.iter().cloned().fold(0.0, f64::max) * 2.0;
     let hi = lo * (top / lo).powf(1.0 / 0.7);
     let width = (40 * series.len() as u32 + 40) * n as u32 + 160;
-    let root = SVGBackend::new(path, (width.max(480), 480)).into_drawing_area();
+    // Drawn into a string, then written to the file atomically (crate::files).
+    let mut svg = String::new();
+    let root = SVGBackend::with_string(&mut svg, (width.max(480), 480)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| err(&e))?;
     let mut chart = ChartBuilder::on(&root)
         .caption(caption, ("sans-serif", 18))
@@ -350,7 +352,9 @@ pub(crate) fn plot_grouped_bars(
         .draw()
         .map_err(|e| err(&e))?;
     root.present().map_err(|e| err(&e))?;
-    Ok(())
+    drop(chart);
+    drop(root);
+    crate::files::write_atomically(path, svg.as_bytes())
 }
 
 #[cfg(test)]

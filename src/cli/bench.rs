@@ -217,8 +217,7 @@ pub fn bench_scaling(desc: &ContextDesc, args: &ScalingArgs) -> Result<ExitCode>
     )?;
     print!("{}", refrakt::bench::scaling_markdown(&r));
     if let Some(p) = &args.json {
-        std::fs::write(p, serde_json::to_string_pretty(&r)? + "\n")
-            .with_context(|| format!("{}: cannot write", p.display()))?;
+        refrakt::files::write_atomically(p, (serde_json::to_string_pretty(&r)? + "\n").as_bytes())?;
         println!("wrote {}", p.display());
     }
     finish(ctx)

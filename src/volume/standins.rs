@@ -194,12 +194,10 @@ pub fn load_or_generate(name: &str, dims: [u32; 3], dir: &Path) -> Result<(Volum
     let vol = generate(name, dims)?;
     std::fs::create_dir_all(dir)
         .with_context(|| format!("creating the stand-in cache {}", dir.display()))?;
-    let tmp = file.with_extension("partial");
     let Voxels::U8(bytes) = &vol.voxels else {
         unreachable!("stand-ins are u8")
     };
-    std::fs::write(&tmp, bytes).with_context(|| format!("writing {}", tmp.display()))?;
-    std::fs::rename(&tmp, &file).with_context(|| format!("writing {}", file.display()))?;
+    crate::files::write_atomically(&file, bytes)?;
     Ok((vol, false))
 }
 

@@ -79,7 +79,6 @@
 //! e^{−2s(1−Λ)} ≈ 3e-6: the walks that follow the forward-peaked beam through a dense
 //! sphere are too rare for 8192 paths, so treat those entries as lower estimates.
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::time::Instant;
@@ -464,22 +463,8 @@ impl AmbientTable {
             std::fs::create_dir_all(dir)
                 .with_context(|| format!("{}: cannot create the folder", dir.display()))?;
         }
-        let name = path
-            .file_name()
-            .ok_or_else(|| anyhow!("{}: not a file name", path.display()))?;
-        let mut tmp_name = name.to_os_string();
-        tmp_name.push(format!(".tmp{}", std::process::id()));
-        let tmp = path.with_file_name(tmp_name);
-        let write = || -> std::io::Result<()> {
-            let mut f = std::fs::File::create(&tmp)?;
-            f.write_all(&bytes)?;
-            f.sync_all()?;
-            std::fs::rename(&tmp, path)
-        };
-        write().map_err(|e| {
-            let _ = std::fs::remove_file(&tmp);
-            anyhow!("{}: cannot write the ambient table: {e}", path.display())
-        })
+        crate::files::write_atomically(path, &bytes)
+            .with_context(|| format!("{}: cannot write the ambient table", path.display()))
     }
 
     /// Read a table written by [`AmbientTable::save`], checking the magic, version,
