@@ -20,13 +20,7 @@ use anyhow::{anyhow, bail, Context as _, Result};
 /// rename: it is written in place, and its write errors still fail.
 pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
     let target = resolve(path)?;
-    let what = || {
-        if target == path {
-            path.display().to_string()
-        } else {
-            format!("{} (-> {})", path.display(), target.display())
-        }
-    };
+    let what = || describe(path, &target);
     match std::fs::metadata(&target) {
         Ok(m) if m.is_dir() => bail!("{}: is a folder; give a file name", what()),
         Ok(m) if !m.is_file() => {
@@ -81,6 +75,114 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
         let _ = d.sync_all();
     }
     Ok(())
+}
+
+/// Checks, before any work, that `path` can be written by [`write_atomically`]: its
+/// folder exists and is a folder, it is not itself a folder, and a file can be created in
+/// that folder (tried, not guessed from permission bits: root ignores them, a read-only
+/// mount does not). A device or FIFO already at the path is written in place: no folder
+/// check. The error names the file and the reason.
+pub fn check_writable(path: &Path) -> Result<()> {
+    let target = resolve(path)?;
+    let what = || describe(path, &target);
+    match std::fs::metadata(&target) {
+        Ok(m) if m.is_dir() => bail!("{}: is a folder; give a file name", what()),
+        Ok(m) if !m.is_file() => return Ok(()),
+        _ => {}
+    }
+    let dir = match target.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    match std::fs::metadata(&dir) {
+        Ok(m) if m.is_dir() => {}
+        Ok(_) => bail!("{}: {} is a file, not a folder", what(), dir.display()),
+        Err(_) => bail!("{}: the folder {} does not exist", what(), dir.display()),
+    }
+    tempfile::Builder::new()
+        .prefix(".refrakt-")
+        .suffix(".probe")
+        .tempfile_in(&dir)
+        .map(drop)
+        .map_err(|e| {
+            anyhow!(
+                "{}: cannot write in the folder {}: {}",
+                what(),
+                dir.display(),
+                reason(&e)
+            )
+        })
+}
+
+/// Checks every output of a command before any work ([`check_writable`]), and that none
+/// of them is one of its `inputs` or another of its outputs: the same file after links
+/// are resolved (device and inode compared), so `render --env a.png -o a.png` cannot
+/// replace the map it reads. `outputs` pairs each path with the option that named it.
+pub fn check_outputs(outputs: &[(&str, &Path)], inputs: &[PathBuf]) -> Result<()> {
+    for (flag, path) in outputs {
+        check_writable(path).with_context(|| flag.to_string())?;
+        let Some(id) = file_id(path) else { continue };
+        if let Some(input) = inputs.iter().find(|p| file_id(p) == Some(id)) {
+            bail!(
+                "{flag} {}: is the input {}; the output would replace it (choose another \
+                 file name)",
+                path.display(),
+                input.display()
+            );
+        }
+    }
+    // Outputs that do not exist yet have no inode: their (resolved) names are compared too.
+    for (i, (flag, path)) in outputs.iter().enumerate() {
+        let id = file_id(path);
+        if let Some((other, _)) = outputs[..i]
+            .iter()
+            .find(|(_, p)| (id.is_some() && file_id(p) == id) || same_name(p, path))
+        {
+            bail!(
+                "{flag} {}: is also the output of {other}; give each output its own file",
+                path.display()
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Device and inode of the file at `path` (links followed), if it exists.
+fn file_id(path: &Path) -> Option<(u64, u64)> {
+    use std::os::unix::fs::MetadataExt as _;
+    std::fs::metadata(path).ok().map(|m| (m.dev(), m.ino()))
+}
+
+/// Whether two paths name the same file that may not exist yet: their folders
+/// canonicalized, their file names compared.
+fn same_name(a: &Path, b: &Path) -> bool {
+    let key = |p: &Path| {
+        let dir = p.parent().filter(|d| !d.as_os_str().is_empty());
+        let dir = std::fs::canonicalize(dir.unwrap_or(Path::new("."))).ok()?;
+        Some(dir.join(p.file_name()?))
+    };
+    match (key(a), key(b)) {
+        (Some(x), Some(y)) => x == y,
+        _ => a == b,
+    }
+}
+
+/// An I/O error's reason without the "(os error N)" tail.
+fn reason(e: &std::io::Error) -> String {
+    let s = e.to_string();
+    match s.find(" (os error") {
+        Some(i) => s[..i].to_string(),
+        None => s,
+    }
+}
+
+/// `path`, and where it leads when it is a link.
+fn describe(path: &Path, target: &Path) -> String {
+    if target == path {
+        path.display().to_string()
+    } else {
+        format!("{} (-> {})", path.display(), target.display())
+    }
 }
 
 /// The path a write to `path` lands on: links followed (every component), or `path`

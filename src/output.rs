@@ -14,7 +14,8 @@ pub enum ImageFormat {
 }
 
 /// The output format for a path, or an error naming the path and the accepted extensions.
-/// Also checks that the folder exists, so a long render does not fail at the end.
+/// Also checks that the file can be written ([`crate::files::check_writable`]), so a long
+/// render does not fail at the end.
 pub fn format_for(path: &Path) -> Result<ImageFormat> {
     let ext = path
         .extension()
@@ -32,19 +33,7 @@ pub fn format_for(path: &Path) -> Result<ImageFormat> {
             path.display()
         ),
     };
-    if path.is_dir() {
-        bail!("{}: is a folder; give a file name", path.display());
-    }
-    let parent = path.parent().filter(|p| !p.as_os_str().is_empty());
-    if let Some(dir) = parent {
-        if !dir.is_dir() {
-            bail!(
-                "{}: the folder {} does not exist",
-                path.display(),
-                dir.display()
-            );
-        }
-    }
+    crate::files::check_writable(path)?;
     Ok(format)
 }
 

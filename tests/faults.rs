@@ -5,6 +5,10 @@
 //! The full file system is a tmpfs of a few KiB mounted by the test; where that is not
 //! allowed (not root, no mount in the container) that part is skipped with the reason on
 //! stderr. `/dev/full` needs nothing and always runs.
+//!
+//! Item 2: outputs are checked before any work: an output that is one of the inputs (also
+//! through a link), in a read-only folder, under a file, or named twice is refused before
+//! the device is even opened.
 
 mod common;
 
@@ -70,9 +74,14 @@ struct TinyFs {
 
 impl TinyFs {
     fn mount() -> Result<Self, String> {
+        Self::mount_with("size=32k")
+    }
+
+    /// With mount `options`, e.g. "ro" for a read-only folder.
+    fn mount_with(options: &str) -> Result<Self, String> {
         let dir = tempfile::tempdir().map_err(|e| e.to_string())?;
         let o = std::process::Command::new("mount")
-            .args(["-t", "tmpfs", "-o", "size=32k", "tmpfs"])
+            .args(["-t", "tmpfs", "-o", options, "tmpfs"])
             .arg(dir.path())
             .output()
             .map_err(|e| format!("cannot run mount: {e}"))?;
@@ -144,5 +153,188 @@ fn a_failed_write_leaves_the_previous_image() {
             "{ext}: the previous file changed"
         );
         assert_eq!(fs.entries(), before, "{ext}: files were left behind");
+    }
+}
+
+/// Runs refrakt with `args` and asserts it was refused before any work: exit ≠ 0, no
+/// panic, the device never opened (render prints "device:" first), in well under the
+/// time a render takes; returns stderr.
+fn refused_before_work(args: &[&str], what: &str) -> String {
+    let t = std::time::Instant::now();
+    let o = refrakt(args);
+    let seconds = t.elapsed().as_secs_f64();
+    let err = stderr(&o);
+    assert!(!o.status.success(), "{what}: exit 0; stderr: {err}");
+    assert!(!err.contains("panicked"), "{what}: panicked: {err}");
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        !out.contains("device:"),
+        "{what}: the device was opened first: {out}"
+    );
+    assert!(seconds < 3.0, "{what}: refused after {seconds:.1} s");
+    err
+}
+
+/// `render --env map.png -o map.png` (and through a link to the map, and `--tf` given as
+/// the output) would replace the input: refused before any work, the map byte for byte.
+#[test]
+fn an_output_that_is_an_input_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let map = dir.path().join("map.png");
+    // A valid 2:1 map, so that without the check the render would run and write over it.
+    let o = refrakt(&[
+        "render",
+        "--model",
+        "ea",
+        "--width",
+        "32",
+        "--height",
+        "16",
+        "-o",
+        map.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "making the map: {}", stderr(&o));
+    let before = std::fs::read(&map).unwrap();
+    let link = dir.path().join("link.png");
+    std::os::unix::fs::symlink("map.png", &link).unwrap();
+    let m = map.to_str().unwrap();
+    for (out, what) in [
+        (map.clone(), "the map itself"),
+        (link.clone(), "a link to it"),
+    ] {
+        let err = refused_before_work(
+            &[
+                "render",
+                "--width",
+                "16",
+                "--height",
+                "16",
+                "--env",
+                m,
+                "-o",
+                out.to_str().unwrap(),
+            ],
+            what,
+        );
+        assert!(
+            err.contains("is the input") && err.contains("map.png"),
+            "{what}: the reason is not given: {err}"
+        );
+        assert_eq!(
+            std::fs::read(&map).unwrap(),
+            before,
+            "{what}: the map changed"
+        );
+    }
+    // The scene file is an input too (.toml is not an image extension, so through a link).
+    let scene = dir.path().join("scene.toml");
+    std::fs::write(&scene, "[volume]\nbuiltin = \"shell\"\nsize = 16\n").unwrap();
+    let scene_text = std::fs::read(&scene).unwrap();
+    let scene_link = dir.path().join("scene.png");
+    std::os::unix::fs::symlink("scene.toml", &scene_link).unwrap();
+    let err = refused_before_work(
+        &[
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            scene_link.to_str().unwrap(),
+        ],
+        "the scene file",
+    );
+    assert!(
+        err.contains("is the input") && err.contains("scene.toml"),
+        "the scene file is not named: {err}"
+    );
+    assert_eq!(
+        std::fs::read(&scene).unwrap(),
+        scene_text,
+        "the scene file changed"
+    );
+}
+
+/// An output under a file, in a folder that does not exist, a dump written twice, two
+/// bench reports into one file: refused before any work with the true reason.
+#[test]
+fn outputs_that_cannot_be_written_are_refused_before_work() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("afile");
+    std::fs::write(&file, b"x").unwrap();
+    let under = file.join("x.png");
+    let err = refused_before_work(&["render", "-o", under.to_str().unwrap()], "under a file");
+    assert!(
+        err.contains("is a file, not a folder"),
+        "under a file: {err}"
+    );
+    let missing = dir.path().join("nowhere/x.png");
+    let err = refused_before_work(&["render", "-o", missing.to_str().unwrap()], "no folder");
+    assert!(err.contains("does not exist"), "no folder: {err}");
+    let out = dir.path().join("x.png");
+    let err = refused_before_work(
+        &[
+            "render",
+            "--dump",
+            "light-colour@1,light-colour@1",
+            "-o",
+            out.to_str().unwrap(),
+        ],
+        "one dump twice",
+    );
+    assert!(err.contains("also the output"), "one dump twice: {err}");
+    let err = refused_before_work(
+        &[
+            "render",
+            "--dump-dir",
+            file.to_str().unwrap(),
+            "--dump",
+            "light-colour@1",
+            "-o",
+            out.to_str().unwrap(),
+        ],
+        "dump folder is a file",
+    );
+    assert!(
+        err.contains("is a file, not a folder"),
+        "dump folder is a file: {err}"
+    );
+    // bench: the JSON report and the chart through a link into the same file.
+    let json = dir.path().join("r.json");
+    std::fs::write(&json, b"{}").unwrap();
+    let svg = dir.path().join("r.svg");
+    std::os::unix::fs::symlink("r.json", &svg).unwrap();
+    let o = refrakt(&[
+        "bench",
+        "thesis",
+        "--json",
+        json.to_str().unwrap(),
+        "--plot",
+        svg.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success(), "two reports into one file: exit 0");
+    assert!(
+        stderr(&o).contains("also the output"),
+        "bench: {}",
+        stderr(&o)
+    );
+    assert_eq!(std::fs::read(&json).unwrap(), b"{}", "the report changed");
+}
+
+/// An output in a read-only folder (a read-only mount: permission bits do not bind root)
+/// is refused before any work, naming the folder and the reason.
+#[test]
+fn an_output_in_a_read_only_folder_is_refused_before_work() {
+    let fs = match TinyFs::mount_with("ro,size=32k") {
+        Ok(fs) => fs,
+        Err(why) => {
+            eprintln!("skipped: no read-only file system ({why})");
+            return;
+        }
+    };
+    for ext in ["png", "exr"] {
+        let out = fs.path().join(format!("x.{ext}"));
+        let err = refused_before_work(&["render", "-o", out.to_str().unwrap()], ext);
+        assert!(
+            err.contains("cannot write in the folder") && err.contains("Read-only"),
+            "{ext}: the reason is not given: {err}"
+        );
     }
 }

@@ -225,12 +225,7 @@ pub fn check_output(path: &Path, ext: &str) -> Result<()> {
     if !e.eq_ignore_ascii_case(ext) {
         bail!("{}: expected a .{ext} file", path.display());
     }
-    let parent = path.parent().filter(|p| !p.as_os_str().is_empty());
-    if let Some(p) = parent {
-        ensure!(p.is_dir(), "{}: the folder does not exist", p.display());
-    }
-    ensure!(!path.is_dir(), "{}: is a folder", path.display());
-    Ok(())
+    crate::files::check_writable(path)
 }
 
 /// Bar chart of the thesis' mean frame time beside ours per row (log scale: on lavapipe

@@ -1,5 +1,6 @@
 //! `refrakt generate` and `refrakt bench`: the thesis stand-ins and the timing tables.
 
+use std::path::Path;
 use std::process::ExitCode;
 
 use anyhow::{ensure, Context as _, Result};
@@ -10,6 +11,19 @@ use refrakt::volume::standins;
 
 use super::args::*;
 use super::info::*;
+
+/// A benchmark's report files, checked before minutes of measuring: each has its
+/// extension and can be written, and no two are the same file.
+fn check_reports(reports: &[(&str, Option<&Path>, &str)]) -> Result<()> {
+    let mut outputs = Vec::new();
+    for &(flag, path, ext) in reports {
+        if let Some(p) = path {
+            refrakt::bench::check_output(p, ext).context(flag.to_owned())?;
+            outputs.push((flag, p));
+        }
+    }
+    refrakt::files::check_outputs(&outputs, &[])
+}
 
 pub fn generate(args: &GenerateArgs) -> Result<ExitCode> {
     let rows = refrakt::bench::select_rows(&args.names)?;
@@ -41,15 +55,11 @@ pub fn bench_thesis(desc: &ContextDesc, args: &ThesisArgs) -> Result<ExitCode> {
     standins::scaled_dims([1, 1, 1], args.scale).context("--scale")?;
     ensure!(args.frames >= 1, "--frames must be at least 1");
     refrakt::bench::select_rows(&args.rows).context("--rows")?;
-    if let Some(p) = &args.csv {
-        refrakt::bench::check_output(p, "csv").context("--csv")?;
-    }
-    if let Some(p) = &args.json {
-        refrakt::bench::check_output(p, "json").context("--json")?;
-    }
-    if let Some(p) = &args.plot {
-        refrakt::bench::check_output(p, "svg").context("--plot")?;
-    }
+    check_reports(&[
+        ("--csv", args.csv.as_deref(), "csv"),
+        ("--json", args.json.as_deref(), "json"),
+        ("--plot", args.plot.as_deref(), "svg"),
+    ])?;
     let ctx = Context::new(desc)?;
     let settings = refrakt::bench::ThesisSettings {
         scale: args.scale,
@@ -84,12 +94,10 @@ pub fn bench_variants(desc: &ContextDesc, args: &VariantsArgs) -> Result<ExitCod
     ensure!(args.frames >= 1, "--frames must be at least 1");
     refrakt::bench::select_rows(&args.rows).context("--rows")?;
     refrakt::bench::check_variants(&args.variant).context("--variant")?;
-    if let Some(p) = &args.csv {
-        refrakt::bench::check_output(p, "csv").context("--csv")?;
-    }
-    if let Some(p) = &args.json {
-        refrakt::bench::check_output(p, "json").context("--json")?;
-    }
+    check_reports(&[
+        ("--csv", args.csv.as_deref(), "csv"),
+        ("--json", args.json.as_deref(), "json"),
+    ])?;
     let ctx = Context::new(desc)?;
     let settings = refrakt::bench::VariantsSettings {
         scale: args.scale,
@@ -118,15 +126,11 @@ pub fn bench_models(desc: &ContextDesc, args: &ModelsArgs) -> Result<ExitCode> {
     standins::scaled_dims([1, 1, 1], args.scale).context("--scale")?;
     ensure!(args.frames >= 1, "--frames must be at least 1");
     refrakt::bench::select_models_rows(&args.rows).context("--rows")?;
-    if let Some(p) = &args.csv {
-        refrakt::bench::check_output(p, "csv").context("--csv")?;
-    }
-    if let Some(p) = &args.json {
-        refrakt::bench::check_output(p, "json").context("--json")?;
-    }
-    if let Some(p) = &args.svg {
-        refrakt::bench::check_output(p, "svg").context("--svg")?;
-    }
+    check_reports(&[
+        ("--csv", args.csv.as_deref(), "csv"),
+        ("--json", args.json.as_deref(), "json"),
+        ("--svg", args.svg.as_deref(), "svg"),
+    ])?;
     let ctx = Context::new(desc)?;
     let settings = refrakt::bench::ModelsSettings {
         scale: args.scale,

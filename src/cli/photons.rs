@@ -28,6 +28,9 @@ pub fn photons(args: &PhotonsArgs) -> Result<ExitCode> {
         threads: args.threads.unwrap_or(0),
     };
     popts.validate()?;
+    let scene = scene_from_args(&args.scene)?;
+    let data_dir = data_dir(&args.scene);
+    refrakt::files::check_outputs(&[("-o", &args.output)], &scene.input_files(&data_dir))?;
     let LoadedScene {
         name,
         volume,
@@ -35,7 +38,7 @@ pub fn photons(args: &PhotonsArgs) -> Result<ExitCode> {
         camera,
         opts,
         ..
-    } = build_scene(&args.scene, None)?;
+    } = scene.load_all(&data_dir, None)?;
     let planes = photons::planes(&volume, &camera, &opts)?;
     let depth = match (args.plane, args.depth) {
         (Some(k), _) => photons::plane_depth(&volume, &camera, &opts, k)?,

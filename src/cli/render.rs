@@ -47,18 +47,16 @@ pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
     // Everything that can be checked without the GPU is checked first, so bad input fails
     // at once with a clear message.
     output::format_for(&args.output)?;
-    if args.variant.is_some() || args.pass_timings {
-        // --variant and --pass-timings are the sweep's: refused with --model ea like
-        // --softness and the rest.
-        let mut flags = Vec::new();
-        if args.variant.is_some() {
-            flags.push("--variant");
-        }
-        if args.pass_timings {
-            flags.push("--pass-timings");
-        }
-        scene_with_refract_only(&args.scene, &flags)?;
+    // --variant and --pass-timings are the sweep's: refused with --model ea like
+    // --softness and the rest.
+    let mut flags = Vec::new();
+    if args.variant.is_some() {
+        flags.push("--variant");
     }
+    if args.pass_timings {
+        flags.push("--pass-timings");
+    }
+    let scene = scene_with_refract_only(&args.scene, &flags)?;
     let dumps = match &args.dump {
         Some(d) => parse_dumps(d)?,
         None => Vec::new(),
@@ -73,10 +71,27 @@ pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
     };
     if !dumps.is_empty() && !dump_dir.as_os_str().is_empty() && !dump_dir.is_dir() {
         bail!(
-            "--dump-dir {}: the folder does not exist",
-            dump_dir.display()
+            "--dump-dir {}: {}",
+            dump_dir.display(),
+            if dump_dir.exists() {
+                "is a file, not a folder"
+            } else {
+                "the folder does not exist"
+            }
         );
     }
+    // Every file this render writes, checked against every file it reads before any work
+    // (issue 33): writable, not a folder, not an input, not each other.
+    let data_dir = data_dir(&args.scene);
+    let mut inputs = scene.input_files(&data_dir);
+    inputs.extend(args.scene.ambient_table.clone());
+    let dump_paths: Vec<_> = dumps
+        .iter()
+        .map(|&(buffer, plane)| dump_path(&dump_dir, buffer, plane))
+        .collect();
+    let mut outputs = vec![("-o", args.output.as_path())];
+    outputs.extend(dump_paths.iter().map(|p| ("--dump", p.as_path())));
+    refrakt::files::check_outputs(&outputs, &inputs)?;
     // The device first: its limits let the loaders refuse a volume it cannot hold from
     // the file's header, before reading gigabytes.
     let ctx = Context::new(desc)?;
@@ -99,7 +114,7 @@ pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
         tone,
         notes,
         ..
-    } = build_scene(&args.scene, Some(upload::device_limits(&ctx)))?;
+    } = scene.load_all(&data_dir, Some(upload::device_limits(&ctx)))?;
     progress.suspend(|| notes.iter().for_each(|n| println!("{n}")));
     opts.sweep.dumps = dumps;
     opts.sweep.pass_timings = args.pass_timings;
@@ -272,6 +287,11 @@ pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
     finish(ctx)
 }
 
+/// Where `--dump BUFFER@PLANE` is written in `dir`.
+fn dump_path(dir: &Path, buffer: StateBuffer, plane: u32) -> std::path::PathBuf {
+    dir.join(format!("{}-{plane}.exr", buffer.name()))
+}
+
 /// Writes the --dump state buffers as EXR. Each file's header says where the buffer lives:
 /// the plane's index and view depth, the world-space plane `n·p = d` (n the camera's
 /// forward, d = n·eye + depth) and the camera; the log line says the same.
@@ -292,7 +312,7 @@ pub fn write_dumps(frame: &refrakt::render::Frame, camera: &Camera, dir: &Path) 
     );
     let spacing = frame.sweep.as_ref().map(|s| s.planes.spacing);
     for d in &frame.dumps {
-        let path = dir.join(format!("{}-{}.exr", d.buffer.name(), d.plane));
+        let path = dump_path(dir, d.buffer, d.plane);
         let offset = forward.dot(eye) + d.depth;
         let mut attrs = vec![
             ("refrakt.buffer", Text(d.buffer.name().into())),

@@ -325,8 +325,12 @@ fn refract_only_flags(args: &SceneArgs) -> Vec<&'static str> {
 /// loading (a volume beyond them is refused from its header).
 pub fn build_scene(args: &SceneArgs, limits: Option<DeviceLimits>) -> Result<LoadedScene> {
     let scene = scene_from_args(args)?;
-    let data_dir = args.data_dir.clone().unwrap_or_else(scene::data_dir);
-    scene.load_all(&data_dir, limits)
+    scene.load_all(&data_dir(args), limits)
+}
+
+/// Where the arguments say the fetched data and the stand-ins' originals are.
+pub fn data_dir(args: &SceneArgs) -> PathBuf {
+    args.data_dir.clone().unwrap_or_else(scene::data_dir)
 }
 
 /// `--list-scenes` / `--list-presets`: print the list and say to exit.

@@ -29,6 +29,10 @@ pub fn view(desc: &ContextDesc, args: ViewArgs) -> Result<ExitCode> {
         );
     }
     let scene_args = args.scene.clone();
+    if let Some(path) = &args.screenshot {
+        let inputs = scene_from_args(&scene_args)?.input_files(&data_dir(&scene_args));
+        refrakt::files::check_outputs(&[("--screenshot", path)], &inputs)?;
+    }
     let scene = build_scene(&scene_args, None)?;
     for n in &scene.notes {
         println!("{n}");

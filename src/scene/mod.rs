@@ -564,20 +564,7 @@ impl Scene {
         let (volume, upright) = self.load_volume_noted(data_dir, limits)?;
         let (tf, mut notes) = self.check_data(&volume, tf);
         notes.extend(upright);
-        let mut files: Vec<PathBuf> = self.file.iter().cloned().collect();
-        if let TransferSource::Named(n) = &self.transfer {
-            if Path::new(n).is_file() {
-                files.push(PathBuf::from(n));
-            }
-        }
-        if let EnvSource::File(p) = &self.environment {
-            files.push(p.clone());
-        }
-        if let VolumeSource::File { path, .. } = &self.volume {
-            if path.is_file() {
-                files.push(path.clone());
-            }
-        }
+        let files = self.input_files(data_dir);
         Ok(LoadedScene {
             name: self.name.clone(),
             volume,
@@ -590,6 +577,28 @@ impl Scene {
             files,
             notes,
         })
+    }
+
+    /// The files this scene reads (scene file, transfer functions, environment map, volume
+    /// file or the original of a stand-in), those that exist: what the viewer watches,
+    /// and what no command may write over (issue 33).
+    pub fn input_files(&self, data_dir: &Path) -> Vec<PathBuf> {
+        let mut files: Vec<PathBuf> = self.file.iter().cloned().collect();
+        if let TransferSource::Named(n) = &self.transfer {
+            if Path::new(n).is_file() {
+                files.push(PathBuf::from(n));
+            }
+        }
+        if let EnvSource::File(p) = &self.environment {
+            files.push(p.clone());
+        }
+        match &self.volume {
+            VolumeSource::File { path, .. } if path.is_file() => files.push(path.clone()),
+            VolumeSource::Fetched { file, .. } => files.push(data_dir.join(file)),
+            VolumeSource::Standin { name, .. } => files.extend(original_in(data_dir, name)),
+            _ => {}
+        }
+        files
     }
 
     pub fn tone_map(&self) -> Result<ToneMap> {
