@@ -242,6 +242,12 @@ impl EnvironmentMap {
                 )
             }
             "hdr" | "png" | "jpg" | "jpeg" => {
+                let (w, h) = image::ImageReader::open(path)
+                    .and_then(|r| r.with_guessed_format())
+                    .map_err(image::ImageError::IoError)
+                    .and_then(|r| r.into_dimensions())
+                    .with_context(|| format!("environment map {origin}: not a readable image"))?;
+                check_pixels(w as u64, h as u64, &origin)?;
                 let img = open_image(path)
                     .with_context(|| format!("environment map {origin}: not a readable image"))?;
                 let linear = ext == "hdr";
@@ -309,12 +315,48 @@ fn check_exr_size(path: &Path, origin: &str) -> Result<()> {
     };
     if let Some(h) = meta.headers.iter().find(rgb) {
         let (w, ht) = (h.layer_size.width(), h.layer_size.height());
+        check_pixels(w as u64, ht as u64, origin)?;
         ensure!(
             ht >= 1 && w == 2 * ht,
             "{origin}: an equirectangular map must be twice as wide as high, this one is \
              {w}x{ht}"
         );
     }
+    Ok(())
+}
+
+/// The most pixels an environment map may have unless `REFRAKT_ENV_MAX_PIXELS` raises it:
+/// 8192x4096. Loading one costs about 64 bytes per pixel on the host (the decoded file,
+/// f32 RGBA, the summed-area table) and 32 on the device: 2 GiB and 1 GiB at the limit.
+/// A 16384x8192 map (a 400 KB PNG can be one) took 70 s and 8.5 GB before the limit.
+pub const DEFAULT_MAX_PIXELS: u64 = 8192 * 4096;
+
+/// [`DEFAULT_MAX_PIXELS`], or `REFRAKT_ENV_MAX_PIXELS` when it is set to a number.
+fn max_pixels() -> Result<u64> {
+    match std::env::var("REFRAKT_ENV_MAX_PIXELS") {
+        Ok(v) if !v.is_empty() => v.trim().parse::<u64>().map_err(|_| {
+            anyhow::anyhow!(
+                "REFRAKT_ENV_MAX_PIXELS={:?}: not a whole number of pixels",
+                v.chars().take(40).collect::<String>()
+            )
+        }),
+        _ => Ok(DEFAULT_MAX_PIXELS),
+    }
+}
+
+/// Refuses, from the header, a map of more pixels than [`max_pixels`] allows: before
+/// anything of its size is decoded or allocated.
+fn check_pixels(w: u64, h: u64, origin: &str) -> Result<()> {
+    let max = max_pixels()?;
+    ensure!(
+        w.saturating_mul(h) <= max,
+        "environment map {origin}: {w}x{h} is {} Mpixels, more than the limit of {} Mpixels \
+         (about 64 bytes per pixel on the host while loading); scale it down (2:1, e.g. \
+         8192x4096) or raise the limit with REFRAKT_ENV_MAX_PIXELS={}",
+        (w * h) as f64 / 1e6,
+        max as f64 / 1e6,
+        w * h
+    );
     Ok(())
 }
 
