@@ -438,3 +438,63 @@ fn an_environment_map_beyond_the_pixel_limit_is_refused_from_its_header() {
         stderr(&o)
     );
 }
+
+/// Item 5: `photons --step 1e-6` (10¹⁵ steps) is refused at once with its estimate and
+/// the flag that raises the limit; a small job is refused under a limit below its
+/// estimate and runs under one above it. Item 6: a flag the tracer does not read
+/// (`--model ea`, `--env`) is refused, not ignored.
+#[test]
+fn photon_jobs_are_bounded_and_refuse_flags_they_do_not_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("p.exr");
+    let o = out.to_str().unwrap();
+    let t = std::time::Instant::now();
+    let huge = refrakt(&["photons", "--plane", "3", "--step", "1e-6", "-o", o]);
+    let seconds = t.elapsed().as_secs_f64();
+    let err = stderr(&huge);
+    assert!(!huge.status.success(), "--step 1e-6 ran: {err}");
+    assert!(
+        err.contains("RK4 steps") && err.contains("--max-steps"),
+        "the estimate and the limit's flag are not named: {err}"
+    );
+    assert!(seconds < 10.0, "refused after {seconds:.1} s");
+    assert!(!out.exists(), "a refused job wrote {o}");
+    let small = |max: &str| {
+        refrakt(&[
+            "photons",
+            "--plane",
+            "3",
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--photons-per-pixel",
+            "4",
+            "--max-steps",
+            max,
+            "-o",
+            o,
+        ])
+    };
+    let refused = small("1000");
+    assert!(!refused.status.success(), "1000 steps allowed a 16x16 job");
+    assert!(
+        stderr(&refused).contains("exceed the limit of"),
+        "{}",
+        stderr(&refused)
+    );
+    let ran = small("1e9");
+    assert!(ran.status.success(), "1e9 steps: {}", stderr(&ran));
+    assert!(out.exists());
+    for flag in [&["--model", "ea"][..], &["--env", "none"][..]] {
+        let mut args = vec!["photons", "--plane", "3", "-o", o];
+        args.extend(flag);
+        let r = refrakt(&args);
+        assert!(!r.status.success(), "{flag:?} accepted");
+        assert!(
+            stderr(&r).contains(&format!("{} does not apply", flag[0])),
+            "{flag:?}: {}",
+            stderr(&r)
+        );
+    }
+}

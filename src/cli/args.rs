@@ -140,7 +140,9 @@ pub struct AmbientArgs {
     /// this table).
     #[arg(long, value_name = "FILE")]
     pub out: Option<PathBuf>,
-    /// Rebuild the table even if it is cached.
+    /// Rebuild the table even if it is cached, and let --out replace an existing file
+    /// that is not an ambient table (without --force such a file is refused before the
+    /// build; a table file of other parameters is replaced either way).
     #[arg(long)]
     pub force: bool,
 }
@@ -726,6 +728,10 @@ pub struct PhotonsArgs {
     /// Worker threads [default: all cores].
     #[arg(long)]
     pub threads: Option<usize>,
+    /// Refuse a job of more RK4 steps than this, estimated before tracing (photons ×
+    /// straight path / step); the default is about 40 minutes on 2 cores.
+    #[arg(long, value_name = "N", default_value_t = refrakt::photons::PhotonOptions::DEFAULT_MAX_STEPS)]
+    pub max_steps: f64,
     #[command(flatten)]
     pub scene: SceneArgs,
 }

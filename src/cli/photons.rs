@@ -2,7 +2,7 @@
 
 use std::process::ExitCode;
 
-use anyhow::{bail, Result};
+use anyhow::{bail, ensure, Result};
 
 use refrakt::output;
 use refrakt::scene::LoadedScene;
@@ -20,13 +20,20 @@ pub fn photons(args: &PhotonsArgs) -> Result<ExitCode> {
         );
     }
     output::format_for(&args.output)?;
+    refuse_unused_flags(&args.scene)?;
     let popts = PhotonOptions {
         photons_per_pixel: args.photons_per_pixel,
         step: args.step,
         seed: args.seed,
         jitter: args.jitter,
         threads: args.threads.unwrap_or(0),
+        max_steps: Some(args.max_steps),
     };
+    ensure!(
+        args.max_steps.is_finite() && args.max_steps > 0.0,
+        "--max-steps {}: must be a positive number",
+        args.max_steps
+    );
     popts.validate()?;
     let scene = scene_from_args(&args.scene)?;
     let data_dir = data_dir(&args.scene);
@@ -45,7 +52,21 @@ pub fn photons(args: &PhotonsArgs) -> Result<ExitCode> {
         (None, Some(z)) => z,
         (None, None) => bail!("give --plane K or --depth Z"),
     };
-    let img = photons::trace_irradiance(&volume, &tf, &camera, &opts, depth, &popts)?;
+    // Rows of photons done, on a terminal only (indicatif draws nothing otherwise).
+    let bar = indicatif::ProgressBar::new(0);
+    if let Ok(style) = indicatif::ProgressStyle::with_template(
+        "tracing photons {bar:30} {pos}/{len} rows ({elapsed}, ETA {eta})",
+    ) {
+        bar.set_style(style);
+    }
+    let progress = |done: u64, rows: u64| {
+        bar.set_length(rows);
+        bar.set_position(done);
+    };
+    let img = photons::trace_irradiance_with_progress(
+        &volume, &tf, &camera, &opts, depth, &popts, &progress,
+    )?;
+    bar.finish_and_clear();
     output::write_pixels(img.width, img.height, &img.pixels, &args.output)?;
     println!(
         "irradiance of the {} scene ({}x{}x{}, transfer functions {}) on the plane at view \
@@ -65,4 +86,47 @@ pub fn photons(args: &PhotonsArgs) -> Result<ExitCode> {
     println!("{}", img.summary());
     println!("wrote {}", args.output.display());
     Ok(ExitCode::SUCCESS)
+}
+
+/// The scene flags the photon tracer does not read (it traces the refractive model's
+/// light through the volume and its η; no viewing rays, surfaces, environment or tone
+/// mapping): refused, as `render` refuses flags of another model, rather than ignored.
+fn refuse_unused_flags(a: &SceneArgs) -> Result<()> {
+    let unused: Vec<&str> = [
+        ("--model", a.model.is_some()),
+        ("--no-preintegration", a.no_preintegration),
+        ("--background", a.background.is_some()),
+        ("--ao-radius", a.ao_radius.is_some()),
+        ("--ao-diffuse", a.ao_diffuse.is_some()),
+        ("--g", a.g.is_some()),
+        ("--albedo", a.albedo.is_some()),
+        ("--ambient-radius", a.ambient_radius.is_some()),
+        ("--add-light", !a.add_light.is_empty()),
+        ("--ambient-table", a.ambient_table.is_some()),
+        ("--softness", a.softness.is_some()),
+        ("--roughness", a.roughness.is_some()),
+        ("--specular", a.specular.is_some()),
+        ("--light-transport", a.light_transport.is_some()),
+        ("--light-rays", a.light_rays.is_some()),
+        ("--light-spacing", a.light_spacing.is_some()),
+        ("--reflections", a.reflections.is_some()),
+        ("--clip", a.clip.is_some()),
+        ("--env", a.env.is_some()),
+        ("--env-rotation", a.env_rotation.is_some()),
+        ("--exposure", a.exposure.is_some()),
+        ("--tonemap", a.tonemap.is_some()),
+    ]
+    .into_iter()
+    .filter_map(|(flag, given)| given.then_some(flag))
+    .collect();
+    if !unused.is_empty() {
+        bail!(
+            "{} {} not apply to the photon tracer (it traces the refractive model's light \
+             through the volume onto one plane, with the scene's volume, transfer functions, \
+             camera, image size, sample distance, light and --eta-scale)",
+            unused.join(", "),
+            if unused.len() == 1 { "does" } else { "do" }
+        );
+    }
+    Ok(())
 }

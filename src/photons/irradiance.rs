@@ -13,6 +13,20 @@ pub fn trace_irradiance(
     depth: f32,
     popts: &PhotonOptions,
 ) -> Result<PhotonImage> {
+    trace_irradiance_with_progress(volume, tf, camera, opts, depth, popts, &|_, _| {})
+}
+
+/// [`trace_irradiance`], calling `progress(rows done, rows)` as launch rows finish (from
+/// the worker threads).
+pub fn trace_irradiance_with_progress(
+    volume: &Volume,
+    tf: &TransferFunctions,
+    camera: &Camera,
+    opts: &RenderOptions,
+    depth: f32,
+    popts: &PhotonOptions,
+    progress: &(dyn Fn(u64, u64) + Sync),
+) -> Result<PhotonImage> {
     popts.validate()?;
     let planes = planes(volume, camera, opts)?;
     let field = Field::new(volume, tf, opts)?;
@@ -87,13 +101,27 @@ pub fn trace_irradiance(
         "{} photons are too many; use fewer photons per pixel or a smaller image",
         cols * rows
     );
+    let step = popts.step as f64 * field.ref_step;
+    // The work, estimated before any of it: each photon's straight path from the launch
+    // plane to the target plane, in steps (refraction bends it, total reflection and
+    // absorption end it early; the estimate is for the order of magnitude).
+    let steps = (cols * rows) as f64 * ((z_k - z_l) / d.z / step).ceil().max(1.0);
+    if let Some(max) = popts.max_steps {
+        ensure!(
+            steps <= max,
+            "{} photons of about {:.0} steps each, {steps:.2e} RK4 steps in all, exceed the \
+             limit of {max:.1e} (10¹² is about 40 min on 2 cores); use a larger --step, fewer \
+             --photons-per-pixel or a smaller image, or raise it with --max-steps",
+            cols * rows,
+            steps / (cols * rows) as f64
+        );
+    }
     let colour = opts.sweep.light.colour.map(|c| c as f64);
     let cell = dx * dy;
     let target = Target {
         n: forward,
         c: z_k + forward.dot(eye),
     };
-    let step = popts.step as f64 * field.ref_step;
     let threads = if popts.threads > 0 {
         popts.threads
     } else {
@@ -126,6 +154,7 @@ pub fn trace_irradiance(
             if r >= rows {
                 break;
             }
+            progress(r, rows);
             let j = j0 + r as i64;
             for c in 0..cols {
                 let i = i0 + c as i64;
