@@ -31,7 +31,8 @@ fn main() -> ExitCode {
                 .map(str::trim)
                 .filter(|l| !l.is_empty() && !l.starts_with("For more information"))
                 .collect();
-            eprintln!("{} (see --help)", message.join(" ").trim_end_matches('.'));
+            let line = format!("{} (see --help)", message.join(" ").trim_end_matches('.'));
+            eprintln!("{}", one_line(&line, MAX_ERROR_CHARS));
             return ExitCode::from(2);
         }
         Err(e) => e.exit(),
@@ -39,13 +40,15 @@ fn main() -> ExitCode {
     match run(cli) {
         Ok(code) => code,
         Err(e) => {
-            eprintln!("error: {}", one_line(&format!("{e:#}"), MAX_ERROR_CHARS));
+            let prefix = "error: ";
+            let line = one_line(&format!("{e:#}"), MAX_ERROR_CHARS - prefix.len());
+            eprintln!("{prefix}{line}");
             ExitCode::FAILURE
         }
     }
 }
 
-/// Longest error line printed: the start (file and reason) and the end (a parser's
+/// Longest error line printed, whole (issue 33): the start (file and reason) and the end (a parser's
 /// "expected ...") survive; what a parser quotes of a garbage file in between is cut.
 const MAX_ERROR_CHARS: usize = 400;
 
@@ -74,10 +77,13 @@ fn one_line(msg: &str, max: usize) -> String {
     if chars.len() <= max {
         return flat;
     }
-    let (head, tail) = (max * 3 / 4, max / 4);
+    // The marker is counted in `max`: the line, cut, is at most `max` characters.
+    let marker = |cut: usize| format!(" [... {cut} characters cut ...] ");
+    let keep = max.saturating_sub(marker(chars.len()).chars().count());
+    let (head, tail) = (keep * 3 / 4, keep - keep * 3 / 4);
     let cut = chars.len() - head - tail;
     let mut out: String = chars[..head].iter().collect();
-    out.push_str(&format!(" [... {cut} characters cut ...] "));
+    out.push_str(&marker(cut));
     out.extend(&chars[chars.len() - tail..]);
     out
 }
@@ -115,7 +121,11 @@ mod tests {
         );
         let long = format!("f.toml: {} expected a table", "z".repeat(1_000_000));
         let l = one_line(&long, 400);
-        assert!(l.len() < 450 && !l.contains('\n'), "{}", l.len());
+        assert!(
+            l.chars().count() <= 400 && !l.contains('\n'),
+            "{}",
+            l.chars().count()
+        );
         assert!(
             l.starts_with("f.toml: zz") && l.ends_with("expected a table"),
             "{l}"

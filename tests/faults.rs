@@ -498,3 +498,122 @@ fn photon_jobs_are_bounded_and_refuse_flags_they_do_not_read() {
         );
     }
 }
+
+/// Item 6: every refusal is one line of at most 400 characters, whole ("error: "
+/// included), whatever the input echoes: NUL bytes from an NRRD header, a 10 MB key in a
+/// scene file, a 10 MB scene name, a 300-character file name, a 100 kB flag value.
+#[test]
+fn refusals_are_one_line_of_at_most_400_characters() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name);
+    let mut nrrd = b"NRRD0004\ntype: ".to_vec();
+    nrrd.extend(vec![0u8; 2000]);
+    nrrd.extend(b"\ndimension: 3\n\n");
+    std::fs::write(p("nul.nrrd"), &nrrd).unwrap();
+    let key = format!("[volume]\n{} = 1\n", "k".repeat(10 << 20));
+    std::fs::write(p("key.toml"), key).unwrap();
+    let name = format!(
+        "name = \"{}\"\n[volume]\nbuiltin = \"shell\"\nsize = 16\n",
+        "n".repeat(10 << 20)
+    );
+    std::fs::write(p("name.toml"), name).unwrap();
+    let long = p(&format!("{}.nrrd", "f".repeat(300)));
+    let value = "v".repeat(100_000);
+    let cases: Vec<(String, Vec<String>)> = vec![
+        (
+            "NUL bytes".into(),
+            vec![p("nul.nrrd").display().to_string()],
+        ),
+        (
+            "a 10 MB key".into(),
+            vec![p("key.toml").display().to_string()],
+        ),
+        (
+            "a 10 MB name".into(),
+            vec![p("name.toml").display().to_string()],
+        ),
+        (
+            "300-character name".into(),
+            vec![long.display().to_string()],
+        ),
+        ("a 100 kB flag value".into(), vec!["--model".into(), value]),
+    ];
+    for (what, scene) in cases {
+        let mut args = vec!["render".to_string()];
+        args.extend(scene);
+        args.extend(["-o".into(), p("x.png").display().to_string()]);
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let o = refrakt(&args);
+        let err = stderr(&o);
+        assert!(!o.status.success(), "{what}: exit 0");
+        let lines: Vec<&str> = err.lines().collect();
+        assert_eq!(lines.len(), 1, "{what}: {} lines", lines.len());
+        let n = lines[0].chars().count();
+        assert!(n <= 400, "{what}: {n} characters: {}", lines[0]);
+        assert!(!lines[0].contains('\0'), "{what}: a NUL byte printed");
+        assert!(
+            o.stdout.len() < 4096,
+            "{what}: {} bytes on stdout",
+            o.stdout.len()
+        );
+    }
+}
+
+/// Item 6: errors that come from what a scene file says name the file, wherever they are
+/// found (a zero volume size, scale = inf, a camera inside the volume); `--dims` on a
+/// NIfTI file says what the file is instead of calling it raw.
+#[test]
+fn errors_from_a_scene_file_name_it_and_say_the_true_reason() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.png");
+    for (what, text, reason) in [
+        (
+            "size 0",
+            "[volume]\nbuiltin = \"shell\"\nsize = 0\n",
+            "volume size 0",
+        ),
+        (
+            "scale inf",
+            "[volume]\nbuiltin = \"glass\"\nscale = inf\n",
+            "scale inf",
+        ),
+        (
+            "camera inside",
+            "[volume]\nbuiltin = \"shell\"\nsize = 16\n[camera]\ndistance = 0.1\n",
+            "camera outside the volume",
+        ),
+    ] {
+        let scene = dir.path().join("bad-scene.toml");
+        std::fs::write(&scene, text).unwrap();
+        let o = refrakt(&[
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        let err = stderr(&o);
+        assert!(!o.status.success(), "{what}: exit 0");
+        assert!(
+            err.contains("bad-scene.toml") && err.contains(reason),
+            "{what}: the scene file or the reason is not named: {err}"
+        );
+    }
+    let nii = dir.path().join("head.nii");
+    std::fs::write(&nii, vec![0u8; 400]).unwrap();
+    let o = refrakt(&[
+        "render",
+        nii.to_str().unwrap(),
+        "--dims",
+        "4,4,4",
+        "--type",
+        "u8",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let err = stderr(&o);
+    assert!(!o.status.success(), "--dims on a .nii: exit 0");
+    assert!(
+        err.contains("NIfTI") && !err.contains("raw file of"),
+        "--dims on a .nii: {err}"
+    );
+}

@@ -241,6 +241,16 @@ impl SceneFile {
         }
         o.upright = v.upright;
         if let Some(n) = self.name {
+            // The name is printed with every render: bounded, one line.
+            let chars = n.chars().count();
+            ensure!(
+                chars <= 200,
+                "name: {chars} characters; at most 200 (it is printed with every render)"
+            );
+            ensure!(
+                !n.chars().any(char::is_control),
+                "name: control characters (a line break, a tab, NUL) are not allowed"
+            );
             s.name = n;
         } else if let Some(stem) = path.file_stem() {
             s.name = stem.to_string_lossy().into_owned();

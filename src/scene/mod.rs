@@ -552,6 +552,21 @@ impl Scene {
     /// Loads everything: volume, transfer functions, environment map; checks the options.
     /// `limits`: see [`Scene::load_volume`].
     pub fn load_all(&self, data_dir: &Path, limits: Option<DeviceLimits>) -> Result<LoadedScene> {
+        // An error from what a scene file says names the file (the volume's size, scale,
+        // the camera...), as the parser's errors do.
+        match &self.file {
+            Some(f) => self
+                .load_all_unnamed(data_dir, limits)
+                .with_context(|| format!("scene {}", f.display())),
+            None => self.load_all_unnamed(data_dir, limits),
+        }
+    }
+
+    fn load_all_unnamed(
+        &self,
+        data_dir: &Path,
+        limits: Option<DeviceLimits>,
+    ) -> Result<LoadedScene> {
         let opts = self.render_options()?;
         let tone = self.tone_map()?;
         let env = self.environment_map()?;
@@ -562,6 +577,16 @@ impl Scene {
             Some(self.transfer_functions()?)
         };
         let (volume, upright) = self.load_volume_noted(data_dir, limits)?;
+        if self.model == Model::Refract {
+            // The sweep's planes need the camera outside the box: said now, with the scene
+            // file named (load_all), not after the device has been set up.
+            let half = Vec3::from(volume.normalised_extent()) * 0.5;
+            crate::render::Planes::for_box(
+                &self.camera,
+                half,
+                opts.sample_distance * volume.min_voxel_size(),
+            )?;
+        }
         let (tf, mut notes) = self.check_data(&volume, tf);
         notes.extend(upright);
         let files = self.input_files(data_dir);

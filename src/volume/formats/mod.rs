@@ -163,6 +163,22 @@ fn load_inner(path: &Path, opts: &LoadOptions) -> Result<Volume> {
     );
     let volume = if let Some(layout) = &opts.raw {
         ensure!(!path.is_dir(), "is a directory, not a raw file");
+        // A layout describes a headerless file: a file with a header of its own would be
+        // read as bytes, its header taken for voxels.
+        let headered = match Format::of(path) {
+            Some(Format::Nrrd) => Some("an NRRD"),
+            Some(Format::Nifti) => Some("a NIfTI"),
+            Some(Format::MetaImage) => Some("a MetaImage"),
+            Some(Format::Vti) => Some("a VTK image (.vti)"),
+            Some(Format::Raw) | None => None,
+        };
+        if let Some(kind) = headered {
+            bail!(
+                "is {kind} file, whose header gives its size and voxel type: a raw layout \
+                 (--dims and --type, or dims and type in a scene) is for headerless raw \
+                 files only; drop it"
+            );
+        }
         raw::load(path, layout, opts)?
     } else if path.is_dir() {
         dicom::load_series(path, opts)?
