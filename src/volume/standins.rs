@@ -8,7 +8,12 @@
 //!
 //! Generation is seeded (integer hashing, no platform RNG), multi-threaded over z slabs,
 //! and cached on disk as `<name>_<X>x<Y>x<Z>_uint8.raw` (open-scivis naming) so that the
-//! 472 M voxels of the glass are paid for once.
+//! 472 M voxels of the glass are paid for once. The raw file stays a plain raw file any
+//! tool loads; beside it, `<raw file>.check` (a few lines of text, see [`Check`]) holds
+//! the format tag, `GENERATOR_VERSION`, the name, the dimensions, the byte count and a
+//! CRC-32 of the raw bytes. A cache whose check file is missing or names other
+//! parameters, or whose bytes do not match (corrupt, truncated), is reported in one line
+//! and regenerated (issue 33).
 
 use std::path::{Path, PathBuf};
 
@@ -153,12 +158,15 @@ pub fn scaled_dims(dims: [u32; 3], scale: f64) -> Result<[u32; 3]> {
 
 /// Where generated stand-ins are cached: `$REFRAKT_CACHE_DIR`, else
 /// `$XDG_CACHE_HOME/refrakt`, else `~/.cache/refrakt`; stand-ins go to `standins/` in it.
+/// An empty variable counts as unset (`REFRAKT_CACHE_DIR=""` once cached stand-ins in the
+/// working folder).
 pub fn cache_dir() -> PathBuf {
-    let base = if let Some(d) = std::env::var_os("REFRAKT_CACHE_DIR") {
+    let var = |k: &str| std::env::var_os(k).filter(|v| !v.is_empty());
+    let base = if let Some(d) = var("REFRAKT_CACHE_DIR") {
         PathBuf::from(d)
-    } else if let Some(d) = std::env::var_os("XDG_CACHE_HOME") {
+    } else if let Some(d) = var("XDG_CACHE_HOME") {
         PathBuf::from(d).join("refrakt")
-    } else if let Some(h) = std::env::var_os("HOME") {
+    } else if let Some(h) = var("HOME") {
         PathBuf::from(h).join(".cache/refrakt")
     } else {
         std::env::temp_dir().join("refrakt-cache")
@@ -174,22 +182,161 @@ pub fn cache_file(dir: &Path, name: &str, dims: [u32; 3]) -> PathBuf {
     ))
 }
 
-/// The stand-in `name` at `dims`, from the cache in `dir` when it is there, otherwise
-/// generated and written to it (atomically, so an interrupted run leaves no partial file).
-/// Returns the volume and whether it came from the cache.
+/// The check file beside a cached stand-in: the raw file's name with `.check` appended.
+pub fn check_file(raw: &Path) -> PathBuf {
+    let mut name = raw.as_os_str().to_owned();
+    name.push(".check");
+    PathBuf::from(name)
+}
+
+/// The first line of a check file.
+const CHECK_TAG: &str = "refrakt stand-in check 1";
+
+/// What a stand-in's check file records (text, one `key value` per line after the tag):
+///
+/// ```text
+/// refrakt stand-in check 1
+/// generator 1
+/// name hand
+/// dims 244 124 257
+/// bytes 7775712
+/// crc32 1a2b3c4d
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct Check {
+    pub generator: u32,
+    pub name: String,
+    pub dims: [u32; 3],
+    pub bytes: u64,
+    pub crc32: u32,
+}
+
+impl Check {
+    /// The check of `voxels`, the stand-in `name` at `dims` of this build's generators.
+    pub fn of(name: &str, dims: [u32; 3], voxels: &[u8]) -> Self {
+        Self {
+            generator: GENERATOR_VERSION,
+            name: name.to_string(),
+            dims,
+            bytes: voxels.len() as u64,
+            crc32: crc32fast::hash(voxels),
+        }
+    }
+
+    pub fn to_text(&self) -> String {
+        let [x, y, z] = self.dims;
+        format!(
+            "{CHECK_TAG}\ngenerator {}\nname {}\ndims {x} {y} {z}\nbytes {}\ncrc32 {:08x}\n",
+            self.generator, self.name, self.bytes, self.crc32
+        )
+    }
+
+    /// Parses [`Check::to_text`]'s output; the error says what is wrong.
+    pub fn parse(text: &str) -> Result<Self> {
+        let mut lines = text.lines();
+        if lines.next() != Some(CHECK_TAG) {
+            bail!("the check file does not start with \"{CHECK_TAG}\"");
+        }
+        let mut field = |key: &str| -> Result<&str> {
+            match lines.next().and_then(|l| l.strip_prefix(key)) {
+                Some(v) if v.starts_with(' ') => Ok(v.trim()),
+                _ => bail!("the check file has no '{key}' line where expected"),
+            }
+        };
+        let bad = |key: &str| format!("the check file's '{key}' is not a number");
+        let generator = field("generator")?
+            .parse()
+            .with_context(|| bad("generator"))?;
+        let name = field("name")?.to_string();
+        let d: Vec<u32> = field("dims")?
+            .split_whitespace()
+            .map(str::parse)
+            .collect::<Result<_, _>>()
+            .with_context(|| bad("dims"))?;
+        let dims: [u32; 3] = d
+            .try_into()
+            .map_err(|_| anyhow::anyhow!("the check file's 'dims' are not three numbers"))?;
+        let bytes = field("bytes")?.parse().with_context(|| bad("bytes"))?;
+        let crc32 = u32::from_str_radix(field("crc32")?, 16).with_context(|| bad("crc32"))?;
+        Ok(Self {
+            generator,
+            name,
+            dims,
+            bytes,
+            crc32,
+        })
+    }
+}
+
+/// The cached voxels of `name` at `dims` if `raw` and its check file agree with each other
+/// and with this build; `Ok(None)` when nothing is cached (no raw file); else the reason.
+fn read_cached(raw: &Path, name: &str, dims: [u32; 3]) -> Result<Option<Vec<u8>>> {
+    let bytes = match std::fs::read(raw) {
+        Ok(b) => b,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => bail!("cannot read it: {e}"),
+    };
+    let check_path = check_file(raw);
+    let text = match std::fs::read(&check_path) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            bail!("no check file ({} is missing)", file_name(&check_path))
+        }
+        Err(e) => bail!("cannot read {}: {e}", file_name(&check_path)),
+    };
+    let check = Check::parse(&String::from_utf8_lossy(&text))?;
+    let want = Check::of(name, dims, &[]);
+    if check.generator != want.generator {
+        bail!(
+            "made by generator version {}, this build's is {}",
+            check.generator,
+            want.generator
+        );
+    }
+    if check.name != want.name || check.dims != want.dims {
+        let [x, y, z] = check.dims;
+        bail!(
+            "the check file is for {} at {x}x{y}x{z}",
+            check.name.chars().take(40).collect::<String>()
+        );
+    }
+    let n = dims.iter().map(|&d| d as u64).product::<u64>();
+    if check.bytes != n {
+        bail!("the check file says {} bytes, expected {n}", check.bytes);
+    }
+    if bytes.len() as u64 != n {
+        bail!("{} bytes, expected {n} (truncated or padded)", bytes.len());
+    }
+    let crc = crc32fast::hash(&bytes);
+    if crc != check.crc32 {
+        bail!(
+            "corrupt: the voxels do not match their checksum (CRC-32 {crc:08x}, the check \
+             file says {:08x})",
+            check.crc32
+        );
+    }
+    Ok(Some(bytes))
+}
+
+fn file_name(p: &Path) -> String {
+    p.file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| p.display().to_string())
+}
+
+/// The stand-in `name` at `dims`, from the cache in `dir` when it is there and passes its
+/// check (see the module documentation), otherwise generated and written to it: the raw
+/// file, then its check file, each atomically (an interrupted run leaves no partial file,
+/// and a raw file without its check is regenerated). A cache that fails the check is
+/// reported in one line ("stand-in cache FILE: REASON; regenerating"). Returns the volume
+/// and whether it came from the cache.
 pub fn load_or_generate(name: &str, dims: [u32; 3], dir: &Path) -> Result<(Volume, bool)> {
     dataset(name)?;
     let file = cache_file(dir, name, dims);
-    let n = dims.iter().map(|&d| d as usize).product::<usize>();
-    if let Ok(bytes) = std::fs::read(&file) {
-        if bytes.len() == n {
-            return Ok((Volume::new(dims, [1.0; 3], Voxels::U8(bytes))?, true));
-        }
-        log::warn!(
-            "{}: {} bytes, expected {n}; regenerating",
-            file.display(),
-            bytes.len()
-        );
+    match read_cached(&file, name, dims) {
+        Ok(Some(bytes)) => return Ok((Volume::new(dims, [1.0; 3], Voxels::U8(bytes))?, true)),
+        Ok(None) => {}
+        Err(e) => log::warn!("stand-in cache {}: {e:#}; regenerating", file.display()),
     }
     let vol = generate(name, dims)?;
     std::fs::create_dir_all(dir)
@@ -198,6 +345,8 @@ pub fn load_or_generate(name: &str, dims: [u32; 3], dir: &Path) -> Result<(Volum
         unreachable!("stand-ins are u8")
     };
     crate::files::write_atomically(&file, bytes)?;
+    let check = Check::of(name, dims, bytes);
+    crate::files::write_atomically(&check_file(&file), check.to_text().as_bytes())?;
     Ok((vol, false))
 }
 
@@ -565,5 +714,66 @@ mod tests {
         assert!(scaled_dims([4, 4, 4], 0.0).is_err());
         assert!(scaled_dims([4, 4, 4], f64::NAN).is_err());
         assert!(load_or_generate("teapot", dims, dir.path()).is_err());
+    }
+
+    #[test]
+    fn a_cache_that_fails_its_check_is_regenerated() {
+        let dir = tempfile::tempdir().unwrap();
+        let dims = [20, 10, 21];
+        let (clean, _) = load_or_generate("hand", dims, dir.path()).unwrap();
+        let raw = cache_file(dir.path(), "hand", dims);
+        let check = check_file(&raw);
+        let (raw0, check0) = (std::fs::read(&raw).unwrap(), std::fs::read(&check).unwrap());
+        let text = String::from_utf8(check0.clone()).unwrap();
+        assert_eq!(Check::parse(&text).unwrap(), Check::of("hand", dims, &raw0));
+        assert!(text.starts_with(CHECK_TAG), "{text}");
+        let n = raw0.len();
+        let mut quarter = raw0.clone();
+        quarter[..n / 4].fill(255);
+        let cases: Vec<(Vec<u8>, Option<String>, &str)> = vec![
+            (quarter, Some(text.clone()), "checksum"),
+            (vec![0; n], Some(text.clone()), "checksum"),
+            (raw0[..n - 1].to_vec(), Some(text.clone()), "truncated"),
+            (raw0.clone(), None, "no check file"),
+            (
+                raw0.clone(),
+                Some(text.replace("generator 1", "generator 2")),
+                "generator",
+            ),
+            (
+                raw0.clone(),
+                Some(text.replace("name hand", "name kiwi")),
+                "kiwi",
+            ),
+            (
+                raw0.clone(),
+                Some(text.replace("dims 20", "dims 21")),
+                "21x10x21",
+            ),
+            (
+                raw0.clone(),
+                Some(text.replace("bytes ", "bytes 1")),
+                "bytes",
+            ),
+            (raw0.clone(), Some("garbage".into()), "does not start"),
+        ];
+        for (bytes, check_text, reason) in cases {
+            std::fs::write(&raw, &bytes).unwrap();
+            match &check_text {
+                Some(t) => std::fs::write(&check, t).unwrap(),
+                None => std::fs::remove_file(&check).unwrap(),
+            }
+            let e = format!("{:#}", read_cached(&raw, "hand", dims).unwrap_err());
+            assert!(e.contains(reason), "{reason}: {e}");
+            let (v, cached) = load_or_generate("hand", dims, dir.path()).unwrap();
+            assert!(!cached, "{reason}: used");
+            assert_eq!(v, clean, "{reason}");
+            assert_eq!(std::fs::read(&raw).unwrap(), raw0, "{reason}");
+            assert_eq!(std::fs::read(&check).unwrap(), check0, "{reason}");
+            assert!(load_or_generate("hand", dims, dir.path()).unwrap().1);
+        }
+        // Nothing cached: no reason, just generated.
+        std::fs::remove_file(&raw).unwrap();
+        assert!(read_cached(&raw, "hand", dims).unwrap().is_none());
     }
 }
