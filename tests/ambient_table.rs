@@ -596,7 +596,8 @@ fn save_load_corrupt_files_and_the_cache() {
     let mut nan = bytes.clone();
     let n = nan.len();
     nan[n - 4..].copy_from_slice(&f32::NAN.to_le_bytes());
-    corrupt("not finite", &nan, "not finite");
+    // Caught by the checksum (format version 2) before the finiteness check.
+    corrupt("not finite", &nan, "does not match its checksum");
     // A file of other parameters under this name is rebuilt too.
     let q = TableParams { seed: 99, ..p };
     build(&q).save(&file).unwrap();

@@ -12,6 +12,8 @@ use refrakt::render::ambient::table::{self, AmbientTable, Source, TableParams};
 /// where it came from.
 pub fn table_for(file: Option<&Path>, albedo: f32, quiet: bool) -> Result<(AmbientTable, String)> {
     if let Some(f) = file {
+        // The user's file: one that fails its check (checksum, size, version) is an
+        // error naming it, never rebuilt or replaced.
         let t = AmbientTable::load(f)?;
         ensure!(
             t.params.albedo == albedo,
@@ -42,6 +44,9 @@ pub fn table_for(file: Option<&Path>, albedo: f32, quiet: bool) -> Result<(Ambie
         bar.set_length(total);
         bar.set_position(done);
     };
+    // The implicit cache: a damaged table there is rebuilt; a table that cannot be
+    // written there is only a warning (rendering is this command's job, not caching;
+    // `precompute ambient`, whose job the file is, fails instead).
     let (t, source) = table::load_or_build(&params, None, 0, &progress)?;
     bar.finish_and_clear();
     let line = match source {

@@ -1,13 +1,20 @@
 //! `refrakt precompute ambient`: build (or find) the ambient-scattering light-transport
 //! table and report its build time and Monte-Carlo errors.
+//!
+//! Writing the table is this job, so it fails when it cannot (issue 33): the target is
+//! checked before the build (minutes at the default size): a folder, a folder that cannot
+//! be made or written to, or an `--out` file that is not an ambient table (someone
+//! else's: no table header) is refused, the last unless `--force`. A table file made with
+//! other parameters, of another format version or corrupt is ours and is replaced (said
+//! in one line). A write that fails after the build fails the command.
 
 use std::io::IsTerminal;
 use std::process::ExitCode;
 
-use anyhow::Result;
+use anyhow::{bail, Result};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
-use refrakt::render::ambient::table::{self, Source, TableParams};
+use refrakt::render::ambient::table::{self, AmbientTable, Existing, Source, TableParams};
 
 use super::args::AmbientArgs;
 
@@ -32,6 +39,35 @@ pub fn ambient(args: &AmbientArgs) -> Result<ExitCode> {
         Some(p) => p.clone(),
         None => table::cache_dir(args.cache_dir.as_deref())?.join(params.file_name()),
     };
+    // Before the build: can the table be written there, and whose file is there now?
+    let existing = table::check_target(&params, &path)?;
+    let cached = match existing {
+        Existing::Table(t) if !args.force => Some(t),
+        Existing::Foreign if args.out.is_some() && !args.force => bail!(
+            "{}: exists and is not an ambient table (no table header); not replacing it \
+             (--force replaces it)",
+            path.display()
+        ),
+        // A file under the table's own name in the cache folder is the cache's, whatever
+        // it holds now (zeroed, say): rebuilt.
+        Existing::Foreign => {
+            eprintln!(
+                "{}: not an ambient table; replacing it{}",
+                path.display(),
+                if args.out.is_some() {
+                    " (--force)"
+                } else {
+                    " (the cache's file)"
+                }
+            );
+            None
+        }
+        Existing::Stale(why) => {
+            eprintln!("{}: {why}; replacing it", path.display());
+            None
+        }
+        Existing::Table(_) | Existing::Nothing => None,
+    };
     let pb = if std::io::stderr().is_terminal() {
         let pb = ProgressBar::with_draw_target(Some(0), ProgressDrawTarget::stderr());
         pb.set_style(
@@ -49,7 +85,24 @@ pub fn ambient(args: &AmbientArgs) -> Result<ExitCode> {
         pb.set_length(total);
         pb.set_position(done);
     };
-    let (t, source) = table::load_or_build_file(&params, &path, args.force, threads, &progress)?;
+    let (t, source) = match cached {
+        Some(t) => (t, Source::Cached(path.clone())),
+        None => {
+            let t = AmbientTable::build(&params, threads, &progress)?;
+            pb.finish_and_clear();
+            // The job's output: a failed write fails the command (the table is lost; the
+            // error names the file and the reason).
+            t.save(&path)?;
+            let seconds = t.build_seconds;
+            (
+                t,
+                Source::Built {
+                    seconds,
+                    written: Some(path.clone()),
+                },
+            )
+        }
+    };
     pb.finish_and_clear();
     let p = &t.params;
     println!(

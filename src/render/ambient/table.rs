@@ -86,10 +86,24 @@ use std::time::Instant;
 use anyhow::{anyhow, bail, ensure, Context, Result};
 
 /// Version of the file format and of the estimator; part of the cache file's name.
-pub const FORMAT_VERSION: u32 = 1;
-const MAGIC: [u8; 8] = *b"RFKAMBT\0";
-/// Bytes before the arrays: magic, version, the parameters and the build's seconds.
-const HEADER_BYTES: usize = 8 + 4 + 4 + 4 * 3 + 4 + 4 + 8 + 8;
+/// Version 2: the header ends with a CRC-32 of the rest of the file (issue 33).
+pub const FORMAT_VERSION: u32 = 2;
+/// The first bytes of every table file: what marks a file as ours.
+pub const MAGIC: [u8; 8] = *b"RFKAMBT\0";
+/// Bytes before the arrays: magic, version, the parameters, the build's seconds and the
+/// checksum.
+const HEADER_BYTES: usize = 8 + 4 + 4 + 4 * 3 + 4 + 4 + 8 + 8 + 4;
+/// Where the checksum sits: the header's last four bytes.
+const CRC_AT: usize = HEADER_BYTES - 4;
+
+/// CRC-32 (IEEE) of a file's bytes without its checksum field: the header before it and
+/// every array after it.
+fn checksum(bytes: &[u8]) -> u32 {
+    let mut h = crc32fast::Hasher::new();
+    h.update(&bytes[..CRC_AT]);
+    h.update(&bytes[HEADER_BYTES..]);
+    h.finalize()
+}
 
 /// The anisotropy axis' ends.
 pub const G_MIN: f32 = -0.99;
@@ -203,6 +217,33 @@ impl TableParams {
     pub fn g_coord(&self, g: f32) -> f32 {
         let n = (self.g_bins - 1) as f32;
         ((g - G_MIN) / (G_MAX - G_MIN) * n).clamp(0.0, n)
+    }
+
+    /// The parameters where `self` differs from `wanted`, e.g. "seed 1, wanted 3".
+    pub fn differences(&self, wanted: &TableParams) -> String {
+        let (a, b) = (self, wanted);
+        let mut d = Vec::new();
+        let mut add = |name: &str, x: String, y: String| {
+            if x != y {
+                d.push(format!("{name} {x}, wanted {y}"));
+            }
+        };
+        add("albedo", a.albedo.to_string(), b.albedo.to_string());
+        add(
+            "theta bins",
+            a.theta_bins.to_string(),
+            b.theta_bins.to_string(),
+        );
+        add(
+            "extinction bins",
+            a.s_bins.to_string(),
+            b.s_bins.to_string(),
+        );
+        add("g bins", a.g_bins.to_string(), b.g_bins.to_string());
+        add("s_max", a.s_max.to_string(), b.s_max.to_string());
+        add("paths", a.paths.to_string(), b.paths.to_string());
+        add("seed", a.seed.to_string(), b.seed.to_string());
+        d.join("; ")
     }
 
     /// The cache file's name: every parameter and the format version.
@@ -448,6 +489,7 @@ impl AmbientTable {
         bytes.extend_from_slice(&p.paths.to_le_bytes());
         bytes.extend_from_slice(&p.seed.to_le_bytes());
         bytes.extend_from_slice(&self.build_seconds.to_le_bytes());
+        bytes.extend_from_slice(&[0; 4]); // the checksum, filled in below
         debug_assert_eq!(bytes.len(), HEADER_BYTES);
         for a in [
             &self.scattered,
@@ -459,6 +501,8 @@ impl AmbientTable {
                 bytes.extend_from_slice(&v.to_le_bytes());
             }
         }
+        let crc = checksum(&bytes);
+        bytes[CRC_AT..HEADER_BYTES].copy_from_slice(&crc.to_le_bytes());
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir)
                 .with_context(|| format!("{}: cannot create the folder", dir.display()))?;
@@ -468,8 +512,8 @@ impl AmbientTable {
     }
 
     /// Read a table written by [`AmbientTable::save`], checking the magic, version,
-    /// parameters, size and that every value is finite; errors name the file and the
-    /// reason.
+    /// parameters, size, the checksum (header and arrays) and that every value is finite;
+    /// errors name the file and the reason.
     pub fn load(path: &Path) -> Result<Self> {
         let bytes = std::fs::read(path)
             .map_err(|e| anyhow!("{}: cannot read the ambient table: {e}", path.display()))?;
@@ -508,6 +552,7 @@ impl AmbientTable {
         let paths = u32_(take(4));
         let seed = u64::from_le_bytes(take(8).try_into().expect("8 bytes"));
         let build_seconds = f64::from_le_bytes(take(8).try_into().expect("8 bytes"));
+        let stored_crc = u32_(take(4));
         let params = TableParams {
             albedo,
             theta_bins,
@@ -530,6 +575,12 @@ impl AmbientTable {
             theta_bins,
             s_bins,
             g_bins
+        );
+        let crc = checksum(bytes);
+        ensure!(
+            crc == stored_crc,
+            "corrupt: the payload does not match its checksum (CRC-32 {crc:08x}, the header \
+             says {stored_crc:08x})"
         );
         let mut arrays = Vec::with_capacity(4);
         let mut off = HEADER_BYTES;
@@ -581,7 +632,10 @@ pub fn cache_dir(dir: Option<&Path>) -> Result<PathBuf> {
 }
 
 /// The table of `params` from the cache (see [`cache_dir`]), else built and written there.
-/// A corrupt or mismatched file is reported as a warning and rebuilt.
+/// A corrupt (checksum), truncated or mismatched file is reported in one warning and
+/// rebuilt. A table that cannot be written is a warning too, not an error: this is the
+/// renderer's implicit cache, and rendering, not caching, is the caller's job (`refrakt
+/// precompute ambient`, whose job is the file, checks with [`check_target`] and fails).
 pub fn load_or_build(
     params: &TableParams,
     cache_dir: Option<&Path>,
@@ -590,33 +644,20 @@ pub fn load_or_build(
 ) -> Result<(AmbientTable, Source)> {
     params.validate()?;
     let path = self::cache_dir(cache_dir)?.join(params.file_name());
-    load_or_build_file(params, &path, false, threads, progress)
-}
-
-/// As [`load_or_build`] with the file named (`force`: rebuild even if it holds the table).
-pub fn load_or_build_file(
-    params: &TableParams,
-    path: &Path,
-    force: bool,
-    threads: usize,
-    progress: &(dyn Fn(u64, u64) + Sync),
-) -> Result<(AmbientTable, Source)> {
-    params.validate()?;
-    if !force && path.exists() {
-        match AmbientTable::load(path) {
-            Ok(t) if t.params == *params => return Ok((t, Source::Cached(path.to_path_buf()))),
+    if path.exists() {
+        match AmbientTable::load(&path) {
+            Ok(t) if t.params == *params => return Ok((t, Source::Cached(path))),
             Ok(t) => log::warn!(
-                "{}: made with other parameters ({:?}, wanted {:?}); rebuilding",
+                "{}: made with other parameters ({}); rebuilding",
                 path.display(),
-                t.params,
-                params
+                t.params.differences(params)
             ),
             Err(e) => log::warn!("{e:#}; rebuilding"),
         }
     }
     let table = AmbientTable::build(params, threads, progress)?;
-    let written = match table.save(path) {
-        Ok(()) => Some(path.to_path_buf()),
+    let written = match table.save(&path) {
+        Ok(()) => Some(path),
         Err(e) => {
             log::warn!("{e:#}; the table is not cached");
             None
@@ -624,6 +665,108 @@ pub fn load_or_build_file(
     };
     let seconds = table.build_seconds;
     Ok((table, Source::Built { seconds, written }))
+}
+
+/// What [`check_target`] found at a table's path.
+#[derive(Debug)]
+pub enum Existing {
+    /// No file: it will be made.
+    Nothing,
+    /// An intact table of the parameters asked for.
+    Table(AmbientTable),
+    /// An ambient table file (it starts with [`MAGIC`]) that is not usable for these
+    /// parameters, and why: other parameters, another format version, a checksum
+    /// mismatch, truncated (the reason, without the file's name). Ours to replace.
+    Stale(String),
+    /// A file that is not an ambient table (no [`MAGIC`]): someone else's.
+    Foreign,
+}
+
+/// Checks, before a (long) build, that a table for `params` can be written to `path`
+/// and says what is there now: an error if `path` is a folder, a link to nothing, or in
+/// a folder that cannot be created or written to (a probe file is made and removed).
+/// Links are followed (the table replaces the file a link points to).
+pub fn check_target(params: &TableParams, path: &Path) -> Result<Existing> {
+    let target = match std::fs::symlink_metadata(path) {
+        Ok(m) if m.file_type().is_symlink() => std::fs::canonicalize(path).map_err(|e| {
+            anyhow!(
+                "{}: is a link to a file that cannot be reached ({e})",
+                path.display()
+            )
+        })?,
+        _ => path.to_path_buf(),
+    };
+    let existing = match std::fs::metadata(&target) {
+        Ok(m) if m.is_dir() => bail!("{}: is a folder; give a file name", path.display()),
+        // A device or FIFO: never a table (not read: a FIFO would block).
+        Ok(m) if !m.is_file() => Existing::Foreign,
+        Ok(_) => {
+            use std::io::Read as _;
+            let mut head = Vec::with_capacity(MAGIC.len());
+            std::fs::File::open(&target)
+                .and_then(|f| f.take(MAGIC.len() as u64).read_to_end(&mut head))
+                .map_err(|e| anyhow!("{}: cannot read: {e}", path.display()))?;
+            if head != MAGIC {
+                Existing::Foreign
+            } else {
+                let bytes = std::fs::read(&target)
+                    .map_err(|e| anyhow!("{}: cannot read: {e}", path.display()))?;
+                match AmbientTable::parse(&bytes) {
+                    Ok(t) if t.params == *params => Existing::Table(t),
+                    Ok(t) => Existing::Stale(format!(
+                        "a table made with other parameters ({})",
+                        t.params.differences(params)
+                    )),
+                    Err(e) => Existing::Stale(format!("{e:#}")),
+                }
+            }
+        }
+        Err(e)
+            if matches!(
+                e.kind(),
+                std::io::ErrorKind::NotFound | std::io::ErrorKind::NotADirectory
+            ) =>
+        {
+            Existing::Nothing
+        }
+        Err(e) => bail!("{}: {e}", path.display()),
+    };
+    let dir = match target.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    std::fs::create_dir_all(&dir).map_err(|e| {
+        // A file where a folder should be: name it.
+        match dir.ancestors().find(|a| a.is_file()) {
+            Some(f) => anyhow!(
+                "{}: cannot create the folder {}: {} is a file",
+                path.display(),
+                dir.display(),
+                f.display()
+            ),
+            None => anyhow!(
+                "{}: cannot create the folder {}: {e}",
+                path.display(),
+                dir.display()
+            ),
+        }
+    })?;
+    // A device or FIFO is written in place (crate::files::write_atomically), so there is
+    // no folder to probe (and opening a FIFO would block); its write errors still fail.
+    if !std::fs::metadata(&target).is_ok_and(|m| !m.is_file()) {
+        tempfile::Builder::new()
+            .prefix(".refrakt-")
+            .suffix(".probe")
+            .tempfile_in(&dir)
+            .map_err(|e| {
+                anyhow!(
+                    "{}: cannot write in the folder {}: {e}",
+                    path.display(),
+                    dir.display()
+                )
+            })?;
+    }
+    Ok(existing)
 }
 
 /// Lower node and fraction of a continuous index on an axis of n nodes.
