@@ -617,3 +617,48 @@ fn errors_from_a_scene_file_name_it_and_say_the_true_reason() {
         "--dims on a .nii: {err}"
     );
 }
+
+/// Item 5: `precompute ambient --paths 4294967295` (1.6·10¹⁴ paths) is refused before any
+/// work with the estimate and the flag that raises the limit; a small table is refused
+/// under a limit below its paths and built under one above them.
+#[test]
+fn ambient_table_builds_are_bounded() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("t.bin");
+    let o = out.to_str().unwrap();
+    let t = std::time::Instant::now();
+    let huge = refrakt(&["precompute", "ambient", "--paths", "4294967295", "--out", o]);
+    let err = stderr(&huge);
+    assert!(!huge.status.success(), "4294967295 paths: exit 0");
+    assert!(
+        err.contains("1.56e14 paths") && err.contains("--max-paths"),
+        "the estimate and the limit's flag are not named: {err}"
+    );
+    assert!(t.elapsed().as_secs_f64() < 3.0, "refused late");
+    assert!(!out.exists());
+    // 2 x 2 x 2 entries x 16 paths = 128 paths.
+    let small = |max: &str| {
+        refrakt(&[
+            "precompute",
+            "ambient",
+            "--theta-bins",
+            "2",
+            "--extinction-bins",
+            "2",
+            "--g-bins",
+            "2",
+            "--paths",
+            "16",
+            "--max-paths",
+            max,
+            "--out",
+            o,
+        ])
+    };
+    let refused = small("127");
+    assert!(!refused.status.success(), "127 allowed 128 paths");
+    assert!(!out.exists());
+    let built = small("128");
+    assert!(built.status.success(), "128 paths: {}", stderr(&built));
+    assert!(out.exists());
+}

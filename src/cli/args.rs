@@ -132,6 +132,11 @@ pub struct AmbientArgs {
     /// Worker threads [default: all cores].
     #[arg(long)]
     pub threads: Option<usize>,
+    /// Refuse a table of more Monte-Carlo paths than this in all (θ bins × extinction bins
+    /// × g bins × --paths), before building; the default is about 40 minutes on 2 cores
+    /// (the default table, 3.0·10⁸ paths, about 70 s).
+    #[arg(long, value_name = "N", default_value_t = 1e10)]
+    pub max_paths: f64,
     /// Cache folder. Default: $REFRAKT_CACHE_DIR, else $XDG_CACHE_HOME/refrakt, else
     /// ~/.cache/refrakt.
     #[arg(long, value_name = "DIR")]
