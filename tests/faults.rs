@@ -662,3 +662,91 @@ fn ambient_table_builds_are_bounded() {
     assert!(built.status.success(), "128 paths: {}", stderr(&built));
     assert!(out.exists());
 }
+
+/// Item 1, the other output kinds: the photon tracer's EXR and a state-buffer dump, each
+/// through a link to /dev/full, fail naming the file; stand-ins generated into a full
+/// file system fail, and the cache holds no partial file.
+#[test]
+fn every_output_kind_fails_on_a_full_device() {
+    let dir = tempfile::tempdir().unwrap();
+    let full = dir.path().join("p.exr");
+    std::os::unix::fs::symlink("/dev/full", &full).unwrap();
+    let o = refrakt(&[
+        "photons",
+        "--plane",
+        "3",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--photons-per-pixel",
+        "4",
+        "-o",
+        full.to_str().unwrap(),
+    ]);
+    assert_failed_naming(&o, &full, "photons");
+    assert!(
+        stderr(&o).contains("No space left"),
+        "photons: {}",
+        stderr(&o)
+    );
+    // The dump's file name is known before the render: a link to /dev/full there.
+    let dump = dir.path().join("light-colour-1.exr");
+    std::os::unix::fs::symlink("/dev/full", &dump).unwrap();
+    let image = dir.path().join("x.png");
+    let o = refrakt(&[
+        "render",
+        "--volume-size",
+        "16",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--dump",
+        "light-colour@1",
+        "-o",
+        image.to_str().unwrap(),
+    ]);
+    assert_failed_naming(&o, &dump, "dump");
+    let fs = match TinyFs::mount() {
+        Ok(fs) => fs,
+        Err(why) => {
+            eprintln!("skipped: stand-ins into a full file system ({why})");
+            return;
+        }
+    };
+    fs.fill();
+    let before = fs.entries();
+    let o = refrakt_command(&["generate", "hand", "--scale", "0.05"])
+        .env("REFRAKT_CACHE_DIR", fs.path())
+        .output()
+        .unwrap();
+    let err = stderr(&o);
+    assert!(
+        !o.status.success(),
+        "generate into a full file system: exit 0"
+    );
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(
+        err.contains("No space left"),
+        "the reason is not given: {err}"
+    );
+    // The standins folder may have been made; no file in it.
+    let left: Vec<_> = walk(fs.path())
+        .into_iter()
+        .filter(|p| !before.contains(p) && p.is_file())
+        .collect();
+    assert!(left.is_empty(), "left behind: {left:?}");
+}
+
+fn walk(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            out.extend(walk(&p));
+        }
+        out.push(p);
+    }
+    out
+}
