@@ -61,6 +61,9 @@ fn main() {
             Some(&format!("{GATHER_COARSE_TILE}u")),
         );
         options.add_macro_definition("VALUE_BRICK", Some(&format!("{VALUE_BRICK}")));
+        options.add_macro_definition("TF_SAMPLES", Some(&format!("{TF_SAMPLES}u")));
+        options.add_macro_definition("PREINT_SIZE", Some(&format!("{PREINT_SIZE}u")));
+        options.add_macro_definition("MAX_LIGHTS", Some(&format!("{MAX_LIGHTS}")));
         let include_root = glsl_dir.clone();
         options.set_include_callback(move |requested, _ty, requester, _depth| {
             let full = include_root.join(requested);

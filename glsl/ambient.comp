@@ -34,8 +34,8 @@ layout(set = 0, binding = 0) uniform Params {
     vec4 march;
     uvec4 size;
     // As ea.comp up to here.
-    vec4 lights[4];   // xyz: direction towards the light (unit) or position; w: 0 / 1 = point
-    vec4 colours[4];  // rgb, linear (a point light's: irradiance at unit distance)
+    vec4 lights[MAX_LIGHTS];   // xyz: direction towards the light (unit) or position; w: 0 / 1 = point
+    vec4 colours[MAX_LIGHTS];  // rgb, linear (a point light's: irradiance at unit distance)
     vec4 ambient;     // x: r (world), y: r (reference steps), z: g, w: albedo
     vec4 table;       // n_theta, n_s, n_g, s_max
     uvec4 counts;     // x: number of lights

@@ -3,8 +3,7 @@
 #ifndef REFRAKT_COMMON_GLSL
 #define REFRAKT_COMMON_GLSL
 
-const uint TF_SAMPLES = 4096u;   // must match transfer::TF_SAMPLES
-const uint PREINT_SIZE = 256u;   // must match render::preintegration::TABLE_SIZE
+// TF_SAMPLES and PREINT_SIZE are macros from src/render/limits.rs (build.rs).
 
 // Post-interpolative TF lookup: hardware-filtered, sample i of TF_SAMPLES sits at
 // s = i / (TF_SAMPLES - 1), so s maps to texel centre s * (N - 1) + 0.5.

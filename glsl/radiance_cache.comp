@@ -31,7 +31,7 @@ layout(set = 0, binding = 1) uniform sampler2D transmission;
 layout(set = 0, binding = 2, rgba32f) uniform writeonly image3D radiance;
 
 layout(push_constant) uniform Push {
-    vec4 lights[4];    // xyz: direction towards the light (unit) or position; w: 0 / 1 = point
+    vec4 lights[MAX_LIGHTS];    // xyz: direction towards the light (unit) or position; w: 0 / 1 = point
     vec4 half_extent;  // xyz: the box's half extent (world), w: r (world)
     vec4 table;        // n_theta, n_s, n_g, s_max
     vec4 misc;         // x: g, y: r in reference steps, z: number of lights

@@ -14,10 +14,8 @@ use std::path::Path;
 use anyhow::{anyhow, bail, ensure, Context as _, Result};
 use serde::Deserialize;
 
-/// Samples per transfer function on the GPU. Fine enough that linear interpolation between
-/// samples is within 1e-4 of the piecewise-linear function for slopes up to ~100 per unit s
-/// away from control points.
-pub const TF_SAMPLES: u32 = 4096;
+/// Samples per transfer function on the GPU (defined with the shaders' other limits).
+pub use crate::render::limits::TF_SAMPLES;
 
 /// The range of refractive indices a transfer function may give (relative to the medium
 /// around the volume, 1): beyond it the sweep's Snell steps and the preintegration table

@@ -18,3 +18,16 @@ pub const GATHER_COARSE_TILE: u32 = 64;
 // The light rays' empty-space test (render::value_ranges, glsl/value_range*.comp): the
 // volume in bricks of VALUE_BRICK^3 voxels, each with the range of values around it.
 pub const VALUE_BRICK: u32 = 4;
+
+// Samples per transfer function on the GPU (transfer::TF_SAMPLES): fine enough that linear
+// interpolation between samples is within 1e-4 of the piecewise-linear function for
+// slopes up to ~100 per unit s away from control points.
+pub const TF_SAMPLES: u32 = 4096;
+
+// Entries per axis of the preintegration table (render::preintegration::TABLE_SIZE).
+pub const PREINT_SIZE: u32 = 256;
+
+// Most lights the ambient-scattering model takes (the main light and three more): its
+// radiance cache holds one light per channel of an RGBA image, so at most 4.
+pub const MAX_LIGHTS: usize = 4;
+const _: () = assert!(MAX_LIGHTS <= 4);

@@ -19,8 +19,8 @@ use crate::vk::{
     ImageKind, Memory, Recorder, Use,
 };
 
-/// Entries per axis; must match PREINT_SIZE in glsl/common.glsl.
-pub const TABLE_SIZE: u32 = 256;
+/// Entries per axis: `PREINT_SIZE`, defined once for Rust and the shaders.
+pub const TABLE_SIZE: u32 = crate::render::limits::PREINT_SIZE;
 
 /// Both table layers read back: (colour + opacity, medium), index = back * 256 + front.
 pub type TableLayers = (Vec<[f32; 4]>, Vec<[f32; 4]>);

@@ -46,8 +46,9 @@ pub const EXTINCTION_SCOPE: &str = "ambient extinction";
 /// The timings scope of the radiance cache's build.
 pub const CACHE_SCOPE: &str = "radiance cache";
 
-/// Most lights the model takes (the main light and three more: one cache channel each).
-pub const MAX_LIGHTS: usize = 4;
+/// Most lights the model takes (the main light and three more: one cache channel each;
+/// defined once for Rust and the shaders).
+pub use crate::render::limits::MAX_LIGHTS;
 /// Smallest and largest ambient radius, in reference steps.
 pub const MIN_RADIUS: f32 = 0.5;
 pub const MAX_RADIUS: f32 = 64.0;
@@ -432,6 +433,36 @@ impl ModelPass for AmbientPass {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn push_blocks_match_the_shaders() {
+        crate::vk::spirv::check_block(
+            shaders::RADIANCE_CACHE_COMP,
+            "Push",
+            &crate::host_layout!(CachePush {
+                lights,
+                half_extent,
+                table,
+                misc
+            }),
+            std::mem::size_of::<CachePush>(),
+            true,
+        )
+        .unwrap();
+        crate::vk::spirv::check_block(
+            shaders::AMBIENT_EXTINCTION_COMP,
+            "Push",
+            &crate::host_layout!(ExtinctionPush {
+                dims,
+                inv_scale,
+                side,
+                pad
+            }),
+            std::mem::size_of::<ExtinctionPush>(),
+            true,
+        )
+        .unwrap();
+    }
 
     #[test]
     fn params_match_the_shaders_block() {

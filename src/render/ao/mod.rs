@@ -324,6 +324,22 @@ mod tests {
     use super::*;
 
     #[test]
+    fn cache_push_matches_the_shaders_block() {
+        crate::vk::spirv::check_block(
+            shaders::AO_CACHE_COMP,
+            "Push",
+            &crate::host_layout!(CachePush {
+                dims,
+                inv_scale,
+                pad
+            }),
+            std::mem::size_of::<CachePush>(),
+            true,
+        )
+        .unwrap();
+    }
+
+    #[test]
     fn params_match_the_shaders_block() {
         let mut host = crate::render::ea::march_layout();
         for (name, offset, size) in crate::host_layout!(Params {

@@ -187,6 +187,21 @@ mod tests {
     use super::*;
 
     #[test]
+    fn cache_push_matches_the_shaders_block() {
+        crate::vk::spirv::check_block(
+            shaders::TRANSMITTANCE_COMP,
+            "Push",
+            &crate::host_layout!(CachePush {
+                towards,
+                half_extent
+            }),
+            std::mem::size_of::<CachePush>(),
+            true,
+        )
+        .unwrap();
+    }
+
+    #[test]
     fn params_match_the_shaders_block() {
         let mut host = crate::render::ea::march_layout();
         host.extend(crate::host_layout!(Params {
