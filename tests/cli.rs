@@ -785,3 +785,81 @@ fn list_presets_names_every_shipped_preset() {
         }
     }
 }
+
+/// Issue 36, item 5: `--background` applies or is an error, never ignored. With the
+/// default environment (the sky) it applies: the corner of a refractive render is the
+/// background's colour, where the sky's would not be; with `--env sky` (or a scene file's
+/// map beside its background) it is refused. A bare volume file stands before the flat
+/// background: its render equals one with `--env none` and differs from one with the sky.
+#[test]
+fn a_background_applies_or_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = |name: &str| dir.path().join(name).display().to_string();
+    let small = ["--volume-size", "16", "--width", "16", "--height", "16"];
+    let render = |extra: &[&str], file: &str| {
+        let mut args = vec!["render"];
+        args.extend(extra);
+        let path = out(file);
+        args.extend(["-o", path.as_str()]);
+        let o = refrakt(&args);
+        assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+        image::open(&path).unwrap().to_rgb8()
+    };
+    let mut args = small.to_vec();
+    args.extend(["--background", "1,0,0", "--tonemap", "none"]);
+    let red = render(&args, "red.png");
+    assert_eq!(
+        red.get_pixel(0, 0).0,
+        [255, 0, 0],
+        "the background is not applied"
+    );
+    assert_clean_failure(
+        &[
+            "render",
+            "--background",
+            "1,0,0",
+            "--env",
+            "sky",
+            "-o",
+            &out("x.png"),
+        ],
+        "--background and --env sky",
+    );
+    let scene = dir.path().join("bg.toml");
+    std::fs::write(
+        &scene,
+        "[volume]\nbuiltin = \"shell\"\nsize = 16\n[environment]\nmap = \"sky\"\n\
+         [render]\nbackground = [1.0, 0.0, 0.0, 1.0]\n",
+    )
+    .unwrap();
+    assert_clean_failure(
+        &["render", scene.to_str().unwrap(), "-o", &out("x.png")],
+        "background and [environment]",
+    );
+    // A bare volume file: a 16³ ball as a named raw file.
+    let raw = dir.path().join("ball_16x16x16_uint8.raw");
+    let bytes: Vec<u8> = (0..16 * 16 * 16)
+        .map(|i: usize| {
+            let c = [i % 16, i / 16 % 16, i / 256].map(|v| v as f32 - 7.5);
+            if c.iter().map(|v| v * v).sum::<f32>() < 36.0 {
+                200
+            } else {
+                0
+            }
+        })
+        .collect();
+    std::fs::write(&raw, bytes).unwrap();
+    let r = raw.to_str().unwrap();
+    let size = ["--width", "16", "--height", "16"];
+    let default = render(&[&[r][..], &size].concat(), "default.png");
+    let none = render(&[&[r, "--env", "none"][..], &size].concat(), "none.png");
+    let sky = render(&[&[r, "--env", "sky"][..], &size].concat(), "sky.png");
+    assert_eq!(
+        default, none,
+        "a volume file's default is not the flat background"
+    );
+    assert_ne!(
+        default, sky,
+        "the sky renders as the flat background (the test is void)"
+    );
+}

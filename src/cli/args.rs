@@ -526,8 +526,9 @@ pub struct SceneArgs {
     /// and --distance are taken around it [scene default: 0,0,0, the volume centre].
     #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
     pub target: Option<String>,
-    /// Background colour behind the volume, linear "r,g,b" or "r,g,b,a" (seen with
-    /// --env none) [default: 0.08,0.08,0.1,1].
+    /// Background colour behind the volume, linear "r,g,b" or "r,g,b,a"; it replaces the
+    /// environment (sets --env none; with --env MAP it is an error) [default:
+    /// 0.08,0.08,0.1,1].
     #[arg(long, allow_hyphen_values = true)]
     pub background: Option<String>,
     /// World-space direction towards the light, "x,y,z" (refract). It must lie in the
@@ -619,7 +620,8 @@ pub struct SceneArgs {
     pub clip: Option<String>,
     /// Environment map behind the volume (refract): an equirectangular .exr or .hdr
     /// (linear), .png or .jpg (sRGB), twice as wide as high; "sky" for the built-in sky,
-    /// sun and checkered ground; "none" for the flat --background [default: sky].
+    /// sun and checkered ground; "none" for the flat --background [default: sky for the
+    /// built-in scenes and scene files, none for a bare volume file].
     #[arg(long, value_name = "FILE|sky|none")]
     pub env: Option<String>,
     /// Rotation of the environment map about the vertical axis, degrees [default: 0].

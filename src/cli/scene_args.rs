@@ -204,6 +204,19 @@ pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Resu
             f => EnvSource::File(PathBuf::from(f)),
         });
     }
+    // --background applies or is an error, never ignored (issue 36): the refractive model
+    // shows it only without an environment, so it sets none; with a map or the sky asked
+    // for too, one of the two would be ignored.
+    if args.background.is_some() {
+        match &o.environment {
+            None | Some(EnvSource::None) => o.environment = Some(EnvSource::None),
+            Some(_) => bail!(
+                "--background and --env {}: the environment is what lies behind the volume; \
+                 give one of them (--background alone sets --env none)",
+                args.env.as_deref().unwrap_or_default()
+            ),
+        }
+    }
     o.tonemap = args.tonemap.map(|t| match t {
         ToneArg::Aces => output::ToneOperator::Aces,
         ToneArg::Reinhard => output::ToneOperator::Reinhard,

@@ -349,6 +349,16 @@ impl SceneFile {
             o.sample_distance = r.sample_distance;
             o.preintegrated = r.preintegrated;
             o.background = r.background;
+            // As --background: applies (no environment) or is an error.
+            if r.background.is_some() {
+                match &o.environment {
+                    None | Some(EnvSource::None) => o.environment = Some(EnvSource::None),
+                    Some(_) => bail!(
+                        "[render] background and [environment] map: the environment is \
+                         what lies behind the volume; give one of them"
+                    ),
+                }
+            }
             o.roughness = r.roughness;
             o.specular = r.specular;
             o.eta_scale = r.eta_scale;

@@ -310,7 +310,8 @@ impl Scene {
     }
 
     /// A bare volume file: transfer functions derived from its histogram (refractive
-    /// material, opaque dense structure), the default camera and light.
+    /// material, opaque dense structure), the default camera and light, the flat
+    /// background behind it.
     pub fn for_volume_file(path: &Path) -> Scene {
         Scene {
             name: path
@@ -324,6 +325,9 @@ impl Scene {
             },
             transfer: TransferSource::FromData,
             upright: true,
+            // A neutral backdrop: the sky's checkerboard seen from above became giant
+            // tiles that washed out translucent tissue (issue 36).
+            environment: EnvSource::None,
             ..Default::default()
         }
     }
