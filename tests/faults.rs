@@ -11,6 +11,10 @@
 //! the device is even opened.
 
 mod common;
+// The fuzz harness' PNG chunk CRC (self-contained).
+#[allow(dead_code)]
+#[path = "fuzz/mutate.rs"]
+mod mutate;
 
 use std::path::{Path, PathBuf};
 use std::process::Output;
@@ -339,29 +343,12 @@ fn an_output_in_a_read_only_folder_is_refused_before_work() {
     }
 }
 
-/// CRC-32 (ISO-HDLC, as PNG chunks use), bit by bit: the test's own, independent of the
-/// crates the program uses.
-fn crc32(bytes: &[u8]) -> u32 {
-    let mut c = !0u32;
-    for &b in bytes {
-        c ^= b as u32;
-        for _ in 0..8 {
-            c = if c & 1 != 0 {
-                (c >> 1) ^ 0xedb8_8320
-            } else {
-                c >> 1
-            };
-        }
-    }
-    !c
-}
-
 /// A PNG chunk: length, type, data, CRC of type and data.
 fn png_chunk(kind: &[u8; 4], data: &[u8]) -> Vec<u8> {
     let mut v = (data.len() as u32).to_be_bytes().to_vec();
     let body: Vec<u8> = kind.iter().chain(data).copied().collect();
     v.extend(&body);
-    v.extend(crc32(&body).to_be_bytes());
+    v.extend(mutate::crc32(&body).to_be_bytes());
     v
 }
 
