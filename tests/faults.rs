@@ -341,6 +341,44 @@ fn an_output_in_a_read_only_folder_is_refused_before_work() {
             "{ext}: the reason is not given: {err}"
         );
     }
+    // A dump folder that is read-only: refused before the image is rendered or written
+    // (the image was once written, and the command failed on the dump after it).
+    let dir = tempfile::tempdir().unwrap();
+    let image = dir.path().join("x.png");
+    let err = refused_before_work(
+        &[
+            "render",
+            "--dump-dir",
+            fs.path().to_str().unwrap(),
+            "--dump",
+            "light-colour@1",
+            "-o",
+            image.to_str().unwrap(),
+        ],
+        "read-only dump folder",
+    );
+    assert!(err.contains("Read-only"), "dump folder: {err}");
+    assert!(
+        !image.exists(),
+        "the image was written before the dump failed"
+    );
+    // A table built for nothing: precompute refuses before the build.
+    let table = fs.path().join("t.bin");
+    let t = std::time::Instant::now();
+    let o = refrakt(&["precompute", "ambient", "--out", table.to_str().unwrap()]);
+    assert!(
+        !o.status.success(),
+        "precompute into a read-only folder: exit 0"
+    );
+    assert!(
+        stderr(&o).contains("Read-only"),
+        "precompute: {}",
+        stderr(&o)
+    );
+    assert!(
+        t.elapsed().as_secs_f64() < 5.0,
+        "precompute refused after the build"
+    );
 }
 
 /// A PNG chunk: length, type, data, CRC of type and data.
