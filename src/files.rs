@@ -188,7 +188,7 @@ fn describe(path: &Path, target: &Path) -> String {
 /// The path a write to `path` lands on: links followed (every component), or `path`
 /// itself when it does not exist yet. A link whose target is missing is an error (a
 /// rename would replace the link).
-fn resolve(path: &Path) -> Result<PathBuf> {
+pub(crate) fn resolve(path: &Path) -> Result<PathBuf> {
     match std::fs::symlink_metadata(path) {
         Ok(m) if m.file_type().is_symlink() => std::fs::canonicalize(path).map_err(|e| {
             anyhow!(

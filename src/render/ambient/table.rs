@@ -687,15 +687,7 @@ pub enum Existing {
 /// a folder that cannot be created or written to (a probe file is made and removed).
 /// Links are followed (the table replaces the file a link points to).
 pub fn check_target(params: &TableParams, path: &Path) -> Result<Existing> {
-    let target = match std::fs::symlink_metadata(path) {
-        Ok(m) if m.file_type().is_symlink() => std::fs::canonicalize(path).map_err(|e| {
-            anyhow!(
-                "{}: is a link to a file that cannot be reached ({e})",
-                path.display()
-            )
-        })?,
-        _ => path.to_path_buf(),
-    };
+    let target = crate::files::resolve(path)?;
     let existing = match std::fs::metadata(&target) {
         Ok(m) if m.is_dir() => bail!("{}: is a folder; give a file name", path.display()),
         // A device or FIFO: never a table (not read: a FIFO would block).
@@ -751,21 +743,8 @@ pub fn check_target(params: &TableParams, path: &Path) -> Result<Existing> {
             ),
         }
     })?;
-    // A device or FIFO is written in place (crate::files::write_atomically), so there is
-    // no folder to probe (and opening a FIFO would block); its write errors still fail.
-    if !std::fs::metadata(&target).is_ok_and(|m| !m.is_file()) {
-        tempfile::Builder::new()
-            .prefix(".refrakt-")
-            .suffix(".probe")
-            .tempfile_in(&dir)
-            .map_err(|e| {
-                anyhow!(
-                    "{}: cannot write in the folder {}: {e}",
-                    path.display(),
-                    dir.display()
-                )
-            })?;
-    }
+    // The folder can be written (tried), as every output is checked.
+    crate::files::check_writable(path)?;
     Ok(existing)
 }
 
