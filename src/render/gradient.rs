@@ -107,6 +107,8 @@ impl GradientVolume {
                 &[Use::all(volume, Access::Sampled)],
                 |rec| {
                     for (axis, (set, (src, dst))) in sets.iter().zip(pairs).enumerate() {
+                        // By hand: the ping-pong images swap roles per axis inside one
+                        // pass, which a pass's declared Uses (one state each) cannot say.
                         rec.transition_many(&[
                             (src, 0..1, Access::Sampled),
                             (dst, 0..1, Access::ComputeStorage),

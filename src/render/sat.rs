@@ -61,6 +61,8 @@ impl SummedAreaTable {
                 // Rows (one invocation per row), then columns reading what the rows wrote.
                 for (pass, lines) in [(0u32, map.height), (1, map.width)] {
                     if pass == 1 {
+                        // By hand: a declared Use orders the pass's start only, and this
+                        // write-after-write lies between two dispatches inside it.
                         rec.transition_all(&table, Access::ComputeStorage);
                     }
                     let push = SatPush {

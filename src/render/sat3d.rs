@@ -234,7 +234,8 @@ impl Sat3d {
         rec.pass(SCOPE, &uses, |rec| {
             for (axis, groups) in groups.into_iter().enumerate() {
                 if axis > 0 {
-                    // Each scan reads what the previous one wrote.
+                    // Each scan reads what the previous one wrote. By hand: a declared
+                    // Use orders the pass's start only, not its dispatches.
                     rec.transition_all(table, Access::ComputeStorage);
                 }
                 let push = ScanPush {

@@ -1,5 +1,10 @@
 //! Recording one frame of the sweep: the setup pass, the planes with their barriers, the
 //! composite, dumps and timestamps.
+//!
+//! The per-plane transitions here are written by hand, not declared as `vk::Use`: a pass
+//! declares one state per image for its start, while the sweep moves single layers of
+//! the ping-pong images between sampled, attachment and storage use plane by plane inside
+//! one pass (and `drop_barrier_before_plane` must be able to leave one out).
 
 use super::*;
 use crate::vk::{Area, Use};
