@@ -83,6 +83,13 @@ fn render_writes_png_and_exr_with_timings() {
             assert!(out.contains(needle), "no '{needle}' in:\n{out}");
         }
         assert!(out.contains(p), "output path not printed:\n{out}");
+        // Piped, no progress is drawn (no spinner, no "% of the planes", no carriage
+        // returns): only a terminal gets it.
+        let err = stderr(&o);
+        assert!(
+            !err.contains('\r') && !err.contains("of the planes") && !err.contains("loading"),
+            "progress drawn into a pipe:\n{err:?}"
+        );
         let img = image_size(&path);
         assert_eq!(img, (40, 30), "{ext} dimensions");
     }

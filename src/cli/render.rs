@@ -1,6 +1,7 @@
 //! `refrakt render`: one frame to an image, with the GPU time of every pass, the sweep's
 //! statistics and optional state-buffer dumps.
 
+use std::io::IsTerminal;
 use std::path::Path;
 use std::process::ExitCode;
 
@@ -32,6 +33,41 @@ fn spinner(message: &str) -> indicatif::ProgressBar {
     pb.set_message(message.to_owned());
     pb.enable_steady_tick(std::time::Duration::from_millis(200));
     pb
+}
+
+/// The fraction of a frame done and the time left, from the progress the GPU reports.
+/// The rate comes from the marks passed so far, timed from the first one: the work before
+/// it (one-off builds, the setup pass) is not part of the planes' rate.
+#[derive(Default)]
+struct Eta {
+    first: Option<(std::time::Instant, f64)>,
+}
+
+impl Eta {
+    fn update(&mut self, fraction: f64) -> String {
+        let now = std::time::Instant::now();
+        if fraction <= 0.0 {
+            return "waiting for the first planes".into();
+        }
+        let (t0, f0) = *self.first.get_or_insert((now, fraction));
+        let done = format!("{:.0} % of the planes", 100.0 * fraction);
+        if fraction <= f0 || fraction >= 1.0 {
+            return done;
+        }
+        let rate = (fraction - f0) / now.duration_since(t0).as_secs_f64();
+        let left = (1.0 - fraction) / rate;
+        format!("{done}, about {} left", human_seconds(left))
+    }
+}
+
+/// `s` seconds as a person reads them: "8 s", "3 min 20 s".
+fn human_seconds(s: f64) -> String {
+    let s = s.round() as u64;
+    if s < 60 {
+        format!("{s} s")
+    } else {
+        format!("{} min {} s", s / 60, s % 60)
+    }
 }
 
 /// Timestamp scopes of builds that are not part of a frame (see `Renderer`).
@@ -151,7 +187,22 @@ pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
         opts.height,
         model.name()
     ));
-    let mut frame = renderer.render(model, &camera, &opts)?;
+    // On a terminal the frame reports how far the GPU is (timestamps every 2 % of the
+    // planes, read while it runs); piped, nothing is drawn and the frame has no marks.
+    let mut frame = if std::io::stderr().is_terminal() {
+        let what = format!(
+            "rendering {}x{} with {}",
+            opts.width,
+            opts.height,
+            model.name()
+        );
+        let mut eta = Eta::default();
+        renderer.render_observed(model, &camera, &opts, &mut |fraction| {
+            progress.set_message(format!("{what}: {}", eta.update(fraction)));
+        })?
+    } else {
+        renderer.render(model, &camera, &opts)?
+    };
     progress.finish_and_clear();
     // One-off builds first (the gradient volume once per volume, the environment's SAT
     // once per map), then the frame's own passes.

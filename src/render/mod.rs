@@ -377,6 +377,29 @@ impl Renderer {
 
     /// Render one frame with `model` and read it back.
     pub fn render(&mut self, model: Model, camera: &Camera, opts: &RenderOptions) -> Result<Frame> {
+        self.render_inner(model, camera, opts, None)
+    }
+
+    /// [`Renderer::render`], calling `observe` while the GPU works with the fraction of
+    /// the frame done (the sweep's planes; a ray-marched model reports only 0 and 1). The
+    /// same frame, with a timestamp between full barriers every 2 % of the planes.
+    pub fn render_observed(
+        &mut self,
+        model: Model,
+        camera: &Camera,
+        opts: &RenderOptions,
+        observe: &mut dyn FnMut(f64),
+    ) -> Result<Frame> {
+        self.render_inner(model, camera, opts, Some(observe))
+    }
+
+    fn render_inner(
+        &mut self,
+        model: Model,
+        camera: &Camera,
+        opts: &RenderOptions,
+        observe: Option<&mut dyn FnMut(f64)>,
+    ) -> Result<Frame> {
         self.check(model, camera, opts)?;
         self.ensure_gradient(model)?;
         self.ensure_field(model, opts)?;
@@ -384,12 +407,16 @@ impl Renderer {
         self.ensure_ambient_table(model, opts)?;
         let ctx = self.ctx.clone();
         let mut recorded = None;
-        let timings = ctx.execute(|rec| {
+        let record = |rec: &mut Recorder| {
             let r = self.record_inner(rec, model, camera, opts, true)?;
             self.target(model)?.record_copy(rec);
             recorded = Some(r);
             Ok(())
-        })?;
+        };
+        let timings = match observe {
+            Some(observe) => ctx.execute_observed(record, observe)?,
+            None => ctx.execute(record)?,
+        };
         let mut recorded: Recorded = recorded.expect("recorded by execute");
         if let Some(s) = recorded.sweep.as_mut() {
             s.read_clamps()?;

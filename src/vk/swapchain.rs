@@ -426,7 +426,7 @@ impl Swapchain {
         unsafe {
             device.reset_command_buffer(slot.cmd, vk::CommandBufferResetFlags::empty())?;
         }
-        let mut rec = Recorder::begin(&self.ctx, slot.cmd, slot.queries)?;
+        let mut rec = Recorder::begin(&self.ctx, slot.cmd, slot.queries, None)?;
         record(&mut rec, index, image)?;
         rec.transition(image, 0..1, Access::Present);
         let pending = rec.finish()?;

@@ -120,6 +120,7 @@ impl SweepPass {
             };
             rec.bind_compute(pipeline, &self.compute_set);
             for i in 0..n {
+                rec.progress(i, n);
                 // The layer the previous plane wrote is read, the one it read is written:
                 // one barrier over the six images.
                 if drop_before == Some(i) {
@@ -134,6 +135,7 @@ impl SweepPass {
                 rec.dispatch_bound(pipeline, bytemuck::bytes_of(&push), groups(area))?;
                 self.compute_dumps(rec, f, i);
             }
+            rec.progress(n, n);
             return Ok(());
         }
 
@@ -156,6 +158,7 @@ impl SweepPass {
         let screen = Area::full(self.width, self.height);
         rec.bind_compute(light, &self.compute_set);
         for i in 0..=n {
+            rec.progress(i, n);
             // Stage A: the viewing rays of plane i - 1 and the light rays of plane i.
             let view_prev = i.checked_sub(1);
             let light_now = i < n;

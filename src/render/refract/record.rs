@@ -284,6 +284,7 @@ impl SweepPass {
             rec.bind_graphics(plane_pipeline, &self.sweep_set, self.width, self.height);
             let light_images = [&self.rays[0].image, &self.rays[1].image];
             for i in 0..planes.count {
+                rec.progress(i, planes.count);
                 let write = i % 2;
                 let read = 1 - write;
                 let push = PlanePush {
@@ -449,6 +450,7 @@ impl SweepPass {
                 }
             }
         }
+        rec.progress(planes.count, planes.count);
         rec.end_scope();
 
         let last = (planes.count - 1) % 2;

@@ -7,10 +7,35 @@ use crate::vk::{Access, Buffer, Context, Image, Memory};
 
 use super::*;
 
+/// How often [`Context::execute_observed`] looks at the progress marks.
+const PROGRESS_POLL_NS: u64 = 200_000_000;
+
 impl Context {
     /// Record a command buffer with `record`, submit it, wait for it, and return the GPU
     /// time of each scope the recording opened.
     pub fn execute(&self, record: impl FnOnce(&mut Recorder) -> Result<()>) -> Result<Timings> {
+        self.submit_and_wait(record, None)
+    }
+
+    /// [`Context::execute`], reporting progress while the GPU runs: `observe` is called
+    /// every 0.2 s with the fraction of the marked work done (the
+    /// recording's [`Recorder::progress`] marks; 0 until the first is passed), and once
+    /// with 1 when the submission completes. The frame stays one command buffer: the host
+    /// reads the marks' timestamps as they become available. Without timestamp queries
+    /// there are no marks and `observe` sees 0, then 1.
+    pub fn execute_observed(
+        &self,
+        record: impl FnOnce(&mut Recorder) -> Result<()>,
+        observe: &mut dyn FnMut(f64),
+    ) -> Result<Timings> {
+        self.submit_and_wait(record, Some(observe))
+    }
+
+    fn submit_and_wait(
+        &self,
+        record: impl FnOnce(&mut Recorder) -> Result<()>,
+        mut observe: Option<&mut dyn FnMut(f64)>,
+    ) -> Result<Timings> {
         let device = self.device();
         let pool = *self.shared.command_pool.lock().unwrap();
         let alloc = vk::CommandBufferAllocateInfo::default()
@@ -34,7 +59,22 @@ impl Context {
             }
         };
         let result = (|| -> Result<Timings> {
-            let mut rec = Recorder::begin(self, cmd, queries)?;
+            // The progress marks' words, zeroed (see Recorder::progress).
+            let marks = match observe {
+                Some(_) => {
+                    let mut b = Buffer::new(
+                        self,
+                        4 * MAX_MARKS,
+                        vk::BufferUsageFlags::TRANSFER_DST,
+                        Memory::Upload,
+                        "progress marks",
+                    )?;
+                    b.write(0, &[0u8; 4 * MAX_MARKS as usize])?;
+                    Some(b)
+                }
+                None => None,
+            };
+            let mut rec = Recorder::begin(self, cmd, queries, marks.as_ref().map(|b| b.raw))?;
             record(&mut rec)?;
             let pending = rec.finish()?;
             // SAFETY: recording finished; fence waited before anything is read or freed.
@@ -46,8 +86,40 @@ impl Context {
                     let queue = self.shared.queue.lock().unwrap();
                     device.queue_submit2(*queue, &[submit], fence)
                 };
-                let waited =
-                    submitted.and_then(|_| device.wait_for_fences(&[fence], true, u64::MAX));
+                let waited = submitted.and_then(|_| match observe.as_mut() {
+                    None => device.wait_for_fences(&[fence], true, u64::MAX),
+                    Some(observe) => {
+                        let mut next = 0;
+                        observe(0.0);
+                        loop {
+                            match device.wait_for_fences(&[fence], true, PROGRESS_POLL_NS) {
+                                Err(vk::Result::TIMEOUT) => {
+                                    let words = marks.as_ref().and_then(|b| b.mapped().ok());
+                                    let passed = |k: usize| {
+                                        words.is_some_and(|w| {
+                                            // Written by the GPU while we read: a
+                                            // volatile read of the whole word (0 or 1).
+                                            let p = w[4 * k..4 * k + 4].as_ptr() as *const u32;
+                                            std::ptr::read_volatile(p) != 0
+                                        })
+                                    };
+                                    let before = next;
+                                    while next < pending.marks.len() && passed(next) {
+                                        next += 1;
+                                    }
+                                    if next > before {
+                                        observe(pending.marks[next - 1]);
+                                    }
+                                }
+                                Ok(()) => {
+                                    observe(1.0);
+                                    break Ok(());
+                                }
+                                Err(e) => break Err(e),
+                            }
+                        }
+                    }
+                });
                 device.destroy_fence(fence, None);
                 waited.context("GPU submission failed (device lost?)")?;
             }

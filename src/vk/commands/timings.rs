@@ -38,6 +38,8 @@ impl Timings {
 pub struct PendingTimings {
     pub(super) scopes: Vec<Scope>,
     pub(super) used: u32,
+    /// The fraction each progress mark stands for (empty unless observed).
+    pub(super) marks: Vec<f64>,
 }
 
 impl PendingTimings {
