@@ -766,6 +766,173 @@ fn empty_looking_data_warns_and_bare_volumes_get_derived_transfer_functions() {
     assert!(!stderr(&o).contains("will be empty"), "{}", stderr(&o));
 }
 
+/// `render --help` groups its options by topic, the image and the input first and the
+/// developer options last, each option under its own heading; `view` shares the scene's
+/// headings.
+#[test]
+fn help_is_grouped_by_topic_with_diagnostics_last() {
+    for (cmd, headings) in [
+        (
+            "render",
+            &[
+                "Image:",
+                "Input:",
+                "Look:",
+                "Camera:",
+                "Environment:",
+                "Light:",
+                "Scattering models (ao, single, ambient):",
+                "Diagnostics:",
+                "Device:",
+            ][..],
+        ),
+        (
+            "view",
+            &["Input:", "Look:", "Image:", "Camera:", "Light:"][..],
+        ),
+    ] {
+        let o = refrakt(&[cmd, "--help"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let help = String::from_utf8_lossy(&o.stdout);
+        let at = |h: &str| {
+            help.lines()
+                .position(|l| l == h)
+                .unwrap_or_else(|| panic!("{cmd}: no heading {h:?} in:\n{help}"))
+        };
+        let positions: Vec<usize> = headings.iter().map(|h| at(h)).collect();
+        assert!(
+            positions.windows(2).all(|w| w[0] < w[1]),
+            "{cmd}: headings out of order {headings:?} at lines {positions:?}"
+        );
+        // Each option sits under the heading of its topic.
+        let section_of = |flag: &str| {
+            let line = help
+                .lines()
+                .position(|l| {
+                    // An option's own line: "--flag" or "-f, --flag" at its start.
+                    let t = l.trim_start();
+                    t.starts_with(flag) || t.get(4..).is_some_and(|r| r.starts_with(flag))
+                })
+                .unwrap_or_else(|| panic!("{cmd}: no {flag} in:\n{help}"));
+            help.lines()
+                .take(line)
+                .filter(|l| l.ends_with(':') && !l.starts_with(' '))
+                .last()
+                .unwrap_or("")
+                .to_string()
+        };
+        for (flag, heading) in [
+            ("--width", "Image:"),
+            ("--window", "Input:"),
+            ("--tf", "Look:"),
+            ("--azimuth", "Camera:"),
+            ("--softness", "Light:"),
+            ("--env ", "Environment:"),
+            ("--albedo", "Scattering models (ao, single, ambient):"),
+            ("--device", "Device:"),
+        ] {
+            assert_eq!(section_of(flag), heading, "{cmd}: {flag}");
+        }
+        if cmd == "render" {
+            for flag in ["--dump ", "--variant", "--pass-timings", "--verbose"] {
+                assert_eq!(section_of(flag), "Diagnostics:", "render: {flag}");
+            }
+        }
+    }
+}
+
+/// Developer diagnostics (the sweep's state traffic, its light-ray grid, its clamp
+/// counts) print with -v only; the timings and the sweep's planes always.
+#[test]
+fn developer_diagnostics_print_with_verbose_only() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o.png");
+    let base = [
+        "render",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--volume-size",
+        "16",
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    let diagnostics = [
+        "MiB of state-buffer traffic",
+        "light rays: ",
+        "clamps (pixel-planes)",
+    ];
+    for verbose in [false, true] {
+        let mut args = base.to_vec();
+        if verbose {
+            args.push("-v");
+        }
+        let o = refrakt(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        for d in diagnostics {
+            assert_eq!(
+                stdout.contains(d),
+                verbose,
+                "-v {verbose}: {d:?} in:\n{stdout}"
+            );
+        }
+        for always in [
+            "GPU time of the frame",
+            " planes as ",
+            " ms per plane",
+            "wrote ",
+        ] {
+            assert!(
+                stdout.contains(always),
+                "-v {verbose}: no {always:?} in:\n{stdout}"
+            );
+        }
+    }
+}
+
+/// The load line of a volume file names the type the file stores (int16 CT data were
+/// once reported as "f32", the type they become on loading) and one range of values: the
+/// window, when one is given, is said apart as what maps to 0 .. 1.
+#[test]
+fn the_load_line_names_the_stored_type_and_one_range() {
+    let dir = tempfile::tempdir().unwrap();
+    let ct = dir.path().join("ct_8x8x8_int16.raw");
+    let values: Vec<i16> = (0..512).map(|i| -1024 + (i * 8) as i16).collect();
+    let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+    std::fs::write(&ct, bytes).unwrap();
+    let out = dir.path().join("o.png");
+    let (ct, out) = (ct.to_str().unwrap(), out.to_str().unwrap());
+    let base = [
+        "render", ct, "--model", "ea", "--width", "8", "--height", "8", "-o", out,
+    ];
+    for (window, expected) in [
+        (None, "values -1024 .. 3064 → 0 .. 1 (no --window)"),
+        (
+            Some("-500,500"),
+            "values -1024 .. 3064; window -500 .. 500 → 0 .. 1",
+        ),
+    ] {
+        let mut args = base.to_vec();
+        if let Some(w) = window {
+            args.extend(["--window", w]);
+        }
+        let o = refrakt(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        let line = stdout
+            .lines()
+            .find(|l| l.starts_with("volume 8x8x8"))
+            .unwrap_or_else(|| panic!("no load line in:\n{stdout}"));
+        assert!(
+            line.contains(" int16,") && line.contains(expected),
+            "{window:?}: the load line {line:?} lacks \"int16\" or {expected:?}"
+        );
+        assert!(!line.contains("f32"), "{line}");
+    }
+}
+
 /// `--list-presets` (render and view) names every preset file shipped in assets/tf/.
 #[test]
 fn list_presets_names_every_shipped_preset() {

@@ -49,11 +49,16 @@ pub struct Cli {
 pub struct GpuArgs {
     /// Vulkan device to use: an index from `refrakt info` or part of its name
     /// (e.g. "llvmpipe"). Default: discrete > integrated > virtual > CPU.
-    #[arg(long, global = true, value_name = "NAME|INDEX")]
+    #[arg(
+        help_heading = "Device",
+        long,
+        global = true,
+        value_name = "NAME|INDEX"
+    )]
     pub device: Option<String>,
     /// Enable the Khronos validation layer with synchronization validation; the command
     /// exits with status 3 if the layer reports any warning or error.
-    #[arg(long, global = true)]
+    #[arg(help_heading = "Device", long, global = true)]
     pub validate: bool,
 }
 
@@ -447,158 +452,215 @@ pub struct SceneArgs {
     #[arg(value_name = "SCENE")]
     pub scene: Option<String>,
     /// List the built-in scenes and exit.
-    #[arg(long)]
+    #[arg(help_heading = "Input", long)]
     pub list_scenes: bool,
     /// List the transfer-function presets (--tf NAME) and exit.
-    #[arg(long)]
+    #[arg(help_heading = "Input", long)]
     pub list_presets: bool,
     /// Same as the SCENE argument (kept for scripts).
-    #[arg(long = "scene", value_name = "SCENE", conflicts_with = "scene")]
+    #[arg(
+        help_heading = "Input",
+        long = "scene",
+        value_name = "SCENE",
+        conflicts_with = "scene"
+    )]
     pub scene_flag: Option<String>,
     /// Folder of fetched data (scripts/fetch-data) and of thesis originals that replace the
     /// stand-ins (<name>.<ext>, e.g. supernova.nrrd). Default: $REFRAKT_DATA_DIR or
     /// ~/.cache/refrakt/data.
-    #[arg(long, value_name = "DIR")]
+    #[arg(help_heading = "Input", long, value_name = "DIR")]
     pub data_dir: Option<PathBuf>,
     /// Voxels per side of a procedural scene [scene default: 128].
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(help_heading = "Input", long, allow_negative_numbers = true)]
     pub volume_size: Option<u32>,
     /// Fraction of a thesis stand-in's resolution (e.g. 0.25) [scene default: 1].
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(help_heading = "Input", long, allow_negative_numbers = true)]
     pub scale: Option<f64>,
     /// Raw volume files: dimensions "X,Y,Z" (with --type). Files named
     /// <name>_<X>x<Y>x<Z>_<type>.raw need neither.
-    #[arg(long, value_name = "X,Y,Z")]
+    #[arg(help_heading = "Input", long, value_name = "X,Y,Z")]
     pub dims: Option<String>,
     /// Raw volume files: voxel type u8, u16, i16 or f32 (little endian).
-    #[arg(long = "type", value_name = "TYPE")]
+    #[arg(help_heading = "Input", long = "type", value_name = "TYPE")]
     pub voxel_type: Option<String>,
     /// Voxel spacing "X,Y,Z" (overrides the file's).
-    #[arg(long, value_name = "X,Y,Z")]
+    #[arg(help_heading = "Input", long, value_name = "X,Y,Z")]
     pub spacing: Option<String>,
     /// Mirror the volume along these axes after loading, e.g. "xy" (two axes = a 180°
     /// turn, keeping handedness), or "none" to undo a scene's flip.
-    #[arg(long, value_name = "AXES")]
+    #[arg(help_heading = "Input", long, value_name = "AXES")]
     pub flip: Option<String>,
     /// "on" (the default for volume files): turn the patient upright, head up and facing
     /// the camera, when the file states its orientation (NIfTI sform/qform, NRRD space
     /// directions, DICOM ImageOrientationPatient); "off": keep the file's voxel axes.
-    #[arg(long, value_name = "on|off")]
+    #[arg(help_heading = "Input", long, value_name = "on|off")]
     pub upright: Option<String>,
     /// Value window "LO,HI" mapped to [0,1] for signed or float data (e.g. CT Hounsfield
     /// units -1000,2000); default: the data's minimum and maximum. See docs/FORMATS.md.
-    #[arg(long, value_name = "LO,HI", allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Input",
+        long,
+        value_name = "LO,HI",
+        allow_hyphen_values = true
+    )]
     pub window: Option<String>,
     /// Transfer functions: a preset (see README) or a TOML file [scene default].
-    #[arg(long, value_name = "PRESET|FILE")]
+    #[arg(help_heading = "Look", long, value_name = "PRESET|FILE")]
     pub tf: Option<String>,
     /// Rendering model [default: refract].
-    #[arg(long, value_enum)]
+    #[arg(help_heading = "Look", long, value_enum)]
     pub model: Option<ModelArg>,
     /// Sample the transfer function at each step instead of using the preintegration table.
-    #[arg(long)]
+    #[arg(help_heading = "Look", long)]
     pub no_preintegration: bool,
     /// Image width in pixels [default: 512; thesis stand-ins 768].
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(help_heading = "Image", long, allow_negative_numbers = true)]
     pub width: Option<u32>,
     /// Image height in pixels [default: 512; thesis stand-ins 768].
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(help_heading = "Image", long, allow_negative_numbers = true)]
     pub height: Option<u32>,
     /// Distance between samples in units of the smallest voxel side (1 = one sample per
     /// voxel, as in the thesis' chapter 6) [default: 1].
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(help_heading = "Look", long, allow_negative_numbers = true)]
     pub sample_distance: Option<f32>,
     /// Camera azimuth in degrees around the vertical axis [scene default].
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(help_heading = "Camera", long, allow_negative_numbers = true)]
     pub azimuth: Option<f32>,
     /// Camera elevation in degrees, -90 (looking straight up) to 90 (straight down)
     /// [scene default].
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(help_heading = "Camera", long, allow_negative_numbers = true)]
     pub elevation: Option<f32>,
     /// Camera distance from the target, the volume centre unless --target (the volume's
     /// longest side is 1) [scene default].
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(help_heading = "Camera", long, allow_negative_numbers = true)]
     pub distance: Option<f32>,
     /// Vertical field of view in degrees [default: 35].
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(help_heading = "Camera", long, allow_negative_numbers = true)]
     pub fov: Option<f32>,
     /// World-space point "x,y,z" the camera orbits and looks at; --azimuth, --elevation
     /// and --distance are taken around it [scene default: 0,0,0, the volume centre].
-    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Camera",
+        long,
+        value_name = "X,Y,Z",
+        allow_hyphen_values = true
+    )]
     pub target: Option<String>,
     /// Background colour behind the volume, linear "r,g,b" or "r,g,b,a"; it replaces the
     /// environment (sets --env none; with --env MAP it is an error) [default:
     /// 0.08,0.08,0.1,1].
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(help_heading = "Environment", long, allow_hyphen_values = true)]
     pub background: Option<String>,
     /// World-space direction towards the light, "x,y,z" (refract). It must lie in the
     /// viewer's hemisphere: the sweep runs front to back, so light cannot come from behind
     /// the volume. Also the AO model's diffuse light. Default: from above, tilted towards
     /// the camera.
-    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Light",
+        long,
+        value_name = "X,Y,Z",
+        allow_hyphen_values = true
+    )]
     pub light: Option<String>,
     /// Light colour, linear "r,g,b" (refract, ao) [default: 1,1,1].
-    #[arg(long)]
+    #[arg(help_heading = "Light", long)]
     pub light_colour: Option<String>,
     /// Ambient occlusion (--model ao): half-size, in voxels, of the largest cube around a
     /// sample whose extinction occludes it; a power of two (the cubes double from 1)
     /// [default: 16].
-    #[arg(long, value_name = "VOXELS")]
+    #[arg(
+        help_heading = "Scattering models (ao, single, ambient)",
+        long,
+        value_name = "VOXELS"
+    )]
     pub ao_radius: Option<u32>,
     /// Ambient occlusion (--model ao): weight of the light's Lambert term (gradient
     /// normal, unshadowed) against the ambient term, 0-1 [default: 0.5].
-    #[arg(long, value_name = "W", allow_negative_numbers = true)]
+    #[arg(
+        help_heading = "Scattering models (ao, single, ambient)",
+        long,
+        value_name = "W",
+        allow_negative_numbers = true
+    )]
     pub ao_diffuse: Option<f32>,
     /// Scattering models (--model single, ambient): Henyey-Greenstein anisotropy of the phase
     /// function, -0.99 to 0.99; 0 isotropic, positive forward scattering [default: 0].
-    #[arg(long, value_name = "G", allow_negative_numbers = true)]
+    #[arg(
+        help_heading = "Scattering models (ao, single, ambient)",
+        long,
+        value_name = "G",
+        allow_negative_numbers = true
+    )]
     pub g: Option<f32>,
     /// Scattering models (--model single, ambient): albedo, the fraction of the extinguished light
     /// that is scattered, 0-1 [default: 0.9].
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(
+        help_heading = "Scattering models (ao, single, ambient)",
+        long,
+        allow_negative_numbers = true
+    )]
     pub albedo: Option<f32>,
     /// Ambient scattering (--model ambient): radius r of the sphere around each sample in
     /// which light scatters, in voxels, 0.5-64: the size of the soft shadows and of the
     /// translucency [default: 6].
-    #[arg(long, value_name = "VOXELS", allow_negative_numbers = true)]
+    #[arg(
+        help_heading = "Scattering models (ao, single, ambient)",
+        long,
+        value_name = "VOXELS",
+        allow_negative_numbers = true
+    )]
     pub ambient_radius: Option<f32>,
     /// Ambient scattering (--model ambient): another light beside --light, repeatable (up
     /// to 3): "dir:X,Y,Z" (direction towards the light) or "point:X,Y,Z" (world position;
     /// the volume's box is centred at 0 with its longest half side 1), optionally
     /// "@R,G,B" (linear colour; a point light's is the irradiance at distance 1).
-    #[arg(long, value_name = "LIGHT", allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Scattering models (ao, single, ambient)",
+        long,
+        value_name = "LIGHT",
+        allow_hyphen_values = true
+    )]
     pub add_light: Vec<String>,
     /// Ambient scattering (--model ambient): the preintegrated table to use, a file written
     /// by `refrakt precompute ambient --out` (its albedo must be the scene's). Default: the
     /// cached table for --albedo, built on first use (about a minute on 2 cores).
-    #[arg(long, value_name = "FILE")]
+    #[arg(
+        help_heading = "Scattering models (ao, single, ambient)",
+        long,
+        value_name = "FILE"
+    )]
     pub ambient_table: Option<PathBuf>,
     /// Light softness: radius, in voxels, of the elliptical filter applied to the light at
     /// every plane; 0 = hard shadows and sharp caustics (refract) [default: 0.5].
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(help_heading = "Light", long, allow_negative_numbers = true)]
     pub softness: Option<f32>,
     /// GGX roughness of the specular highlights (refract) [default: 0.3].
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(help_heading = "Look", long, allow_negative_numbers = true)]
     pub roughness: Option<f32>,
     /// Specular strength; 0 turns highlights off (refract) [default: 1].
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(help_heading = "Look", long, allow_negative_numbers = true)]
     pub specular: Option<f32>,
     /// Refractive-index scale k: the sweep uses eta' = 1 + k (eta_tf - 1); 0 turns
     /// refraction off, 1 is the transfer function's eta (refract) [default: 1].
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(help_heading = "Look", long, allow_negative_numbers = true)]
     pub eta_scale: Option<f32>,
     /// How light travels from plane to plane (refract): "forward" advances every light
     /// ray on its own and splats its flux onto each plane, so light is conserved through
     /// foci and caustics land where geometric optics puts them; "backward" is the thesis'
     /// semi-Lagrangian step (one direction per pixel, gain bounded per plane), kept for
     /// comparison [default: forward].
-    #[arg(long, value_name = "forward|backward")]
+    #[arg(help_heading = "Light", long, value_name = "forward|backward")]
     pub light_transport: Option<String>,
     /// Forward light transport: light rays per screen pixel, 1 to 8 (refract). The rays
     /// cover the light's whole domain at the nearest plane's pixel pitch as far as this
     /// budget allows; more resolve oblique light and caustics more finely, at a cost
     /// proportional to their number [default: 2].
-    #[arg(long, value_name = "N", allow_negative_numbers = true)]
+    #[arg(
+        help_heading = "Light",
+        long,
+        value_name = "N",
+        allow_negative_numbers = true
+    )]
     pub light_rays: Option<u32>,
     /// Forward light transport: the light rays' spacing in pixels of the nearest plane,
     /// 0.25 to 4 (refract). Below 1 the rays resolve caustics finer than the pixels (0.5:
@@ -606,42 +668,51 @@ pub struct SceneArgs {
     /// fewer and faster, and caustics blur. The time of the light transport grows with
     /// 1 / spacing²; --light-rays bounds the rays' number, and `render` says when that
     /// bound widened the spacing [default: 1].
-    #[arg(long, value_name = "PIXELS")]
+    #[arg(help_heading = "Light", long, value_name = "PIXELS")]
     pub light_spacing: Option<f32>,
     /// Fresnel reflection of viewing rays at changes of η (refract): the reflected part
     /// sees the environment (or background) in the mirrored direction, not occluded by
     /// the volume; "off" is the thesis' model, everything transmitted [default: on].
-    #[arg(long, value_name = "on|off")]
+    #[arg(help_heading = "Look", long, value_name = "on|off")]
     pub reflections: Option<String>,
     /// Clipping plane "nx,ny,nz,offset" in world space: opacity is zero where
     /// n·p > offset, the medium and refraction stay (refract, thesis Fig. 6.6); "none"
     /// removes a scene's plane.
-    #[arg(long, value_name = "NX,NY,NZ,D|none", allow_hyphen_values = true)]
+    #[arg(
+        help_heading = "Look",
+        long,
+        value_name = "NX,NY,NZ,D|none",
+        allow_hyphen_values = true
+    )]
     pub clip: Option<String>,
     /// Environment map behind the volume (refract): an equirectangular .exr or .hdr
     /// (linear), .png or .jpg (sRGB), twice as wide as high; "sky" for the built-in sky,
     /// sun and checkered ground; "none" for the flat --background [default: sky for the
     /// built-in scenes and scene files, none for a bare volume file].
-    #[arg(long, value_name = "FILE|sky|none")]
+    #[arg(help_heading = "Environment", long, value_name = "FILE|sky|none")]
     pub env: Option<String>,
     /// Rotation of the environment map about the vertical axis, degrees [default: 0].
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(help_heading = "Environment", long, allow_negative_numbers = true)]
     pub env_rotation: Option<f32>,
     /// Exposure in stops applied before tone mapping (PNG output and the window)
     /// [default: 0].
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(help_heading = "Image", long, allow_negative_numbers = true)]
     pub exposure: Option<f32>,
     /// Tone mapping for PNG output: aces (filmic), reinhard, or none (clamp). EXR output is
     /// always the linear HDR image [default: aces].
-    #[arg(long, value_enum)]
+    #[arg(help_heading = "Image", long, value_enum)]
     pub tonemap: Option<ToneArg>,
 }
 
 #[derive(Args)]
 pub struct RenderArgs {
     /// Output image; the extension picks the format: .png (8-bit sRGB) or .exr (linear).
-    #[arg(short, long, default_value = "refrakt.png")]
+    #[arg(help_heading = "Image", short, long, default_value = "refrakt.png")]
     pub output: PathBuf,
+    // The scene's options come right after -o: `--help` shows its headings (input,
+    // look, camera, light, ...) before the diagnostics below.
+    #[command(flatten)]
+    pub scene: SceneArgs,
     /// Write state buffers after given planes as EXR: "BUFFER@PLANE[,...]" with BUFFER one
     /// of light-colour, light-direction, view-position, view-direction, colour-opacity,
     /// medium, light-rays, light-ray-directions (refract). With the forward light transport
@@ -649,17 +720,17 @@ pub struct RenderArgs {
     /// direction sum (weight in alpha); light-rays / light-ray-directions are the rays
     /// themselves. Files go to --dump-dir as BUFFER-PLANE.exr; each header (and the log)
     /// gives the plane's view depth and world-space plane n·p = d and the camera.
-    #[arg(long, value_name = "BUFFER@PLANE,...")]
+    #[arg(help_heading = "Diagnostics", long, value_name = "BUFFER@PLANE,...")]
     pub dump: Option<String>,
     /// Folder for --dump files (default: the output image's folder).
-    #[arg(long)]
+    #[arg(help_heading = "Diagnostics", long)]
     pub dump_dir: Option<PathBuf>,
     /// Also render the EA baseline with the same volume, view, image size and sample
     /// distance in the same run, and print its GPU time and the ratio to this model's
     /// (the comparison the thesis' cost discussion needs; compare ratios on lavapipe).
-    #[arg(long)]
+    #[arg(help_heading = "Diagnostics", long)]
     pub with_baseline: bool,
-    #[arg(
+    #[arg(help_heading = "Diagnostics", 
         long,
         value_name = "SPEC",
         value_parser = parse_variant,
@@ -669,10 +740,13 @@ pub struct RenderArgs {
     /// Time the forward light transport's three draws of every plane apart (light rays,
     /// splat, viewing rays; summed over the planes) with GPU timestamps around each: a
     /// profile, which the extra timestamps may slow a little (refract).
-    #[arg(long)]
+    #[arg(help_heading = "Diagnostics", long)]
     pub pass_timings: bool,
-    #[command(flatten)]
-    pub scene: SceneArgs,
+    /// Also print developer diagnostics: the sweep's shaded fraction and state traffic
+    /// per plane, the light-ray grid and whether the ray budget bound it, and how often
+    /// the sweep clamped a light direction, a gain or a viewing direction (refract).
+    #[arg(help_heading = "Diagnostics", short, long)]
+    pub verbose: bool,
 }
 
 #[derive(Args)]

@@ -267,22 +267,31 @@ pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
     }
     if let Some(stats) = &frame.sweep {
         let planes = stats.planes.count;
+        let per_plane = frame
+            .timings
+            .get("sweep")
+            .map(|ms| format!(", {:.3} ms per plane", ms / planes as f64))
+            .unwrap_or_default();
         println!(
-            "sweep: {planes} planes as {}, spacing {:.5}, {:.0} % of the viewport shaded per \
-             plane (mean), {:.1} MiB of state-buffer traffic per plane ({:.1} MiB compulsory: \
-             each state texel read and written once)",
+            "sweep: {planes} planes as {}, spacing {:.5}{per_plane}",
             match stats.path {
                 SweepPath::Compute => "compute dispatches",
                 _ => "draws",
             },
             stats.planes.spacing,
+        );
+    }
+    // Developer diagnostics (-v): what the sweep shaded and moved, its light-ray grid
+    // and what it clamped.
+    if let (Some(stats), true) = (&frame.sweep, args.verbose) {
+        println!(
+            "sweep state: {:.0} % of the viewport shaded per plane (mean), {:.1} MiB of \
+             state-buffer traffic per plane ({:.1} MiB compulsory: each state texel read \
+             and written once)",
             100.0 * stats.shaded_fraction,
             stats.bytes_per_plane as f64 / (1 << 20) as f64,
             stats.compulsory_bytes_per_plane as f64 / (1 << 20) as f64
         );
-        if let Some(ms) = frame.timings.get("sweep") {
-            println!("  {:.3} ms per plane", ms / planes as f64);
-        }
         if stats.light_transport == LightTransport::Forward {
             let [columns, rows, ..] = stats.light_rays;
             let [asked, launched] = stats.light_spacing;

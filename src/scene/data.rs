@@ -29,24 +29,39 @@ impl Scene {
         let (lo, hi) = volume.value_range();
         let raw = |s: f32| lo + s * (hi - lo);
         if from_file {
+            // One range: the data's values, and what maps to 0 .. 1 only where a window
+            // makes that another range.
             let window = match &self.volume {
                 VolumeSource::File {
                     window: Some(w), ..
                 }
                 | VolumeSource::Fetched {
                     window: Some(w), ..
-                } => format!("window {} .. {} → 0 .. 1", w.0, w.1),
-                _ => format!("{} .. {} → 0 .. 1 (no --window)", short(lo), short(hi)),
+                } => format!("; window {} .. {} → 0 .. 1", short(w.0), short(w.1)),
+                _ => " → 0 .. 1 (no --window)".into(),
             };
+            // The data's own extremes: with a window, the histogram sees values clamped
+            // to it, so f32 data (what windowed data become) are scanned once more.
+            let (data_lo, data_hi) = match (&volume.voxels, volume.range) {
+                (crate::volume::Voxels::F32(v), Some(_)) => v
+                    .iter()
+                    .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &x| {
+                        (a.min(x), b.max(x))
+                    }),
+                _ => (raw(h.min), raw(h.max)),
+            };
+            let [sx, sy, sz] = volume.spacing;
             notes.push(format!(
-                "volume {}x{}x{} {}, spacing {:?}, values {} .. {} ({window})",
+                "volume {}x{}x{} {}, spacing {} × {} × {}, values {} .. {}{window}",
                 volume.dims[0],
                 volume.dims[1],
                 volume.dims[2],
-                volume.voxels.type_name(),
-                volume.spacing,
-                short(raw(h.min)),
-                short(raw(h.max)),
+                volume.stored.unwrap_or(volume.voxels.type_name()),
+                short(sx),
+                short(sy),
+                short(sz),
+                short(data_lo),
+                short(data_hi),
             ));
         }
         let tf = match tf {

@@ -56,6 +56,9 @@ pub struct Volume {
     /// +x left, +y posterior, +z superior), unit length, when the file states it (NIfTI
     /// sform/qform, NRRD space directions, DICOM ImageOrientationPatient).
     pub axes: Option<[[f32; 3]; 3]>,
+    /// The sample type the file stores ("int16", "float32", ...), when read from a file:
+    /// the voxels may hold another (signed or windowed data become f32 on loading).
+    pub stored: Option<&'static str>,
 }
 
 impl Volume {
@@ -66,6 +69,7 @@ impl Volume {
             voxels,
             range: None,
             axes: None,
+            stored: None,
         };
         v.validate()?;
         Ok(v)

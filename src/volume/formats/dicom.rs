@@ -331,7 +331,16 @@ pub(super) fn load_series(dir: &Path, opts: &LoadOptions) -> Result<Volume> {
             Voxels::F32(v)
         }
     };
-    Ok(super::loaded(dims, spacing, voxels, axes, opts))
+    let mut volume = super::loaded(dims, spacing, voxels, axes, opts);
+    volume.stored = Some(match (first.bits_alloc, first.signed) {
+        (8, false) => "uint8",
+        (8, true) => "int8",
+        (16, false) => "uint16",
+        (16, true) => "int16",
+        (_, false) => "uint32",
+        (_, true) => "int32",
+    });
+    Ok(volume)
 }
 
 fn fallback_dz(s: &Slice) -> f64 {

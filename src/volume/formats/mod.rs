@@ -461,7 +461,9 @@ pub(crate) fn build_volume(
             Voxels::F32(v)
         }
     };
-    Ok(loaded(dims, spacing, voxels, None, opts))
+    let mut volume = loaded(dims, spacing, voxels, None, opts);
+    volume.stored = Some(sample.name());
+    Ok(volume)
 }
 
 /// A loaded volume: its voxels, the window the options ask for, the orientation read.
@@ -478,6 +480,7 @@ pub(crate) fn loaded(
         voxels,
         range: opts.window,
         axes,
+        stored: None,
     }
 }
 
