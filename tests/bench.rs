@@ -65,6 +65,17 @@ fn tiny_thesis_bench_has_the_documented_structure() {
 
     // JSON: unknown or missing fields fail to deserialise (deny_unknown_fields).
     let r: Report = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    // The chart says which bars are whose, and that a 5 % run is not the thesis' size.
+    let svg_path = dir.path().join("r.svg");
+    refrakt::bench::plot_svg(&r, &svg_path).unwrap();
+    let svg = std::fs::read_to_string(&svg_path).unwrap();
+    for needle in [
+        "thesis: GTX 1070 / 980, full size",
+        &format!("ours: {}, scale 0.05", r.meta.device),
+        "not comparable",
+    ] {
+        assert!(svg.contains(needle), "the chart lacks {needle:?}");
+    }
     assert_eq!(r.schema, SCHEMA);
     assert!(r.meta.device.contains("llvmpipe") || std::env::var("REFRAKT_DEVICE").is_ok());
     assert!(!r.meta.git_commit.is_empty() && !r.meta.date.is_empty());
