@@ -495,6 +495,12 @@ pub struct SceneArgs {
     /// directions, DICOM ImageOrientationPatient); "off": keep the file's voxel axes.
     #[arg(help_heading = "Input", long, value_name = "on|off")]
     pub upright: Option<String>,
+    /// Where the voxel axes point in the patient, as three letters naming the side each
+    /// of x, y, z points towards (the DICOM/NIfTI convention): RAS, LPS, LAS, PIR, ...
+    /// Replaces what the file states (or supplies what a raw file cannot); the volume is
+    /// then turned upright, head up and facing the camera. For volume files.
+    #[arg(help_heading = "Input", long, value_name = "CODE")]
+    pub orientation: Option<String>,
     /// Value window "LO,HI" mapped to [0,1] for signed or float data (e.g. CT Hounsfield
     /// units -1000,2000); default: the data's minimum and maximum. See docs/FORMATS.md.
     #[arg(

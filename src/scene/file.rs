@@ -39,6 +39,8 @@ struct VolumeTable {
     flip: Option<String>,
     /// Turn the patient upright from the file's stated orientation (default true).
     upright: Option<bool>,
+    /// Where the voxel axes point, e.g. "RAS" (replaces the file's; see --orientation).
+    orientation: Option<String>,
 }
 
 #[derive(Deserialize)]
@@ -240,6 +242,10 @@ impl SceneFile {
             o.flip = Some(parse_flip(f).context("[volume] flip")?);
         }
         o.upright = v.upright;
+        if let Some(code) = &v.orientation {
+            o.orientation =
+                Some(crate::volume::orientation::parse_code(code).context("[volume] orientation")?);
+        }
         if let Some(n) = self.name {
             // The name is printed with every render: bounded, one line.
             let chars = n.chars().count();

@@ -70,6 +70,10 @@ pub struct Scene {
     /// ([`Volume::turn_upright`]): on for volume files, off for the built-in scenes (each
     /// composed with its own view).
     pub upright: bool,
+    /// Where the voxel axes point in the patient (LPS unit vectors, as
+    /// [`Volume::axes`]), stated by the user (`--orientation RAS`): replaces what the
+    /// file says, for volume files only.
+    pub orientation: Option<[[f32; 3]; 3]>,
     /// Axes (x, y, z) to mirror the data along after loading and turning upright (two = a
     /// 180° rotation).
     pub flip: [bool; 3],
@@ -156,6 +160,7 @@ pub struct Overrides {
     pub env_rotation: Option<f32>,
     pub flip: Option<[bool; 3]>,
     pub upright: Option<bool>,
+    pub orientation: Option<[[f32; 3]; 3]>,
 }
 
 impl Scene {
@@ -203,6 +208,9 @@ impl Scene {
         set(&mut self.env_rotation, o.env_rotation);
         set(&mut self.flip, o.flip);
         set(&mut self.upright, o.upright);
+        if o.orientation.is_some() {
+            self.orientation = o.orientation;
+        }
     }
 }
 
@@ -251,6 +259,7 @@ impl Default for Scene {
             spacing: None,
             flip: [false; 3],
             upright: false,
+            orientation: None,
             transfer: TransferSource::Named("glass-floor".into()),
             camera: Camera::default(),
             light_towards: None,
@@ -325,6 +334,7 @@ impl Scene {
             },
             transfer: TransferSource::FromData,
             upright: true,
+            orientation: None,
             // A neutral backdrop: the sky's checkerboard seen from above became giant
             // tiles that washed out translucent tissue (issue 36).
             environment: EnvSource::None,
@@ -485,6 +495,38 @@ impl Scene {
                 ),
                 None => format!("--spacing {s:?}"),
             })?;
+        }
+        let file = match &self.volume {
+            VolumeSource::File { path, .. } => Some(path.clone()),
+            VolumeSource::Fetched { file, .. } => Some(data_dir.join(file)),
+            _ => None,
+        };
+        if let Some(axes) = self.orientation {
+            ensure!(
+                file.is_some(),
+                "an orientation (--orientation, [volume] orientation) applies to volume \
+                 files; '{}' is a built-in scene",
+                self.name
+            );
+            ensure!(
+                self.upright,
+                "an orientation (--orientation, [volume] orientation) is used to turn the \
+                 volume upright, which --upright off (or [volume] upright = false) turns \
+                 off: drop one of them"
+            );
+            vol.axes = Some(axes);
+        }
+        if let (Some(f), false, None) = (&file, vol.spacing_stated, self.spacing) {
+            log::warn!(
+                "{}: the file does not state its voxel spacing, so 1 × 1 × 1 (cubic voxels) \
+                 is assumed; if the volume looks squashed or stretched, give --spacing X,Y,Z{}",
+                f.display(),
+                if crate::volume::formats::is_raw(f) {
+                    " or a sidecar NAME.json with \"spacing\": [x, y, z] beside the raw file"
+                } else {
+                    ""
+                }
+            );
         }
         if self.upright {
             notes.extend(vol.turn_upright());

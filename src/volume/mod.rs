@@ -6,6 +6,7 @@
 
 pub mod formats;
 pub mod histogram;
+pub mod orientation;
 pub mod procedural;
 pub mod standins;
 
@@ -59,6 +60,10 @@ pub struct Volume {
     /// The sample type the file stores ("int16", "float32", ...), when read from a file:
     /// the voxels may hold another (signed or windowed data become f32 on loading).
     pub stored: Option<&'static str>,
+    /// False when the file did not state the voxel spacing and 1 × 1 × 1 was assumed (a
+    /// raw file without a sidecar, a header without spacings): the scene warns, since a
+    /// CT with 5 mm slices then renders squashed.
+    pub spacing_stated: bool,
 }
 
 impl Volume {
@@ -70,6 +75,7 @@ impl Volume {
             range: None,
             axes: None,
             stored: None,
+            spacing_stated: true,
         };
         v.validate()?;
         Ok(v)
@@ -213,7 +219,7 @@ impl Volume {
         let from: String = dominant.iter().filter_map(|&d| name(d)).collect();
         self.reorder(perm, reverse);
         Some(format!(
-            "turned upright from the file's orientation (voxel axes x, y, z pointed {from}; \
+            "turned upright from the stated orientation (voxel axes x, y, z pointed {from}; \
              now L, S, A: head up, facing the camera); --flip applies after this"
         ))
     }

@@ -5,7 +5,8 @@
 //! MET_USHORT, MET_INT, MET_UINT, MET_FLOAT, MET_DOUBLE; `CompressedData = True` (zlib, or
 //! gzip when the data starts with the gzip magic); `ElementSpacing` (else `ElementSize`);
 //! `BinaryDataByteOrderMSB` / `ElementByteOrderMSB`; `HeaderSize` (bytes to skip in the
-//! data file, -1: data at its end); `BinaryData = False` (ASCII numbers).
+//! data file, -1: data at its end); `BinaryData = False` (ASCII numbers); orientation
+//! from `TransformMatrix` (or `AnatomicalOrientation`), in ITK's LPS frame.
 //! Not supported (clear error): `ElementDataFile = LIST` and file patterns, several
 //! channels, other element types, NDims other than 3.
 
@@ -16,8 +17,9 @@ use anyhow::{anyhow, bail, ensure, Context as _, Result};
 
 use super::{
     build_volume, check_size, checked_dims, header_bytes, inflate_zlib_or_gzip, parse3,
-    parse_ascii, read_file, read_promised, resolve_spacing, LoadOptions, Sample,
+    parse_ascii, parse_numbers, read_file, read_promised, resolve_spacing, LoadOptions, Sample,
 };
+use crate::volume::orientation::{parse_itk_code, unit_axes};
 use crate::volume::Volume;
 
 pub(super) fn load(path: &Path, opts: &LoadOptions) -> Result<Volume> {
@@ -168,6 +170,41 @@ pub(super) fn load(path: &Path, opts: &LoadOptions) -> Result<Volume> {
         &bytes
     };
     let big_endian = big_endian && (binary || compressed);
+    let stated = spacing.is_some() || opts.spacing.is_some();
     let spacing = resolve_spacing(opts, spacing)?;
-    build_volume(dims, spacing, sample, big_endian, payload, None, opts)
+    let mut volume = build_volume(dims, spacing, sample, big_endian, payload, None, opts)?;
+    volume.spacing_stated = stated;
+    volume.axes = header_axes(&fields)?;
+    Ok(volume)
+}
+
+/// The voxel axes in LPS: ITK's physical space is LPS and `TransformMatrix` (synonyms
+/// `Rotation`, `Orientation`) holds the direction of voxel axis i in its numbers 3i..3i+3
+/// (ITK's MetaImageIO reads it so); without one, `AnatomicalOrientation` in ITK's "from"
+/// convention (`orientation` module: RAI is LPS). `None` when neither is there; a
+/// malformed one is an error.
+fn header_axes(fields: &HashMap<String, String>) -> Result<Option<[[f32; 3]; 3]>> {
+    let get = |k: &str| fields.get(k).map(String::as_str);
+    let matrix = ["transformmatrix", "rotation", "orientation"]
+        .iter()
+        .find_map(|k| get(k));
+    if let Some(m) = matrix {
+        let v = parse_numbers::<f64>(m, "TransformMatrix")?;
+        ensure!(
+            v.len() == 9,
+            "TransformMatrix has {} numbers, a 3-D image needs 9",
+            v.len()
+        );
+        let dirs = std::array::from_fn(|i| std::array::from_fn(|j| v[3 * i + j]));
+        let axes = unit_axes(dirs)
+            .ok_or_else(|| anyhow!("TransformMatrix '{m}' is degenerate (no orientation)"))?;
+        return Ok(Some(axes));
+    }
+    match get("anatomicalorientation") {
+        // "???" is what MetaIO writes when it does not know.
+        Some(code) if !code.contains('?') => parse_itk_code(code)
+            .map(Some)
+            .with_context(|| format!("AnatomicalOrientation '{code}'")),
+        _ => Ok(None),
+    }
 }

@@ -281,6 +281,11 @@ enum Format {
     Vti,
 }
 
+/// True for a path named like a raw file (`.raw`, any case).
+pub fn is_raw(path: &Path) -> bool {
+    matches!(Format::of(path), Some(Format::Raw))
+}
+
 impl Format {
     fn of(path: &Path) -> Option<Format> {
         let name = path.file_name()?.to_string_lossy().to_ascii_lowercase();
@@ -481,6 +486,7 @@ pub(crate) fn loaded(
         range: opts.window,
         axes,
         stored: None,
+        spacing_stated: true,
     }
 }
 

@@ -188,8 +188,10 @@ pub(super) fn load(path: &Path, opts: &LoadOptions) -> Result<Volume> {
         }
     };
     let big_endian = big_endian && encoding != Encoding::Ascii;
+    let stated = spacing.is_some() || opts.spacing.is_some();
     let spacing = resolve_spacing(opts, spacing)?;
     let mut volume = build_volume(dims, spacing, sample, big_endian, payload, None, opts)?;
+    volume.spacing_stated = stated;
     volume.axes = header_axes(&fields);
     Ok(volume)
 }

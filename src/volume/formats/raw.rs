@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use anyhow::{anyhow, bail, ensure, Result};
+use anyhow::{anyhow, bail, ensure, Context as _, Result};
 
 use super::{
     build_volume, check_size, checked_dims, header_bytes, read_file, resolve_spacing, LoadOptions,
@@ -32,17 +32,87 @@ pub(super) fn load(path: &Path, layout: &RawLayout, opts: &LoadOptions) -> Resul
     }
     let bytes = read_file(path)?;
     check_size("raw file", bytes.len(), expected)?;
-    let spacing = match (opts.spacing, layout.spacing) {
-        (None, Some(s)) => {
+    let sidecar = match (opts.spacing, layout.spacing) {
+        (None, None) => sidecar_spacing(path, dims)?,
+        _ => None,
+    };
+    let spacing = match (opts.spacing, layout.spacing, &sidecar) {
+        (None, Some(s), _) => {
             ensure!(
                 s.iter().all(|x| x.is_finite() && *x > 0.0),
                 "raw layout spacing {s:?} must be finite and positive"
             );
             s
         }
+        (None, None, Some((s, _))) => *s,
         _ => resolve_spacing(opts, None)?,
     };
-    build_volume(dims, spacing, sample, false, &bytes, None, opts)
+    let mut volume = build_volume(dims, spacing, sample, false, &bytes, None, opts)?;
+    volume.spacing_stated = opts.spacing.is_some() || layout.spacing.is_some() || sidecar.is_some();
+    Ok(volume)
+}
+
+/// The JSON files beside a raw file that may describe it: `<name>.json` for
+/// `<name>_<X>x<Y>x<Z>_<type>.raw` (as the open-scivis collection names its
+/// descriptions) and `<file stem>.json`.
+pub(crate) fn sidecar_paths(path: &Path) -> Vec<std::path::PathBuf> {
+    let Some(stem) = path.file_stem().map(|s| s.to_string_lossy().into_owned()) else {
+        return Vec::new();
+    };
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let mut names = Vec::new();
+    let mut parts = stem.rsplitn(3, '_');
+    if let (Some(_), Some(_), Some(base)) = (parts.next(), parts.next(), parts.next()) {
+        names.push(format!("{base}.json"));
+    }
+    names.push(format!("{stem}.json"));
+    names.into_iter().map(|n| dir.join(n)).collect()
+}
+
+/// The spacing a JSON sidecar states (`"spacing": [x, y, z]`), with the sidecar's path.
+/// A sidecar whose `"size"` differs from the file's dimensions describes another file:
+/// an error, as is a sidecar that is not JSON or whose spacing is malformed. `None` when
+/// there is no sidecar or it states no spacing.
+fn sidecar_spacing(path: &Path, dims: [u32; 3]) -> Result<Option<([f32; 3], std::path::PathBuf)>> {
+    let Some(json) = sidecar_paths(path).into_iter().find(|p| p.is_file()) else {
+        return Ok(None);
+    };
+    let what = || format!("the sidecar {}", json.display());
+    // A description is a few hundred bytes: read no more than a megabyte of it.
+    let text = super::read_promised(&json, &what(), 1 << 20)?;
+    let value: serde_json::Value =
+        serde_json::from_slice(&text).with_context(|| format!("{}: not JSON", what()))?;
+    if let Some(size) = value.get("size") {
+        let size: Option<Vec<u64>> = size
+            .as_array()
+            .map(|a| a.iter().filter_map(|v| v.as_u64()).collect());
+        let matches = size.as_deref() == Some(&dims.map(u64::from)[..]);
+        ensure!(
+            matches,
+            "{}: \"size\" {} is not the raw file's {}x{}x{}: it describes another file",
+            what(),
+            value["size"],
+            dims[0],
+            dims[1],
+            dims[2]
+        );
+    }
+    let Some(spacing) = value.get("spacing") else {
+        return Ok(None);
+    };
+    let s: Option<Vec<f64>> = spacing
+        .as_array()
+        .map(|a| a.iter().filter_map(|v| v.as_f64()).collect());
+    let s = match s.as_deref() {
+        Some(&[x, y, z]) if [x, y, z].iter().all(|v| v.is_finite() && *v > 0.0) => {
+            [x as f32, y as f32, z as f32]
+        }
+        _ => bail!(
+            "{}: \"spacing\" {spacing} is not three positive numbers",
+            what()
+        ),
+    };
+    Ok(Some((s, json)))
 }
 
 /// Reads a `.raw` file whose layout is in its name.

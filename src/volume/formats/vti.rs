@@ -1,7 +1,7 @@
 //! VTK XML ImageData (`.vti`): one piece, the first (or the `Scalars`-named) PointData
 //! DataArray.
 //!
-//! Supported: `WholeExtent`, `Spacing`; DataArray types Int8, UInt8, Int16, UInt16, Int32,
+//! Supported: `WholeExtent`, `Spacing`, `Direction` (the orientation); DataArray types Int8, UInt8, Int16, UInt16, Int32,
 //! UInt32, Float32, Float64 with one component; formats `ascii`, `binary` (inline base64)
 //! and `appended` (`encoding="raw"` or `"base64"`, the `_` marker, `offset`);
 //! `header_type` UInt32 (default) or UInt64; `byte_order` LittleEndian or BigEndian; no
@@ -24,6 +24,7 @@ use super::{
     build_volume, checked_dims, parse_ascii, parse_numbers, read_compressed, read_file,
     resolve_spacing, LoadOptions, Sample,
 };
+use crate::volume::orientation::{unit_axes, world_to_lps};
 use crate::volume::Volume;
 
 struct Tag {
@@ -336,8 +337,29 @@ pub(super) fn load(path: &Path, opts: &LoadOptions) -> Result<Volume> {
         }
         f => bail!("{what} has unsupported format '{f}' (ascii, binary or appended)"),
     };
+    let stated = spacing.is_some() || opts.spacing.is_some();
     let spacing = resolve_spacing(opts, spacing)?;
-    build_volume(dims, spacing, sample, be, &bytes, None, opts)
+    let mut volume = build_volume(dims, spacing, sample, be, &bytes, None, opts)?;
+    volume.spacing_stated = stated;
+    volume.axes = match image.get("Direction") {
+        Some(d) => Some(direction_axes(d)?),
+        None => None,
+    };
+    Ok(volume)
+}
+
+/// The voxel axes from ImageData's `Direction` (VTK 9: the 3 × 3 direction matrix, row
+/// by row; column k is voxel axis k in VTK's world). VTK's world has no anatomy, so the
+/// axes are placed in the renderer's world as they were in VTK's (x right, y up, z
+/// towards the viewer): the identity changes nothing, a rotated grid is turned back
+/// upright ([`world_to_lps`]). `--orientation` states an anatomical one instead.
+fn direction_axes(d: &str) -> Result<[[f32; 3]; 3]> {
+    let v = parse_numbers::<f64>(d, "Direction")?;
+    ensure!(v.len() == 9, "Direction has {} values, expected 9", v.len());
+    let columns = std::array::from_fn(|k| std::array::from_fn(|r| v[3 * r + k]));
+    let axes = unit_axes(columns)
+        .ok_or_else(|| anyhow!("Direction '{d}' is degenerate (no orientation)"))?;
+    Ok(axes.map(world_to_lps))
 }
 
 #[derive(Clone, Copy)]
