@@ -664,7 +664,14 @@ impl Scene {
             files.push(p.clone());
         }
         match &self.volume {
-            VolumeSource::File { path, .. } if path.is_file() => files.push(path.clone()),
+            VolumeSource::File { path, .. } if path.is_file() => {
+                files.push(path.clone());
+                // A raw file's JSON sidecar, which may state its spacing.
+                if crate::volume::formats::is_raw(path) {
+                    let sidecars = crate::volume::formats::raw_sidecars(path);
+                    files.extend(sidecars.into_iter().filter(|p| p.is_file()));
+                }
+            }
             VolumeSource::Fetched { file, .. } => files.push(data_dir.join(file)),
             VolumeSource::Standin { name, .. } => files.extend(original_in(data_dir, name)),
             _ => {}

@@ -281,6 +281,11 @@ enum Format {
     Vti,
 }
 
+/// The JSON files beside a raw file that may state its spacing (see `raw`).
+pub fn raw_sidecars(path: &Path) -> Vec<std::path::PathBuf> {
+    raw::sidecar_paths(path)
+}
+
 /// True for a path named like a raw file (`.raw`, any case).
 pub fn is_raw(path: &Path) -> bool {
     matches!(Format::of(path), Some(Format::Raw))
