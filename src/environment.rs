@@ -269,6 +269,91 @@ impl EnvironmentMap {
         }
     }
 
+    /// The key light of the map (`--light env`): its brightest region as one directional
+    /// light. `None` for a map that is black everywhere.
+    ///
+    /// The peak is the largest radiance after a box blur of about 11° (so one hot pixel
+    /// does not win over a sun disk, and a soft box counts as a whole); the region is
+    /// every pixel within 25° of the peak whose luminance is at least half the blurred
+    /// peak's. Its direction is the region's flux-weighted mean direction, its colour the
+    /// irradiance it gives a surface facing it, Σ L Δω over the region (Δω the pixel's
+    /// solid angle): in the units of the map's radiance, so a dim night map gives a dim
+    /// light and the background seen behind the volume keeps the same scale.
+    pub fn key_light(&self) -> Option<KeyLight> {
+        use std::f64::consts::PI;
+        let (w, h) = (self.width as usize, self.height as usize);
+        let lum = |p: &[f32; 4]| 0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64;
+        let y: Vec<f64> = self.pixels.iter().map(lum).collect();
+        // Box blur, separable, wrapping around in longitude, clamped in latitude.
+        let r = (w / 64).max(1);
+        let mut across = vec![0.0; w * h];
+        for row in 0..h {
+            for x in 0..w {
+                let mut sum = 0.0;
+                for dx in 0..=2 * r {
+                    sum += y[row * w + (x + w + dx - r) % w];
+                }
+                across[row * w + x] = sum / (2 * r + 1) as f64;
+            }
+        }
+        let (mut peak, mut at) = (0.0, (0, 0));
+        for row in 0..h {
+            for x in 0..w {
+                let lo = row.saturating_sub(r);
+                let hi = (row + r).min(h - 1);
+                let sum: f64 = (lo..=hi).map(|yy| across[yy * w + x]).sum();
+                let v = sum / (hi - lo + 1) as f64;
+                if v > peak {
+                    peak = v;
+                    at = (x, row);
+                }
+            }
+        }
+        if peak <= 0.0 || !peak.is_finite() {
+            return None;
+        }
+        let dir = |x: usize, row: usize| {
+            let (phi, theta) =
+                pixel_angles(self.width, self.height, x as f32 + 0.5, row as f32 + 0.5);
+            (
+                glam::DVec3::from(direction(phi, theta).map(f64::from)),
+                theta as f64,
+            )
+        };
+        let (centre, _) = dir(at.0, at.1);
+        let cos_max = 25f64.to_radians().cos();
+        let pixel_area = (2.0 * PI / w as f64) * (PI / h as f64);
+        let (mut flux_dir, mut colour, mut solid_angle) = (glam::DVec3::ZERO, [0.0f64; 3], 0.0);
+        for row in 0..h {
+            for x in 0..w {
+                let p = &self.pixels[row * w + x];
+                if y[row * w + x] < 0.5 * peak {
+                    continue;
+                }
+                let (d, theta) = dir(x, row);
+                if d.dot(centre) < cos_max {
+                    continue;
+                }
+                let dw = pixel_area * theta.cos();
+                for c in 0..3 {
+                    colour[c] += p[c] as f64 * dw;
+                }
+                flux_dir += d * y[row * w + x] * dw;
+                solid_angle += dw;
+            }
+        }
+        let towards = if flux_dir.length() > 0.0 {
+            flux_dir.normalize()
+        } else {
+            centre
+        };
+        Some(KeyLight {
+            towards: towards.as_vec3().to_array(),
+            colour: colour.map(|c| c as f32),
+            solid_angle: solid_angle as f32,
+        })
+    }
+
     /// Mean colour (f64 accumulation).
     pub fn mean(&self) -> [f32; 4] {
         let mut acc = [0f64; 4];
@@ -376,6 +461,28 @@ fn srgb_to_linear(c: f32) -> f32 {
         c / 12.92
     } else {
         ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// A map's brightest region as a directional light ([`EnvironmentMap::key_light`]), in
+/// the map's own frame (before `--env-rotation`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct KeyLight {
+    /// Unit direction towards the region.
+    pub towards: [f32; 3],
+    /// Irradiance on a surface facing it (linear RGB, the map's units).
+    pub colour: [f32; 3],
+    /// The region's solid angle, steradians.
+    pub solid_angle: f32,
+}
+
+impl KeyLight {
+    /// [`KeyLight::towards`] in the world, for a map turned by `degrees` about the
+    /// vertical (the composite looks a world direction up in the map turned back by it).
+    pub fn world_towards(&self, degrees: f32) -> [f32; 3] {
+        let r = degrees.to_radians();
+        let [x, y, z] = self.towards;
+        [r.cos() * x + r.sin() * z, y, -r.sin() * x + r.cos() * z]
     }
 }
 

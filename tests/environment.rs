@@ -656,3 +656,108 @@ mod exr_compression {
         );
     }
 }
+
+/// `--light env` (issue 36): under a map with one bright spot, the key light comes from the
+/// spot: its direction and its irradiance (radiance × the disk's solid angle, computed
+/// here from the disk's size, not from the map's pixels). The render equals one lit
+/// explicitly from there, shadow and all; a light 30° away gives a visibly different
+/// image (so the comparison can fail).
+#[test]
+fn the_environment_lights_the_scene_from_its_brightest_spot() {
+    use exr::prelude::write_rgba_file;
+    use refrakt::environment::{direction, pixel_angles};
+    let dir = tempfile::tempdir().unwrap();
+    let map = dir.path().join("spot.exr");
+    let (w, h) = (512usize, 256usize);
+    let spot = glam::Vec3::new(0.25, 0.75, 0.6).normalize();
+    let (radius, radiance, dim) = (4f32.to_radians(), 60.0f32, 0.02f32);
+    let radiance_at = |x: usize, y: usize| {
+        let (phi, theta) = pixel_angles(w as u32, h as u32, x as f32 + 0.5, y as f32 + 0.5);
+        let d = glam::Vec3::from(direction(phi, theta));
+        if d.dot(spot) >= radius.cos() {
+            radiance
+        } else {
+            dim
+        }
+    };
+    write_rgba_file(&map, w, h, |x, y| {
+        let v = radiance_at(x, y);
+        (v, v, v, 1.0)
+    })
+    .unwrap();
+    // The disk's irradiance on a surface facing it: L · 2π(1 − cos r).
+    let e = radiance * 2.0 * std::f32::consts::PI * (1.0 - radius.cos());
+    let base = [
+        "render",
+        "sphere-on-floor",
+        "--volume-size",
+        "32",
+        "--width",
+        "40",
+        "--height",
+        "40",
+        "--env",
+        map.to_str().unwrap(),
+    ];
+    let run = |extra: &[&str], out: &str| {
+        let out = dir.path().join(out);
+        let mut args = base.to_vec();
+        args.extend(extra);
+        args.extend(["-o", out.to_str().unwrap()]);
+        let o = common::refrakt(&args);
+        let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
+        assert!(
+            o.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        (read_linear(&out), stdout)
+    };
+    let (from_env, log) = run(&["--light", "env"], "env.exr");
+    assert!(
+        log.contains("light from the environment's brightest region"),
+        "{log}"
+    );
+    let v = |d: glam::Vec3| format!("{},{},{}", d.x, d.y, d.z);
+    let c = format!("{e},{e},{e}");
+    let (explicit, _) = run(&["--light", &v(spot), "--light-colour", &c], "explicit.exr");
+    // 30° further round the vertical: the shadow moves.
+    let turned = glam::Quat::from_rotation_y(30f32.to_radians()) * spot;
+    let (elsewhere, _) = run(&["--light", &v(turned), "--light-colour", &c], "turned.exr");
+    let mean_diff = |a: &[[f32; 3]], b: &[[f32; 3]]| {
+        a.iter()
+            .zip(b)
+            .map(|(p, q)| (0..3).map(|k| (p[k] - q[k]).abs()).sum::<f32>() / 3.0)
+            .sum::<f32>()
+            / a.len() as f32
+    };
+    let mean_level = explicit
+        .iter()
+        .map(|p| (p[0] + p[1] + p[2]) / 3.0)
+        .sum::<f32>()
+        / explicit.len() as f32;
+    let same = mean_diff(&from_env, &explicit) / mean_level;
+    let moved = mean_diff(&elsewhere, &explicit) / mean_level;
+    println!("relative mean difference: env vs explicit {same:.4}, 30° away {moved:.4}");
+    assert!(
+        same < 0.03,
+        "--light env differs from the spot's light by {same:.4} of the mean"
+    );
+    assert!(
+        moved > 5.0 * same.max(0.005),
+        "a light 30° away differs by only {moved:.4}"
+    );
+}
+
+/// The linear RGB pixels of an EXR.
+fn read_linear(path: &std::path::Path) -> Vec<[f32; 3]> {
+    let img = exr::prelude::read_first_rgba_layer_from_file(
+        path,
+        |res, _| (res.width(), vec![[0f32; 3]; res.width() * res.height()]),
+        |(w, px): &mut (usize, Vec<[f32; 3]>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+            px[pos.y() * *w + pos.x()] = [r, g, b];
+        },
+    )
+    .unwrap();
+    img.layer_data.channel_data.pixels.1
+}

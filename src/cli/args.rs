@@ -560,11 +560,12 @@ pub struct SceneArgs {
     /// World-space direction towards the light, "x,y,z" (refract). It must lie in the
     /// viewer's hemisphere: the sweep runs front to back, so light cannot come from behind
     /// the volume. Also the AO model's diffuse light. Default: from above, tilted towards
-    /// the camera.
+    /// the camera. "env": direction and colour from the environment map's brightest
+    /// region (its irradiance, in the map's units: a night map gives a night scene).
     #[arg(
         help_heading = "Light",
         long,
-        value_name = "X,Y,Z",
+        value_name = "X,Y,Z|env",
         allow_hyphen_values = true
     )]
     pub light: Option<String>,

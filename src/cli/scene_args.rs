@@ -187,7 +187,17 @@ pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Resu
         o.background = Some(parse_background(b)?);
     }
     if let Some(l) = &args.light {
-        o.light_towards = Some(glam::Vec3::from(parse_floats::<3>("--light", l)?));
+        if l.trim().eq_ignore_ascii_case("env") {
+            if args.light_colour.is_some() {
+                bail!(
+                    "--light env takes the light's colour from the environment map too: drop \
+                     --light-colour, or give --light X,Y,Z"
+                );
+            }
+            o.light_from_env = Some(true);
+        } else {
+            o.light_towards = Some(glam::Vec3::from(parse_floats::<3>("--light", l)?));
+        }
     }
     if let Some(c) = &args.light_colour {
         o.light_colour = Some(parse_floats::<3>("--light-colour", c)?);

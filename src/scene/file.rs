@@ -68,9 +68,17 @@ struct CameraTable {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct LightTable {
-    towards: Option<[f32; 3]>,
+    towards: Option<Towards>,
     colour: Option<[f32; 3]>,
     softness: Option<f32>,
+}
+
+/// `[light] towards`: a direction, or "env" (the environment map's brightest region).
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum Towards {
+    Direction([f32; 3]),
+    Word(String),
 }
 
 #[derive(Deserialize)]
@@ -332,7 +340,22 @@ impl SceneFile {
             o.fov = c.fov;
         }
         if let Some(l) = self.light {
-            o.light_towards = l.towards.map(Vec3::from);
+            match l.towards {
+                Some(Towards::Direction(d)) => o.light_towards = Some(Vec3::from(d)),
+                Some(Towards::Word(w)) if w.eq_ignore_ascii_case("env") => {
+                    ensure!(
+                        l.colour.is_none(),
+                        "[light] towards = \"env\" takes the colour from the environment map \
+                         too: drop [light] colour"
+                    );
+                    o.light_from_env = Some(true);
+                }
+                Some(Towards::Word(w)) => bail!(
+                    "[light] towards = \"{w}\": expected [x, y, z] or \"env\" (the \
+                     environment map's brightest region)"
+                ),
+                None => {}
+            }
             o.light_colour = l.colour;
             o.softness = l.softness;
         }

@@ -82,6 +82,9 @@ pub struct Scene {
     pub camera: Camera,
     /// `None`: the default key light for the camera (see [`default_light`]).
     pub light_towards: Option<Vec3>,
+    /// `--light env`: the key light's direction and colour come from the environment
+    /// map's brightest region ([`EnvironmentMap::key_light`]) when the scene is loaded.
+    pub light_from_env: bool,
     pub light_colour: [f32; 3],
     pub softness: f32,
     pub environment: EnvSource,
@@ -154,6 +157,7 @@ pub struct Overrides {
     pub fov: Option<f32>,
     pub target: Option<Vec3>,
     pub light_towards: Option<Vec3>,
+    pub light_from_env: Option<bool>,
     pub light_colour: Option<[f32; 3]>,
     pub softness: Option<f32>,
     pub environment: Option<EnvSource>,
@@ -201,6 +205,11 @@ impl Scene {
         set(&mut self.camera.target, o.target);
         if o.light_towards.is_some() {
             self.light_towards = o.light_towards;
+            self.light_from_env = false;
+        }
+        if o.light_from_env == Some(true) {
+            self.light_from_env = true;
+            self.light_towards = None;
         }
         set(&mut self.light_colour, o.light_colour);
         set(&mut self.softness, o.softness);
@@ -263,6 +272,7 @@ impl Default for Scene {
             transfer: TransferSource::Named("glass-floor".into()),
             camera: Camera::default(),
             light_towards: None,
+            light_from_env: false,
             light_colour: Light::DEFAULT_COLOUR,
             softness: Light::DEFAULT_SOFTNESS,
             environment: EnvSource::Sky,
@@ -613,9 +623,60 @@ impl Scene {
         data_dir: &Path,
         limits: Option<DeviceLimits>,
     ) -> Result<LoadedScene> {
-        let opts = self.render_options()?;
+        let mut opts = self.render_options()?;
         let tone = self.tone_map()?;
         let env = self.environment_map()?;
+        let mut light_note = None;
+        if self.light_from_env {
+            let Some(map) = &env else {
+                bail!(
+                    "the light is to come from the environment (--light env, [light] towards \
+                     = \"env\"), but there is no environment map: give --env FILE or --env sky"
+                );
+            };
+            let key = map.key_light().ok_or_else(|| {
+                anyhow::anyhow!(
+                    "--light env: the environment map is black everywhere; it gives no light"
+                )
+            })?;
+            let towards = Vec3::from(key.world_towards(self.env_rotation));
+            // The sweep takes light from the viewer's side only: a map whose brightest
+            // region is behind the volume is said here, with the turn of the map that
+            // brings it round to the camera's side.
+            let (_, forward, _, _) = self.camera.frame();
+            if self.model == Model::Refract
+                && (-towards).dot(forward) < crate::render::limits::MIN_FORWARD
+            {
+                let angle = |v: Vec3| v.z.atan2(v.x).to_degrees();
+                let turn = angle(towards) - angle(-forward);
+                let r = (self.env_rotation + turn + 540.0).rem_euclid(360.0) - 180.0;
+                bail!(
+                    "--light env: the environment map's brightest region (towards ({:.2}, \
+                     {:.2}, {:.2})) lies behind the volume as this camera sees it, and the \
+                     sweep takes light from the viewer's side only; turn the map with \
+                     --env-rotation {r:.0} (the camera's side), move the camera, or give \
+                     --light X,Y,Z",
+                    towards.x,
+                    towards.y,
+                    towards.z
+                );
+            }
+            opts.sweep.light.towards = towards;
+            opts.sweep.light.colour = key.colour;
+            light_note = Some(format!(
+                "light from the environment's brightest region: towards ({:.3}, {:.3}, {:.3}) \
+                 ({:.0}° above the horizon), {:.4} sr, irradiance ({:.3}, {:.3}, {:.3})",
+                towards.x,
+                towards.y,
+                towards.z,
+                towards.y.clamp(-1.0, 1.0).asin().to_degrees(),
+                key.solid_angle,
+                key.colour[0],
+                key.colour[1],
+                key.colour[2]
+            ));
+            opts.validate()?;
+        }
         let derived = matches!(self.transfer, TransferSource::FromData);
         let tf = if derived {
             None
@@ -635,6 +696,7 @@ impl Scene {
         }
         let (tf, mut notes) = self.check_data(&volume, tf);
         notes.extend(upright);
+        notes.extend(light_note);
         let files = self.input_files(data_dir);
         Ok(LoadedScene {
             name: self.name.clone(),
