@@ -38,6 +38,12 @@ layout(set = 0, binding = 0, std430) readonly buffer ControlPoints {
 } tf;
 layout(set = 0, binding = 1, rgba32f) uniform writeonly image2DArray table;
 
+// A label volume (src/labels.rs) is sampled at the nearest voxel: between two samples the
+// value does not pass through the values between (other labels, or none) but jumps from
+// the front sample's label to the back one's. The segment is then half the front label
+// and half the back label, and η's extremes are those of the two labels.
+layout(constant_id = 0) const bool LABELS = false;
+
 const uint STEPS = 256u;
 const uint SUB = 8u;
 const float MIN_TRANSMITTANCE = 1e-30;  // ln() stays finite for alpha = 1 or m = 0
@@ -114,12 +120,12 @@ void main() {
     float tau = 0.0;          // optical depth so far
     vec3 ln_m = vec3(0.0);    // log of the medium product so far
     for (uint k = 0u; k < STEPS; ++k) {
-        float s = mix(front, back, (float(k) + 0.5) * h);
+        float s = LABELS ? (2u * k < STEPS ? front : back) : mix(front, back, (float(k) + 0.5) * h);
         vec3 colour = eval_tf(0u, s, cur_c);
         // Where the sub-segment contains no control point of opacity or medium both are
         // linear across it and one midpoint sample suffices; where it does, SUB samples
         // place the kink or step.
-        float s_end = mix(front, back, float(k + 1u) * h);
+        float s_end = LABELS ? s : mix(front, back, float(k + 1u) * h);
         int end_a = cur_a, end_m = cur_m;
         advance(1u, s_end, end_a);
         advance(2u, s_end, end_m);
@@ -127,7 +133,7 @@ void main() {
         float sigma_h = 0.0;
         vec3 ln_m_h = vec3(0.0);
         for (uint j = 0u; j < sub; ++j) {
-            float sj = mix(front, back, (float(k) + (float(j) + 0.5) / float(sub)) * h);
+            float sj = LABELS ? s : mix(front, back, (float(k) + (float(j) + 0.5) / float(sub)) * h);
             int ca = cur_a, cm = cur_m;
             float alpha = eval_tf(1u, sj, ca).x;
             vec3 m = eval_tf(2u, sj, cm);
@@ -148,5 +154,15 @@ void main() {
     imageStore(table, ivec3(id, 0), vec4(C, 1.0 - exp(-tau)));
     imageStore(table, ivec3(id, 1), vec4(exp(ln_m), 1.0));
     float lo = min(front, back), hi = max(front, back);
-    imageStore(table, ivec3(id, 2), vec4(eta_extreme(lo, hi, 1.0), eta_extreme(lo, hi, -1.0)));
+    if (LABELS) {
+        int c = locate(3u, front);
+        float ef = tf.count[3] == 0u ? 1.0 : eval_tf(3u, front, c).x;
+        c = locate(3u, back);
+        float eb = tf.count[3] == 0u ? 1.0 : eval_tf(3u, back, c).x;
+        vec2 top = ef >= eb ? vec2(ef, front) : vec2(eb, back);
+        vec2 dip = ef <= eb ? vec2(ef, front) : vec2(eb, back);
+        imageStore(table, ivec3(id, 2), vec4(top, dip));
+    } else {
+        imageStore(table, ivec3(id, 2), vec4(eta_extreme(lo, hi, 1.0), eta_extreme(lo, hi, -1.0)));
+    }
 }

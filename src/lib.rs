@@ -13,6 +13,7 @@ pub mod bench;
 pub mod camera;
 pub mod environment;
 pub mod files;
+pub mod labels;
 pub mod light;
 pub mod output;
 pub mod photons;

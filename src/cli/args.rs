@@ -513,6 +513,14 @@ pub struct SceneArgs {
     /// Transfer functions: a preset (see README) or a TOML file [scene default].
     #[arg(help_heading = "Look", long, value_name = "PRESET|FILE")]
     pub tf: Option<String>,
+    /// Label volumes (segmentations): "auto" (default) takes a volume file of at most 64
+    /// distinct integer values, with no --tf, as a label map; "on" forces it with the
+    /// built-in palette; FILE colours the labels from a colour table (3D Slicer
+    /// `index name R G B A`, or ITK-SNAP's label description); "off" treats the values as
+    /// a scan. Each label gets its own colour and opacity (label 0 none), and each sample
+    /// is classified by its nearest voxel (a segment between two labels is half each).
+    #[arg(help_heading = "Look", long, value_name = "auto|on|off|FILE")]
+    pub labels: Option<String>,
     /// Rendering model [default: refract].
     #[arg(help_heading = "Look", long, value_enum)]
     pub model: Option<ModelArg>,

@@ -138,6 +138,9 @@ pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Resu
     if let Some(u) = &args.upright {
         o.upright = Some(scene::parse_on_off(u).context("--upright")?);
     }
+    if let Some(l) = &args.labels {
+        o.labels = Some(scene::LabelChoice::parse(l));
+    }
     if let Some(code) = &args.orientation {
         o.orientation = Some(refrakt::volume::orientation::parse_code(code)?);
     }

@@ -99,6 +99,8 @@ pub struct Renderer {
     tf_image: Image,
     tf_dirty: bool,
     linear: Sampler,
+    /// The volume's sampler for classification: linear, nearest for a label volume.
+    volume_sampler: Sampler,
     preint: PreintegrationTable,
     /// Each model's pass, made on its first frame and again when the size changes.
     passes: HashMap<Model, Box<dyn ModelPass>>,
@@ -178,7 +180,12 @@ impl Renderer {
         let volume_tex = upload::volume_texture(ctx, volume)?;
         let tf_image = upload::transfer_texture(ctx, tf)?;
         let linear = Sampler::new(ctx, Filter::Linear, "linear clamp")?;
-        let preint = PreintegrationTable::new(ctx)?;
+        let volume_sampler = if volume.labels {
+            Sampler::new(ctx, Filter::Nearest, "label volume (nearest)")?
+        } else {
+            Sampler::new(ctx, Filter::Linear, "volume (linear)")?
+        };
+        let preint = PreintegrationTable::new(ctx, volume.labels)?;
         let (env, _) = Environment::new(ctx, None)?;
         let e = volume.normalised_extent();
         Ok(Self {
@@ -205,6 +212,7 @@ impl Renderer {
             tf_image,
             tf_dirty: true,
             linear,
+            volume_sampler,
             preint,
             passes: HashMap::new(),
             env,
@@ -692,6 +700,7 @@ impl Renderer {
             eta_films: self.tf.eta_has_films(),
             preint: self.preint.image(),
             linear: &self.linear,
+            volume_sampler: &self.volume_sampler,
             env: refract::EnvInputs {
                 map: &self.env.image,
                 sat: &self.env.sat.table,

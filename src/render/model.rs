@@ -53,6 +53,9 @@ pub(crate) struct Inputs<'a> {
     pub eta_films: bool,
     pub preint: &'a Image,
     pub linear: &'a Sampler,
+    /// How the models that classify samples read the volume: `linear`, or nearest for a
+    /// label volume ([`crate::volume::Volume::labels`]: no blend between two labels).
+    pub volume_sampler: &'a Sampler,
     pub env: EnvInputs<'a>,
 }
 

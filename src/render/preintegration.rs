@@ -34,7 +34,9 @@ pub struct PreintegrationTable {
 }
 
 impl PreintegrationTable {
-    pub fn new(ctx: &Context) -> Result<Self> {
+    /// `labels`: the table of a label volume (nearest-voxel classification: each segment
+    /// half its front label, half its back label; glsl/preintegrate.comp).
+    pub fn new(ctx: &Context, labels: bool) -> Result<Self> {
         // Header (2 x uvec4) plus every control point of the four functions.
         let control_points = Buffer::new(
             ctx,
@@ -61,8 +63,14 @@ impl PreintegrationTable {
             ],
             "preintegration",
         )?;
-        let pipeline =
-            ComputePipeline::new(ctx, shaders::PREINTEGRATE_COMP, &set, 0, "preintegrate")?;
+        let pipeline = ComputePipeline::with_constants(
+            ctx,
+            shaders::PREINTEGRATE_COMP,
+            &set,
+            0,
+            &[labels as u32],
+            "preintegrate",
+        )?;
         Ok(Self {
             image,
             control_points,

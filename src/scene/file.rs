@@ -41,6 +41,8 @@ struct VolumeTable {
     upright: Option<bool>,
     /// Where the voxel axes point, e.g. "RAS" (replaces the file's; see --orientation).
     orientation: Option<String>,
+    /// "auto", "on", "off" or a colour table file (see --labels).
+    labels: Option<String>,
 }
 
 #[derive(Deserialize)]
@@ -250,6 +252,12 @@ impl SceneFile {
             o.flip = Some(parse_flip(f).context("[volume] flip")?);
         }
         o.upright = v.upright;
+        if let Some(l) = &v.labels {
+            o.labels = Some(match LabelChoice::parse(l) {
+                LabelChoice::Table(p) => LabelChoice::Table(rel(&p.to_string_lossy())?),
+                other => other,
+            });
+        }
         if let Some(code) = &v.orientation {
             o.orientation =
                 Some(crate::volume::orientation::parse_code(code).context("[volume] orientation")?);

@@ -58,6 +58,31 @@ pub enum EnvSource {
     File(PathBuf),
 }
 
+/// `--labels`: is the volume a label map (segmentation), and where do its colours come
+/// from (`crate::labels`).
+#[derive(Clone, Debug, PartialEq)]
+pub enum LabelChoice {
+    /// A volume file whose transfer functions are derived from the data and whose
+    /// values are at most [`crate::labels::MAX_AUTO_LABELS`] distinct integers.
+    Auto,
+    /// A label map, coloured from the built-in palette.
+    On,
+    /// A label map, coloured from this colour table.
+    Table(PathBuf),
+    Off,
+}
+
+impl LabelChoice {
+    pub fn parse(s: &str) -> Self {
+        match s.trim() {
+            "auto" => Self::Auto,
+            "on" => Self::On,
+            "off" => Self::Off,
+            file => Self::Table(PathBuf::from(file)),
+        }
+    }
+}
+
 /// A fully resolved scene. Build the GPU inputs with the methods below.
 #[derive(Clone, Debug)]
 pub struct Scene {
@@ -74,6 +99,9 @@ pub struct Scene {
     /// [`Volume::axes`]), stated by the user (`--orientation RAS`): replaces what the
     /// file says, for volume files only.
     pub orientation: Option<[[f32; 3]; 3]>,
+    /// Whether the volume is a label map (`--labels`): detected, forced with the built-in
+    /// palette or a colour table, or off.
+    pub labels: LabelChoice,
     /// Axes (x, y, z) to mirror the data along after loading and turning upright (two = a
     /// 180° rotation).
     pub flip: [bool; 3],
@@ -165,6 +193,7 @@ pub struct Overrides {
     pub flip: Option<[bool; 3]>,
     pub upright: Option<bool>,
     pub orientation: Option<[[f32; 3]; 3]>,
+    pub labels: Option<LabelChoice>,
 }
 
 impl Scene {
@@ -220,6 +249,7 @@ impl Scene {
         if o.orientation.is_some() {
             self.orientation = o.orientation;
         }
+        set(&mut self.labels, o.labels);
     }
 }
 
@@ -269,6 +299,7 @@ impl Default for Scene {
             flip: [false; 3],
             upright: false,
             orientation: None,
+            labels: LabelChoice::Auto,
             transfer: TransferSource::Named("glass-floor".into()),
             camera: Camera::default(),
             light_towards: None,
@@ -345,6 +376,7 @@ impl Scene {
             transfer: TransferSource::FromData,
             upright: true,
             orientation: None,
+            labels: LabelChoice::Auto,
             // A neutral backdrop: the sky's checkerboard seen from above became giant
             // tiles that washed out translucent tissue (issue 36).
             environment: EnvSource::None,
@@ -683,7 +715,13 @@ impl Scene {
         } else {
             Some(self.transfer_functions()?)
         };
-        let (volume, upright) = self.load_volume_noted(data_dir, limits)?;
+        let (mut volume, upright) = self.load_volume_noted(data_dir, limits)?;
+        let mut tf = tf;
+        let mut label_note = None;
+        if let Some((labels_tf, note)) = self.label_map(&mut volume, derived)? {
+            tf = Some(labels_tf);
+            label_note = Some(note);
+        }
         if self.model == Model::Refract {
             // The sweep's planes need the camera outside the box: said now, with the scene
             // file named (load_all), not after the device has been set up.
@@ -695,6 +733,7 @@ impl Scene {
             )?;
         }
         let (tf, mut notes) = self.check_data(&volume, tf);
+        notes.extend(label_note);
         notes.extend(upright);
         notes.extend(light_note);
         let files = self.input_files(data_dir);
@@ -710,6 +749,84 @@ impl Scene {
             files,
             notes,
         })
+    }
+
+    /// The categorical transfer functions of a label volume, and a note, when the scene
+    /// asks for labels or detects them (`derived`: the transfer functions are the data's
+    /// own); marks the volume for nearest-voxel classification.
+    fn label_map(
+        &self,
+        volume: &mut Volume,
+        derived: bool,
+    ) -> Result<Option<(TransferFunctions, String)>> {
+        use crate::labels;
+        let from_file = matches!(
+            self.volume,
+            VolumeSource::File { .. } | VolumeSource::Fetched { .. }
+        );
+        let forced = matches!(self.labels, LabelChoice::On | LabelChoice::Table(_));
+        if forced || self.labels == LabelChoice::Off {
+            ensure!(
+                from_file,
+                "--labels applies to volume files; '{}' is a built-in scene",
+                self.name
+            );
+        }
+        if forced {
+            ensure!(
+                derived,
+                "--labels makes the transfer functions from the labels: drop --tf (or \
+                 [transfer])"
+            );
+        }
+        if !from_file || !derived || self.labels == LabelChoice::Off {
+            return Ok(None);
+        }
+        let max = if forced {
+            4096
+        } else {
+            labels::MAX_AUTO_LABELS
+        };
+        let integer_file = volume.stored.is_some_and(|t| t.contains("int"));
+        let values = match labels::distinct_values(volume, max) {
+            Some(v) if forced || (integer_file && v.len() >= 2) => v,
+            Some(_) | None if !forced => return Ok(None),
+            _ => bail!(
+                "--labels: the volume's values are not a label map (more than {max} \
+                 distinct values, or values that are not integers)"
+            ),
+        };
+        let (table, source) = match &self.labels {
+            LabelChoice::Table(path) => (labels::read_table(path)?, format!("{}", path.display())),
+            _ => (
+                labels::default_labels(&values),
+                "the built-in palette".into(),
+            ),
+        };
+        let tf = labels::categorical(&table, &values, volume.value_range());
+        volume.labels = true;
+        let missing = values
+            .iter()
+            .filter(|v| !table.iter().any(|l| l.value == **v))
+            .count();
+        let mut note = format!(
+            "label volume: {} labels ({} .. {}), colours from {source}; classified by the \
+             nearest voxel (a segment between two labels is half each){}",
+            values.len(),
+            values[0],
+            values[values.len() - 1],
+            if self.labels == LabelChoice::Auto {
+                " (detected; --labels off treats the values as a scan)"
+            } else {
+                ""
+            }
+        );
+        if missing > 0 {
+            note.push_str(&format!(
+                "; {missing} of the volume's values are not in the table and are not drawn"
+            ));
+        }
+        Ok(Some((tf, note)))
     }
 
     /// The files this scene reads (scene file, transfer functions, environment map, volume

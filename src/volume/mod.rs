@@ -64,6 +64,9 @@ pub struct Volume {
     /// raw file without a sidecar, a header without spacings): the scene warns, since a
     /// CT with 5 mm slices then renders squashed.
     pub spacing_stated: bool,
+    /// A label map (segmentation): its values name categories, so the renderer
+    /// classifies the nearest voxel instead of interpolating (`crate::labels`).
+    pub labels: bool,
 }
 
 impl Volume {
@@ -76,6 +79,7 @@ impl Volume {
             axes: None,
             stored: None,
             spacing_stated: true,
+            labels: false,
         };
         v.validate()?;
         Ok(v)

@@ -129,7 +129,7 @@ impl RayMarchPass {
         let output = FrameTarget::new(ctx, width, height, &format!("{name} frame"))?;
         let mut bindings = vec![
             Binding::Uniform(&params),
-            Binding::Texture(inputs.volume, sampler),
+            Binding::Texture(inputs.volume, inputs.volume_sampler),
             Binding::Texture(inputs.tf, sampler),
             Binding::Texture(inputs.preint, sampler),
             Binding::StorageImage(&output.image),

@@ -365,6 +365,7 @@ impl SweepPass {
             tf,
             preint,
             linear: sampler,
+            volume_sampler,
             env,
             ..
         } = inputs;
@@ -495,7 +496,7 @@ impl SweepPass {
 
         let common = [
             Binding::Uniform(&params),
-            Binding::Texture(volume, sampler),
+            Binding::Texture(volume, volume_sampler),
             Binding::Texture(tf, sampler),
             Binding::Texture(preint, sampler),
         ];

@@ -492,6 +492,7 @@ pub(crate) fn loaded(
         axes,
         stored: None,
         spacing_stated: true,
+        labels: false,
     }
 }
 

@@ -1,0 +1,99 @@
+//! Issue 36, "label volumes in colour": a segmentation gets a categorical transfer
+//! function from a colour table and is classified by its nearest voxel, so two labels
+//! side by side never show the colour of a value between them.
+//!
+//! The volume: label 2 on the left, label 4 on the right, background 0 around. The table
+//! also has label 3, green, which the volume does not contain: interpolating across the
+//! 2 | 4 boundary passes through 3 and would paint a green seam there (measured: with the
+//! volume sampled trilinearly the seam's pixels are green). Seen face on, unlit (EA),
+//! each half must be its label's colour and nothing green anywhere.
+
+mod common;
+
+use common::refrakt;
+
+const N: usize = 20;
+
+#[test]
+fn labels_take_their_table_colours_and_never_blend() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut v = vec![0u8; N * N * N];
+    for z in 4..N - 4 {
+        for y in 4..N - 4 {
+            for x in 4..N - 4 {
+                v[x + N * (y + N * z)] = if x < N / 2 { 2 } else { 4 };
+            }
+        }
+    }
+    let raw = dir.path().join("seg_20x20x20_uint8.raw");
+    std::fs::write(&raw, &v).unwrap();
+    let table = dir.path().join("seg.ctbl");
+    std::fs::write(
+        &table,
+        "# 3D Slicer colour table\n0 Background 0 0 0 0\n2 left 255 0 0 255\n\
+         3 between 0 255 0 255\n4 right 0 0 255 255\n",
+    )
+    .unwrap();
+    let out = dir.path().join("o.exr");
+    for model in ["ea", "refract"] {
+        let o = refrakt(&[
+            "render",
+            raw.to_str().unwrap(),
+            "--labels",
+            table.to_str().unwrap(),
+            "--model",
+            model,
+            "--spacing",
+            "1,1,1",
+            "--azimuth",
+            "0",
+            "--elevation",
+            "0",
+            "--background",
+            "0,0,0,1",
+            "--width",
+            "40",
+            "--height",
+            "40",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        assert!(
+            stdout.contains("label volume: 3 labels (0 .. 4)") && stdout.contains("seg.ctbl"),
+            "{stdout}"
+        );
+        let img = exr::prelude::read_first_rgba_layer_from_file(
+            &out,
+            |res, _| (res.width(), vec![[0f32; 3]; res.width() * res.height()]),
+            |(w, px): &mut (usize, Vec<[f32; 3]>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+                px[pos.y() * *w + pos.x()] = [r, g, b];
+            },
+        )
+        .unwrap();
+        let (w, px) = img.layer_data.channel_data.pixels;
+        let (mut red_left, mut blue_right, mut green) = (0, 0, 0.0f32);
+        for (i, p) in px.iter().enumerate() {
+            let x = i % w;
+            let (r, g, b) = (p[0], p[1], p[2]);
+            // Green beyond what light and shading could mix in: none of the labels has any.
+            green = green.max(g / (r + g + b).max(1e-3));
+            if r > 0.05 && r > 4.0 * b && x < w / 2 {
+                red_left += 1;
+            }
+            if b > 0.05 && b > 4.0 * r && x >= w / 2 {
+                blue_right += 1;
+            }
+        }
+        println!("{model}: red left {red_left}, blue right {blue_right}, green share {green:.4}");
+        assert!(
+            red_left > 100 && blue_right > 100,
+            "{model}: labels not in their colours"
+        );
+        assert!(
+            green < 0.02,
+            "{model}: a green share of {green:.3}: the labels blended"
+        );
+    }
+}
