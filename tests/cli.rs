@@ -757,12 +757,23 @@ fn empty_looking_data_warns_and_bare_volumes_get_derived_transfer_functions() {
         err.contains("will be empty") && err.contains("0 .. 29") && err.contains("--window 0,29"),
         "no empty-image warning with the data range in: {err}"
     );
-    // Bare: derived transfer functions, no warning, the volume visible.
-    let o = run(&args(&[]));
+    // Bare, read as a scan (--labels off): derived transfer functions, no warning, the
+    // volume visible.
+    let o = run(&args(&["--labels", "off"]));
     assert!(o.status.success(), "{}", stderr(&o));
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(stdout.contains("derived from the histogram"), "{stdout}");
     assert!(stdout.contains("values 0 .. 29"), "{stdout}");
+    assert!(!stderr(&o).contains("will be empty"), "{}", stderr(&o));
+    // Bare as it is: two integer values are a label map (issue 36), coloured from the
+    // palette, not derived from the histogram.
+    let o = run(&args(&[]));
+    assert!(o.status.success(), "{}", stderr(&o));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stdout.contains("label volume: 2 labels (0 .. 29)") && !stdout.contains("histogram"),
+        "{stdout}"
+    );
     assert!(!stderr(&o).contains("will be empty"), "{}", stderr(&o));
 }
 
