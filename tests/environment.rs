@@ -711,7 +711,7 @@ fn the_environment_lights_the_scene_from_its_brightest_spot() {
             "{args:?}: {}",
             String::from_utf8_lossy(&o.stderr)
         );
-        (read_linear(&out), stdout)
+        (common::read_exr_rgb(&out).1, stdout)
     };
     let (from_env, log) = run(&["--light", "env"], "env.exr");
     assert!(
@@ -747,17 +747,4 @@ fn the_environment_lights_the_scene_from_its_brightest_spot() {
         moved > 5.0 * same.max(0.005),
         "a light 30° away differs by only {moved:.4}"
     );
-}
-
-/// The linear RGB pixels of an EXR.
-fn read_linear(path: &std::path::Path) -> Vec<[f32; 3]> {
-    let img = exr::prelude::read_first_rgba_layer_from_file(
-        path,
-        |res, _| (res.width(), vec![[0f32; 3]; res.width() * res.height()]),
-        |(w, px): &mut (usize, Vec<[f32; 3]>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
-            px[pos.y() * *w + pos.x()] = [r, g, b];
-        },
-    )
-    .unwrap();
-    img.layer_data.channel_data.pixels.1
 }

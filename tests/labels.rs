@@ -64,15 +64,7 @@ fn labels_take_their_table_colours_and_never_blend() {
             stdout.contains("label volume: 3 labels (0 .. 4)") && stdout.contains("seg.ctbl"),
             "{stdout}"
         );
-        let img = exr::prelude::read_first_rgba_layer_from_file(
-            &out,
-            |res, _| (res.width(), vec![[0f32; 3]; res.width() * res.height()]),
-            |(w, px): &mut (usize, Vec<[f32; 3]>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
-                px[pos.y() * *w + pos.x()] = [r, g, b];
-            },
-        )
-        .unwrap();
-        let (w, px) = img.layer_data.channel_data.pixels;
+        let (w, px) = common::read_exr_rgb(&out);
         let (mut red_left, mut blue_right, mut green) = (0, 0, 0.0f32);
         for (i, p) in px.iter().enumerate() {
             let x = i % w;

@@ -84,7 +84,7 @@ fn nifti(cols: [[f32; 3]; 3]) -> Vec<u8> {
 
 /// Renders `file` from the front (EA, unlit) and returns the brightness-weighted centroid
 /// of the image, in [-1, 1] with +x right and +y up, and the pixels; and stderr.
-fn centroid(file: &Path, extra: &[&str], out: &Path) -> ([f64; 2], Vec<[f32; 4]>, String) {
+fn centroid(file: &Path, extra: &[&str], out: &Path) -> ([f64; 2], Vec<[f32; 3]>, String) {
     let mut args = vec![
         "render",
         file.to_str().unwrap(),
@@ -107,15 +107,7 @@ fn centroid(file: &Path, extra: &[&str], out: &Path) -> ([f64; 2], Vec<[f32; 4]>
     let o = refrakt(&args);
     let err = String::from_utf8_lossy(&o.stderr).into_owned();
     assert!(o.status.success(), "{args:?}: {err}");
-    let img = exr::prelude::read_first_rgba_layer_from_file(
-        out,
-        |res, _| (res.width(), vec![[0f32; 4]; res.width() * res.height()]),
-        |(w, px): &mut (usize, Vec<[f32; 4]>), pos, (r, g, b, a): (f32, f32, f32, f32)| {
-            px[pos.y() * *w + pos.x()] = [r, g, b, a];
-        },
-    )
-    .unwrap();
-    let (w, px) = img.layer_data.channel_data.pixels;
+    let (w, px) = common::read_exr_rgb(out);
     let h = px.len() / w;
     let (mut sx, mut sy, mut sum) = (0.0, 0.0, 0.0);
     for (i, p) in px.iter().enumerate() {

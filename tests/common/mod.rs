@@ -327,3 +327,17 @@ pub fn smoothed(img: &[[f32; 4]], w: usize, h: usize) -> Vec<f64> {
     }
     out
 }
+
+/// The linear RGB pixels of an EXR written by `render`, row-major from the top, with the
+/// image's width.
+pub fn read_exr_rgb(path: &std::path::Path) -> (usize, Vec<[f32; 3]>) {
+    let img = exr::prelude::read_first_rgba_layer_from_file(
+        path,
+        |res, _| (res.width(), vec![[0f32; 3]; res.width() * res.height()]),
+        |(w, px): &mut (usize, Vec<[f32; 3]>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+            px[pos.y() * *w + pos.x()] = [r, g, b];
+        },
+    )
+    .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    img.layer_data.channel_data.pixels
+}
