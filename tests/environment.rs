@@ -696,12 +696,11 @@ fn the_environment_lights_the_scene_from_its_brightest_spot() {
         "40",
         "--height",
         "40",
-        "--env",
-        map.to_str().unwrap(),
     ];
-    let run = |extra: &[&str], out: &str| {
+    let run_with = |env: &std::path::Path, extra: &[&str], out: &str| {
         let out = dir.path().join(out);
         let mut args = base.to_vec();
+        args.extend(["--env", env.to_str().unwrap()]);
         args.extend(extra);
         args.extend(["-o", out.to_str().unwrap()]);
         let o = common::refrakt(&args);
@@ -713,6 +712,7 @@ fn the_environment_lights_the_scene_from_its_brightest_spot() {
         );
         (common::read_exr_rgb(&out).1, stdout)
     };
+    let run = |extra: &[&str], out: &str| run_with(&map, extra, out);
     let (from_env, log) = run(&["--light", "env"], "env.exr");
     assert!(
         log.contains("light from the environment's brightest region"),
@@ -746,5 +746,27 @@ fn the_environment_lights_the_scene_from_its_brightest_spot() {
     assert!(
         moved > 5.0 * same.max(0.005),
         "a light 30° away differs by only {moved:.4}"
+    );
+    // --env-rotation turns the light with the map. With rotation r a world direction of
+    // longitude φ sees the map at φ + r (glsl/sweep_composite.comp), so the map rolled
+    // back by r (a column shift of r / 360 · width) and turned by r shows the same
+    // background as the map itself unturned, and must be lit from the same place.
+    let rolled = dir.path().join("rolled.exr");
+    let shift = w / 8; // 45°
+    write_rgba_file(&rolled, w, h, |x, y| {
+        let v = radiance_at((x + w - shift) % w, y);
+        (v, v, v, 1.0)
+    })
+    .unwrap();
+    let (turned_map, _) = run_with(
+        &rolled,
+        &["--env-rotation", "45", "--light", "env"],
+        "rot.exr",
+    );
+    let rotated = mean_diff(&turned_map, &from_env) / mean_level;
+    println!("rolled map turned back by --env-rotation 45: {rotated:.6}");
+    assert!(
+        rotated < 1e-3,
+        "--env-rotation 45 on the rolled map differs by {rotated:.4} of the mean"
     );
 }
