@@ -26,18 +26,23 @@ void main() {
     // images, one ray per cell of a regular grid over the launch plane (plane -1), carrying
     // the flux of its cell (irradiance x cell area, so that the splat of unobstructed rays
     // reads the light colour), its position in .w. Texels past the grid hold no light.
-    if (P.transport.x > 0.5 && all(lessThan(id, ivec2(P.light_rays.zw)))) {
-        int r = id.y * int(P.light_rays.z) + id.x;
+    // The grid's size changes with the camera, so it chooses values here, never a branch:
+    // lavapipe (Mesa 22.3) inlines uniforms that decide a branch into the shader and
+    // compiles a variant per value, 0.36 s per frame while the camera moves (measured in
+    // the viewer with an empty Mesa shader cache); the ray images' size is the image's.
+    ivec2 ray_image = imageSize(rays_flux).xy;
+    if (P.transport.x > 0.5 && all(lessThan(id, ray_image))) {
+        int r = id.y * ray_image.x + id.x;
         ivec2 grid = ivec2(P.light_rays.xy);
         ivec2 ij = ivec2(r % grid.x, r / grid.x);
-        vec4 lc = vec4(0.0);
-        vec4 ld = vec4(0.0, 0.0, 1.0, 0.0);
-        if (r < grid.x * grid.y) {
-            vec2 pos = P.light_grid.xy + (vec2(ij) + 0.5) * P.light_grid.zw;
-            float eta_l = eta_of(value_at_tex(to_tex(vec3(pos, d0 - ds))));
-            lc = vec4(P.light_colour.rgb * (P.light_grid.z * P.light_grid.w), pos.x);
-            ld = vec4(P.light_dir.xyz * eta_l, pos.y);
-        }
+        bool in_grid = r < grid.x * grid.y;
+        vec2 pos = P.light_grid.xy + (vec2(ij) + 0.5) * P.light_grid.zw;
+        float eta_l = eta_of(value_at_tex(to_tex(vec3(pos, d0 - ds))));
+        vec4 lc = mix(vec4(0.0),
+                      vec4(P.light_colour.rgb * (P.light_grid.z * P.light_grid.w), pos.x),
+                      bvec4(in_grid));
+        vec4 ld = mix(vec4(0.0, 0.0, 1.0, 0.0), vec4(P.light_dir.xyz * eta_l, pos.y),
+                      bvec4(in_grid));
         for (int layer = 0; layer < 2; ++layer) {
             imageStore(rays_flux, ivec3(id, layer), lc);
             imageStore(rays_direction, ivec3(id, layer), ld);
