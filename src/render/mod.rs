@@ -102,9 +102,24 @@ pub struct Renderer {
     /// The volume's sampler for classification: linear, nearest for a label volume.
     volume_sampler: Sampler,
     preint: PreintegrationTable,
-    /// Each model's pass, made on its first frame and again when the size changes.
-    passes: HashMap<Model, Box<dyn ModelPass>>,
+    /// Each model's pass per slot, made on its first frame there and again when the size
+    /// changes.
+    passes: HashMap<(Model, Slot), Box<dyn ModelPass>>,
     env: Environment,
+}
+
+/// Which of a model's two passes a recording uses. A pass owns its images and pipelines
+/// for one frame size; the viewer alternates reduced-size previews with full frames, and
+/// with one pass per model each switch would rebuild it (pipelines, state images). Both
+/// slots share everything else (volume, tables, environment).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum Slot {
+    /// The frames [`Renderer::render`] reads back and the viewer's full-quality frames.
+    #[default]
+    Main,
+    /// The viewer's previews while the view changes, one slot per rung of its ladder
+    /// (`viewer::preview`), so that a change of rung rebuilds nothing it has built before.
+    Preview(u8),
 }
 
 /// The environment map on the GPU with its summed-area table. A 2 × 1 black map stands in
@@ -416,8 +431,8 @@ impl Renderer {
         let ctx = self.ctx.clone();
         let mut recorded = None;
         let record = |rec: &mut Recorder| {
-            let r = self.record_inner(rec, model, camera, opts, true)?;
-            self.target(model)?.record_copy(rec);
+            let r = self.record_inner(rec, Slot::Main, model, camera, opts, true)?;
+            self.target(model, Slot::Main)?.record_copy(rec);
             recorded = Some(r);
             Ok(())
         };
@@ -429,7 +444,7 @@ impl Renderer {
         if let Some(s) = recorded.sweep.as_mut() {
             s.read_clamps()?;
         }
-        let target = self.target(model)?;
+        let target = self.target(model, Slot::Main)?;
         let (width, height) = (opts.width, opts.height);
         let dumps = match &recorded.sweep {
             Some(s) => s.read_dumps(width, height)?,
@@ -461,6 +476,20 @@ impl Renderer {
         camera: &Camera,
         opts: &RenderOptions,
     ) -> Result<RecordedFrame<'_>> {
+        self.record_in(rec, Slot::Main, model, camera, opts)
+    }
+
+    /// [`Renderer::record`] with the pass of `slot`: the viewer records its previews in
+    /// [`Slot::Preview`], so that switching between a preview's size and the full one
+    /// rebuilds nothing.
+    pub fn record_in(
+        &mut self,
+        rec: &mut Recorder,
+        slot: Slot,
+        model: Model,
+        camera: &Camera,
+        opts: &RenderOptions,
+    ) -> Result<RecordedFrame<'_>> {
         ensure!(
             opts.sweep.dumps.is_empty(),
             "state-buffer dumps are read back by Renderer::render, not recorded frames"
@@ -470,19 +499,24 @@ impl Renderer {
         self.ensure_field(model, opts)?;
         self.ensure_extinction(model)?;
         self.ensure_ambient_table(model, opts)?;
-        let r = self.record_inner(rec, model, camera, opts, false)?;
+        let r = self.record_inner(rec, slot, model, camera, opts, false)?;
         Ok(RecordedFrame {
-            image: &self.target(model)?.image,
+            image: &self.target(model, slot)?.image,
             max_steps: r.max_steps,
             sweep: r.sweep.map(|s| s.stats),
         })
     }
 
-    fn target(&self, model: Model) -> Result<&FrameTarget> {
+    fn target(&self, model: Model, slot: Slot) -> Result<&FrameTarget> {
         self.passes
-            .get(&model)
+            .get(&(model, slot))
             .map(|p| p.output())
             .ok_or_else(|| anyhow::anyhow!("no {} frame has been recorded", model.name()))
+    }
+
+    /// Drop `model`'s passes in both slots (their descriptor sets name inputs that change).
+    fn remove_passes(&mut self, model: Model) {
+        self.passes.retain(|(m, _), _| *m != model);
     }
 
     /// Build the gradient volume if `model` needs it and it is not there yet: its own
@@ -537,7 +571,7 @@ impl Renderer {
             )?);
             self.field_dirty = true;
             // The pass's descriptor set names the volume in the field's place: make it anew.
-            self.passes.remove(&model);
+            self.remove_passes(model);
         }
         Ok(())
     }
@@ -612,7 +646,7 @@ impl Renderer {
     /// whose albedo differs from the table's are refused.
     pub fn set_ambient_table(&mut self, table: &ambient::table::AmbientTable) -> Result<()> {
         table.params.validate()?;
-        self.passes.remove(&Model::Ambient);
+        self.remove_passes(Model::Ambient);
         self.ambient_table = Some(ambient::TableTextures::new(&self.ctx, table, true)?);
         Ok(())
     }
@@ -648,7 +682,7 @@ impl Renderer {
         };
         log::info!("ambient-scattering table for albedo {albedo}: loading or building");
         let (table, _) = ambient::table::load_or_build(&params, None, 0, &|_, _| {})?;
-        self.passes.remove(&Model::Ambient);
+        self.remove_passes(Model::Ambient);
         self.ambient_table = Some(ambient::TableTextures::new(&self.ctx, &table, false)?);
         Ok(())
     }
@@ -657,6 +691,7 @@ impl Renderer {
     fn record_inner(
         &mut self,
         rec: &mut Recorder,
+        slot: Slot,
         model: Model,
         camera: &Camera,
         opts: &RenderOptions,
@@ -710,12 +745,13 @@ impl Renderer {
         };
         let passes = &mut self.passes;
         let mut record = |rec: &mut Recorder| -> Result<Recorded> {
-            if !passes.get(&model).is_some_and(|p| p.fits(opts)) {
+            let key = (model, slot);
+            if !passes.get(&key).is_some_and(|p| p.fits(opts)) {
                 // Free the old pass's images before making the new one.
-                passes.remove(&model);
-                passes.insert(model, model::make_pass(model, &inputs)?);
+                passes.remove(&key);
+                passes.insert(key, model::make_pass(model, &inputs)?);
             }
-            let pass = passes.get_mut(&model).expect("just made");
+            let pass = passes.get_mut(&key).expect("just made");
             pass.record(rec, &inputs)
         };
         // The benchmark's frame time: every pass and barrier of the frame, without a table

@@ -72,7 +72,7 @@ pub fn steps_for(half_extent: Vec3, ref_step: f32, sample_distance: f32) -> u64 
     (diag / (sample_distance as f64 * ref_step as f64)).ceil() as u64
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct RenderOptions {
     pub width: u32,
     pub height: u32,

@@ -2,10 +2,16 @@
 //! 8-bit colour attachment (a swapchain image in the viewer), with the arithmetic of
 //! [`crate::tone::ToneMap`] and [`crate::tone::linear_to_srgb`] — what the PNG path does
 //! on the CPU — in `glsl/tonemap.frag`. `tests/viewer.rs` checks the two agree within 1/255.
+//!
+//! The source may be smaller than the target: the viewer's previews are rendered at a
+//! fraction of the window's size and shown magnified (bilinear between the source's pixel
+//! centres). At equal sizes each pixel is its source texel, exactly. The viewer also draws
+//! a small axes marker into a corner (the world's x, y, z as red, green, blue lines).
 
 use anyhow::{ensure, Result};
 use bytemuck::{Pod, Zeroable};
 
+use crate::camera::Camera;
 use crate::shaders;
 use crate::tone::{ToneMap, ToneOperator};
 use crate::vk::{
@@ -19,8 +25,18 @@ struct Push {
     scale: f32,
     op: u32,
     encode_srgb: u32,
-    pad: u32,
+    /// 1: draw the axes marker.
+    axes: u32,
+    /// The target's size in pixels (the source's comes from the image).
+    target: [u32; 2],
+    pad: [u32; 2],
+    /// The world's x, y and z axes on the screen: (right, down, towards the viewer)
+    /// components of each unit axis.
+    axis: [[f32; 4]; 3],
 }
+
+/// Source images the pass keeps descriptor sets for (the viewer's full frame and preview).
+const BOUND_SOURCES: usize = 4;
 
 /// Source image (by [`Image::id`]), its descriptor set and the pipeline laid out for it.
 struct Bound {
@@ -35,7 +51,8 @@ pub struct ToneMapPass {
     sampler: Sampler,
     format: vk::Format,
     encode_srgb: bool,
-    bound: Option<Bound>,
+    /// Most recently used first.
+    bound: Vec<Bound>,
 }
 
 impl ToneMapPass {
@@ -49,7 +66,7 @@ impl ToneMapPass {
             sampler: Sampler::new(ctx, Filter::Nearest, "tonemap nearest")?,
             format,
             encode_srgb: !target_encodes_srgb,
-            bound: None,
+            bound: Vec::new(),
         })
     }
 
@@ -64,8 +81,9 @@ impl ToneMapPass {
     }
 
     /// Record the pass: `source` (linear RGBA, the renderer's frame) → `target` (layer 0,
-    /// through `framebuffer`, of the same size). The descriptor set and pipeline are kept
-    /// while the source image stays the same one.
+    /// through `framebuffer`), magnified when the source is smaller, with the axes marker
+    /// of `axes`' view when given. Descriptor sets and pipelines are kept for the last few
+    /// source images.
     pub fn record(
         &mut self,
         rec: &mut Recorder,
@@ -73,15 +91,62 @@ impl ToneMapPass {
         target: &Image,
         framebuffer: &Framebuffer,
         tone: &ToneMap,
+        axes: Option<&Camera>,
     ) -> Result<()> {
         let [w, h, _] = source.extent();
         let [tw, th, _] = target.extent();
         ensure!(
-            (w, h) == (tw, th),
-            "tonemap source is {w}x{h}, target {tw}x{th}; they must match"
+            w <= tw && h <= th,
+            "tonemap source is {w}x{h}, larger than its target {tw}x{th}"
         );
-        if self.bound.as_ref().map(|b| b.source) != Some(source.id()) {
-            self.bound = None;
+        match self.bound.iter().position(|b| b.source == source.id()) {
+            Some(i) => {
+                let b = self.bound.remove(i);
+                self.bound.insert(0, b);
+            }
+            None => {
+                self.bound.truncate(BOUND_SOURCES - 1);
+                let b = self.bind(source)?;
+                self.bound.insert(0, b);
+            }
+        }
+        let bound = &self.bound[0];
+        let mut axis = [[0.0; 4]; 3];
+        if let Some(camera) = axes {
+            let (_, forward, right, up) = camera.frame();
+            for (a, world) in axis
+                .iter_mut()
+                .zip([glam::Vec3::X, glam::Vec3::Y, glam::Vec3::Z])
+            {
+                *a = [right.dot(world), -up.dot(world), -forward.dot(world), 0.0];
+            }
+        }
+        let push = Push {
+            scale: tone.exposure.exp2(),
+            op: match tone.operator {
+                ToneOperator::None => 0,
+                ToneOperator::Reinhard => 1,
+                ToneOperator::Aces => 2,
+            },
+            encode_srgb: u32::from(self.encode_srgb),
+            axes: u32::from(axes.is_some()),
+            target: [tw, th],
+            pad: [0; 2],
+            axis,
+        };
+        let render_pass = &self.render_pass;
+        rec.pass("tonemap", &[Use::all(source, Access::Sampled)], |rec| {
+            rec.begin_render_pass(render_pass, framebuffer, &[(target, 0)])?;
+            rec.bind_graphics(&bound.pipeline, &bound.set, tw, th);
+            rec.draw_fullscreen(&bound.pipeline, bytemuck::bytes_of(&push))?;
+            rec.end_render_pass();
+            Ok(())
+        })
+    }
+
+    /// A descriptor set over `source` and a pipeline laid out for it.
+    fn bind(&self, source: &Image) -> Result<Bound> {
+        {
             let set = DescriptorSet::new(
                 &self.ctx,
                 &[Binding::Texture(source, &self.sampler)],
@@ -98,31 +163,12 @@ impl ToneMapPass {
                 ),
                 "tonemap",
             )?;
-            self.bound = Some(Bound {
+            Ok(Bound {
                 source: source.id(),
                 set,
                 pipeline,
-            });
+            })
         }
-        let bound = self.bound.as_ref().expect("just bound");
-        let push = Push {
-            scale: tone.exposure.exp2(),
-            op: match tone.operator {
-                ToneOperator::None => 0,
-                ToneOperator::Reinhard => 1,
-                ToneOperator::Aces => 2,
-            },
-            encode_srgb: u32::from(self.encode_srgb),
-            pad: 0,
-        };
-        let render_pass = &self.render_pass;
-        rec.pass("tonemap", &[Use::all(source, Access::Sampled)], |rec| {
-            rec.begin_render_pass(render_pass, framebuffer, &[(target, 0)])?;
-            rec.bind_graphics(&bound.pipeline, &bound.set, w, h);
-            rec.draw_fullscreen(&bound.pipeline, bytemuck::bytes_of(&push))?;
-            rec.end_render_pass();
-            Ok(())
-        })
     }
 }
 
@@ -136,7 +182,10 @@ mod tests {
             scale,
             op,
             encode_srgb,
-            pad
+            axes,
+            target,
+            pad,
+            axis
         });
         crate::vk::spirv::check_block(
             shaders::TONEMAP_FRAG,

@@ -162,7 +162,7 @@ pub use super::limits::MIN_FORWARD;
 pub const MAX_ETA_SCALE: f32 = 3.0;
 
 /// Options of the refractive model beyond the common [`RenderOptions`].
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct SweepOptions {
     pub light: Light,
     /// GGX roughness of the Cook–Torrance specular term.
