@@ -20,6 +20,14 @@ use refrakt::transfer::TransferFunctions;
 use refrakt::vk::{self, Framebuffer, Image, ImageDesc, ImageKind};
 use refrakt::volume::procedural;
 
+/// The tests of this file one at a time: the preview test reads frame times, which other
+/// renders on the same CPU cores would stretch.
+static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+fn exclusive() -> std::sync::MutexGuard<'static, ()> {
+    ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner())
+}
+
 /// Tone map `frame` with the GPU pass into an RGBA8 UNORM image and read it back.
 fn gpu_tonemap(
     ctx: &vk::Context,
@@ -55,7 +63,7 @@ fn gpu_tonemap(
     let linear = renderer.render(model, camera, opts).unwrap().pixels;
     ctx.execute(|rec| {
         let out = renderer.record(rec, model, camera, opts)?;
-        pass.record(rec, out.image, &target, &fb, tone)
+        pass.record(rec, out.image, &target, &fb, tone, None)
     })
     .unwrap();
     (ctx.read_image(&target, 0).unwrap(), linear)
@@ -75,6 +83,7 @@ fn max_difference(a: &[u8], b: &[u8]) -> (u8, usize) {
 
 #[test]
 fn gpu_tone_mapping_matches_the_png_path() {
+    let _one = exclusive();
     common::with_context(|ctx| {
         let volume = procedural::sphere_on_floor(24).unwrap();
         let tf = TransferFunctions::load("glass-floor").unwrap();
@@ -130,6 +139,7 @@ fn gpu_tone_mapping_matches_the_png_path() {
 
 #[test]
 fn recorded_frames_equal_rendered_frames() {
+    let _one = exclusive();
     // Renderer::record (the viewer's path) leaves in its image exactly what render reads
     // back, also when several recordings with different cameras and models share one
     // submission: each frame's parameters travel in the command stream (a parameter
@@ -271,6 +281,7 @@ fn read_png(path: &Path) -> (u32, u32, Vec<u8>) {
 
 #[test]
 fn viewer_runs_resizes_and_shows_the_headless_image() {
+    let _one = exclusive();
     let Some((display, xvfb)) = display() else {
         return;
     };
@@ -303,6 +314,7 @@ fn viewer_runs_resizes_and_shows_the_headless_image() {
         "120x80@2",
         "--screenshot",
         shot.to_str().unwrap(),
+        "--no-axes",
     ];
     args.extend(scene);
     let o = refrakt(&args, &display);
@@ -366,8 +378,131 @@ fn viewer_runs_resizes_and_shows_the_headless_image() {
     drop(xvfb);
 }
 
+/// "frame N: QUALITY: MS ms GPU, ..." lines of the viewer's log: (N, quality, ms).
+fn frame_lines(out: &str) -> Vec<(u64, String, f64)> {
+    out.lines()
+        .filter_map(|l| {
+            let rest = l.strip_prefix("frame ")?;
+            let (n, rest) = rest.split_once(": ")?;
+            let (quality, rest) = rest.rsplit_once(": ")?;
+            let ms = rest.split_once(" ms GPU")?.0.parse().ok()?;
+            Some((n.parse().ok()?, quality.to_string(), ms))
+        })
+        .collect()
+}
+
+#[test]
+fn previews_while_dragging_fit_the_budget_and_the_refined_frame_is_the_render() {
+    let _one = exclusive();
+    // Issue 36: a scripted drag (the camera orbits 4 degrees before each of the first six
+    // frames, as a mouse drag does) on a 256² window. Every frame while the view changes
+    // is a preview whose GPU time (the viewer's own log) is within the budget; once the
+    // view is still, the frame is full quality and equals `render` of the view the drag
+    // ended at. Without previews the frames take seconds each on lavapipe; a refined frame
+    // that kept a preview's size or sample distance would differ from the render.
+    let Some((display, xvfb)) = display() else {
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let shot = dir.path().join("refined.png");
+    let headless = dir.path().join("headless.png");
+    const BUDGET_MS: f64 = 100.0;
+    let scene = [
+        "--volume-size",
+        "32",
+        "--elevation",
+        "25",
+        "--light",
+        "0,1,0",
+        "--sample-distance",
+        "2",
+    ];
+    let mut args = vec![
+        "view",
+        "glass-floor",
+        "--width",
+        "256",
+        "--height",
+        "256",
+        "--azimuth",
+        "40",
+        "--drag",
+        "6",
+        "--frames",
+        "9",
+        "--preview-budget",
+        "100",
+        "--no-axes",
+        "--screenshot",
+        shot.to_str().unwrap(),
+    ];
+    args.extend(scene);
+    let o = refrakt(&args, &display);
+    let out = String::from_utf8_lossy(&o.stdout);
+    let err = String::from_utf8_lossy(&o.stderr);
+    println!("{out}{err}");
+    assert!(o.status.success(), "view failed ({}):\n{err}", o.status);
+    let frames = frame_lines(&out);
+    for n in 0..6 {
+        let (_, quality, ms) = frames
+            .iter()
+            .find(|f| f.0 == n)
+            .unwrap_or_else(|| panic!("frame {n} missing:\n{out}"));
+        assert!(
+            quality.starts_with("preview "),
+            "frame {n}, while dragging, is '{quality}'"
+        );
+        assert!(
+            *ms <= BUDGET_MS,
+            "frame {n} ({quality}) took {ms} ms, over the {BUDGET_MS} ms budget"
+        );
+    }
+    for (n, quality, ms) in &frames {
+        if quality.starts_with("preview ") {
+            assert!(*ms <= BUDGET_MS, "frame {n} ({quality}) took {ms} ms");
+        }
+    }
+    let last = frames.iter().find(|f| f.0 == 8).expect("frame 8");
+    assert_eq!(last.1, "full", "the last frame is refined");
+    assert!(
+        last.2 > BUDGET_MS,
+        "the full frame ({} ms) must cost more than a preview may, or the test shows nothing",
+        last.2
+    );
+
+    // The drag turned the camera from azimuth 40 by 6 × 4 degrees.
+    let mut args = vec![
+        "render",
+        "--scene",
+        "glass-floor",
+        "--width",
+        "256",
+        "--height",
+        "256",
+        "--azimuth",
+        "16",
+        "-o",
+        headless.to_str().unwrap(),
+    ];
+    args.extend(scene);
+    let o = refrakt(&args, &display);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (w, h, shown) = read_png(&shot);
+    assert_eq!((w, h), (256, 256));
+    let (_, _, expected) = read_png(&headless);
+    let (d, at) = max_difference(&shown, &expected);
+    assert!(
+        d <= 1,
+        "refined frame and render differ by {d}/255 at pixel ({}, {})",
+        (at / 4) as u32 % w,
+        (at / 4) as u32 / w
+    );
+    drop(xvfb);
+}
+
 #[test]
 fn view_options_and_a_missing_display_are_clear_errors() {
+    let _one = exclusive();
     let run = |args: &[&str]| {
         Command::new(env!("CARGO_BIN_EXE_refrakt"))
             .args(args)

@@ -790,6 +790,20 @@ pub struct ViewArgs {
     /// environment map) change on disk (R still reloads).
     #[arg(long)]
     pub no_watch: bool,
+    /// GPU time per frame, in ms, that previews must fit while the view changes: they are
+    /// rendered at a reduced size and sample distance (the cheapest first, then the best
+    /// that measured within the budget), and a full-quality frame follows once the view
+    /// has been still for 0.3 s. 0: no previews, every frame at full quality.
+    #[arg(long, value_name = "MS", default_value_t = refrakt::viewer::preview::DEFAULT_BUDGET_MS, allow_negative_numbers = true)]
+    pub preview_budget: f64,
+    /// Orbit the camera before each of the first N frames as a drag of 10 pixels to the
+    /// right would (4 degrees; for tests and scripts, with --frames).
+    #[arg(long, value_name = "N")]
+    pub drag: Option<u64>,
+    /// Do not draw the axes marker (the world's x, y, z in red, green, blue in the
+    /// bottom-left corner; X toggles it).
+    #[arg(long)]
+    pub no_axes: bool,
 }
 
 #[derive(Args)]

@@ -22,6 +22,12 @@ pub fn view(desc: &ContextDesc, args: ViewArgs) -> Result<ExitCode> {
         bail!("--frames must be at least 1");
     }
     let resize = args.resize.as_deref().map(parse_resize).transpose()?;
+    if !(args.preview_budget.is_finite() && args.preview_budget >= 0.0) {
+        bail!(
+            "--preview-budget {}: expected a frame time in ms, 0 or more (0: no previews)",
+            args.preview_budget
+        );
+    }
     if !args.screenshot_dir.is_dir() {
         bail!(
             "--screenshot-dir {}: the folder does not exist",
@@ -44,6 +50,9 @@ pub fn view(desc: &ContextDesc, args: ViewArgs) -> Result<ExitCode> {
         resize,
         screenshot_dir: args.screenshot_dir.clone(),
         watch: !args.no_watch,
+        preview_budget_ms: (args.preview_budget > 0.0).then_some(args.preview_budget),
+        drag: args.drag,
+        axes: !args.no_axes,
     };
     let report = viewer::run(
         desc.clone(),

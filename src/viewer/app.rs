@@ -57,6 +57,7 @@ impl App {
             camera: scene.camera,
             opts: scene.opts.clone(),
             tone: scene.tone,
+            axes: options.axes,
         };
         Self {
             clip_default: scene.opts.sweep.clip,
@@ -157,9 +158,14 @@ impl App {
             shot_requested: false,
             shot_counter: 0,
             resize_done: false,
-            planes: HashMap::new(),
+            in_flight: HashMap::new(),
             last_print: None,
             last_check_error: None,
+            preview: self.options.preview_budget_ms.map(PreviewControl::new),
+            seen: None,
+            changed_at: Instant::now(),
+            refined: false,
+            last_drag: None,
         };
         let proxy = self.proxy.clone();
         let handle = std::thread::Builder::new()
@@ -250,6 +256,14 @@ impl App {
                         said = Some("screenshot at the next frame".into());
                     }
                     "h" => println!("{KEY_MAP}"),
+                    "x" => {
+                        let mut st = self.state.lock().unwrap();
+                        st.axes = !st.axes;
+                        said = Some(format!(
+                            "axes marker {}",
+                            if st.axes { "on" } else { "off" }
+                        ));
+                    }
                     "c" => {
                         let mut st = self.state.lock().unwrap();
                         if st.opts.sweep.clip.is_some() {
@@ -355,14 +369,7 @@ impl App {
                 if let Some((px, py)) = self.input.cursor {
                     let (dx, dy) = ((x - px) as f32, (y - py) as f32);
                     if self.input.orbiting {
-                        let mut s = self.state.lock().unwrap();
-                        let c = &mut s.camera;
-                        c.azimuth = (c.azimuth - dx * DRAG_DEG_PER_PIXEL).rem_euclid(360.0);
-                        c.elevation = (c.elevation + dy * DRAG_DEG_PER_PIXEL).clamp(-89.0, 89.0);
-                        // The light stays put in the world unless the camera left its cone.
-                        let camera = s.camera;
-                        let l = &mut s.opts.sweep.light.towards;
-                        *l = clamp_light(*l, &camera);
+                        orbit(&mut self.state.lock().unwrap(), dx, dy);
                     } else if self.input.lighting {
                         self.light_moved(dx * DRAG_DEG_PER_PIXEL, -dy * DRAG_DEG_PER_PIXEL);
                     }

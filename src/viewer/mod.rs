@@ -12,6 +12,12 @@
 //! rendered (Mesa's software WSI does, so on lavapipe a 512² sweep would freeze the window
 //! for seconds per frame); the event loop never waits for the GPU.
 //!
+//! What is drawn ([`preview`]): while the view changes, previews at a reduced size and
+//! sample distance chosen to fit a frame-time budget; once it has been still for
+//! [`preview::SETTLE`], one full-quality frame, and then nothing until it changes again
+//! (with `--frames`, frames go on being drawn at full quality, for scripts and tests). The
+//! window's title and the log name each frame's quality and GPU time.
+//!
 //! Per frame: the renderer's recording (preintegration if the transfer functions changed,
 //! sweep or EA) and the tone-map pass go into one command buffer with the swapchain's
 //! acquire/present synchronization ([`Swapchain::frame`]); up to
@@ -48,14 +54,28 @@ use crate::vk::{
 /// Reloads the scene from its sources (the command line's options and files).
 pub type SceneLoader = Box<dyn FnMut() -> Result<LoadedScene>>;
 
-/// What the controls change and every frame reads.
-#[derive(Clone, Debug)]
+/// What the controls change and every frame reads. A change of any of it (compared as a
+/// whole) starts previews.
+#[derive(Clone, Debug, PartialEq)]
 pub struct ViewState {
     pub model: Model,
     pub camera: Camera,
     /// The size is replaced by the swapchain's at each frame.
     pub opts: RenderOptions,
     pub tone: ToneMap,
+    /// Draw the axes marker.
+    pub axes: bool,
+}
+
+/// A left-drag of (dx, dy) pixels: orbit the camera; the light stays put in the world
+/// unless the camera left its cone.
+pub(super) fn orbit(s: &mut ViewState, dx: f32, dy: f32) {
+    let c = &mut s.camera;
+    c.azimuth = (c.azimuth - dx * DRAG_DEG_PER_PIXEL).rem_euclid(360.0);
+    c.elevation = (c.elevation + dy * DRAG_DEG_PER_PIXEL).clamp(-89.0, 89.0);
+    let camera = s.camera;
+    let l = &mut s.opts.sweep.light.towards;
+    *l = clamp_light(*l, &camera);
 }
 
 /// Main thread → render thread.
@@ -91,7 +111,17 @@ pub struct ViewOptions {
     pub screenshot_dir: PathBuf,
     /// Reload when the scene's files change on disk.
     pub watch: bool,
+    /// The previews' GPU frame-time budget in ms; None: no previews, every frame full.
+    pub preview_budget_ms: Option<f64>,
+    /// Orbit the camera by a scripted drag of [`SCRIPTED_DRAG_PX`] before each of the
+    /// first N frames (tests, scripts).
+    pub drag: Option<u64>,
+    /// Draw the axes marker (X toggles it).
+    pub axes: bool,
 }
+
+/// Pixels to the right per frame of `--drag` (4 degrees of azimuth).
+pub const SCRIPTED_DRAG_PX: f32 = 10.0;
 
 /// What a viewer session leaves behind.
 #[derive(Clone, Debug, Default)]
@@ -102,6 +132,8 @@ pub struct ViewReport {
     pub validation_messages: usize,
     /// GPU milliseconds of each completed frame (the "frame" scope), in order.
     pub frame_ms: Vec<f64>,
+    /// The quality of each completed frame with a time, in the same order.
+    pub frame_quality: Vec<preview::Quality>,
 }
 
 /// The key map `H` prints (and the README documents).
@@ -116,6 +148,7 @@ refrakt view keys:
   ; / '             specular roughness - / +
   M                 model: refract > ea > ao > single > ambient (cycles)
   C                 clipping plane on / off
+  X                 axes marker on / off (x red, y green, z blue; darker: pointing away)
   R                 reload the scene and transfer-function files (also automatic on change)
   P                 screenshot (PNG as shown + linear EXR)
   H                 this help
@@ -190,7 +223,9 @@ pub fn run(
 }
 
 mod app;
+pub mod preview;
 mod render_loop;
 
 use app::*;
+use preview::PreviewControl;
 use render_loop::*;

@@ -1,7 +1,15 @@
-//! The render thread: the swapchain, the renderer and the tone-map pass, frame after frame
-//! with the view state as it is when each frame is recorded; screenshots.
+//! The render thread: the swapchain, the renderer and the tone-map pass; previews while
+//! the view changes and a full frame once it is still, each with the view state as it is
+//! when the frame is recorded; screenshots.
 
+use super::preview::{PreviewControl, Quality, SETTLE};
 use super::*;
+use crate::render::Slot;
+use crate::vk::{Image, ImageDesc, ImageKind};
+
+/// How long the render thread sleeps between looks at the view while it has nothing to
+/// draw (the refined frame is shown and the view has not changed).
+const IDLE_POLL: Duration = Duration::from_millis(10);
 
 /// Everything on the GPU, owned by the render thread. Dropped in field order after
 /// [`Gpu::drop`] waited for the device: what the frames use, then the swapchain, the
@@ -78,14 +86,25 @@ pub(super) struct RenderLoop {
     pub(super) shot_requested: bool,
     pub(super) shot_counter: u32,
     pub(super) resize_done: bool,
-    /// Planes of each frame in flight, for the title once its timings arrive.
-    pub(super) planes: HashMap<u64, Option<u32>>,
+    /// Planes and quality of each frame in flight, for the title once its timings arrive.
+    pub(super) in_flight: HashMap<u64, (Option<u32>, Quality)>,
     pub(super) last_print: Option<Instant>,
     pub(super) last_check_error: Option<String>,
+    /// The previews' rung; None when previews are off.
+    pub(super) preview: Option<PreviewControl>,
+    /// The view (with the window's size) as last looked at, and since when it is so.
+    pub(super) seen: Option<ViewState>,
+    pub(super) changed_at: Instant,
+    /// A full-quality frame of `seen` has been drawn.
+    pub(super) refined: bool,
+    /// The frame the scripted drag last moved the camera before.
+    pub(super) last_drag: Option<u64>,
 }
 
 impl RenderLoop {
     pub(super) fn run(&mut self) -> Result<()> {
+        self.preintegrate()?;
+        self.warm_up()?;
         loop {
             if !self.messages()? {
                 return Ok(());
@@ -95,8 +114,157 @@ impl RenderLoop {
                 self.collect_timings();
                 return Ok(());
             }
-            self.draw()?;
+            self.scripted_drag();
+            match self.next_quality() {
+                Some(quality) => {
+                    self.draw(quality)?;
+                    if quality == Quality::Full {
+                        self.refined = true;
+                    }
+                }
+                None => std::thread::sleep(IDLE_POLL),
+            }
             self.collect_timings();
+        }
+    }
+
+    /// Build the preintegration table for new transfer functions in a submission of its
+    /// own (seconds on a CPU device), so that no preview carries it.
+    fn preintegrate(&mut self) -> Result<()> {
+        let t = self.gpu.renderer.update_preintegration()?;
+        if let Some(ms) = t.get("preintegration") {
+            println!("preintegration table: {ms:.1} ms GPU");
+        }
+        Ok(())
+    }
+
+    /// The view a frame of `quality` renders in a window of `window` pixels, and the
+    /// renderer's slot for it.
+    fn frame_view(&self, quality: Quality, window: [u32; 2]) -> (ViewState, Slot) {
+        let mut view = self.state.lock().unwrap().clone();
+        [view.opts.width, view.opts.height] = quality.size(window);
+        view.opts.sample_distance *= quality.sample_factor();
+        let slot = match quality {
+            Quality::Full => Slot::Main,
+            Quality::Preview(k) => Slot::Preview(k),
+        };
+        (view, slot)
+    }
+
+    /// Record the first preview once, off screen, before the window shows anything. A CPU
+    /// device (llvmpipe) compiles a pipeline's shaders when it first runs them, inside the
+    /// frame: about 2 s for the sweep's on an empty Mesa shader cache, which would make
+    /// the first interaction wait; here it is part of the start, like the preintegration.
+    fn warm_up(&mut self) -> Result<()> {
+        let Some(preview) = &self.preview else {
+            return Ok(());
+        };
+        let quality = preview.quality();
+        let gpu = &self.gpu;
+        let window = gpu.swapchain.extent();
+        let (view, slot) = self.frame_view(quality, window);
+        if gpu
+            .renderer
+            .check(view.model, &view.camera, &view.opts)
+            .is_err()
+        {
+            // draw() reports it.
+            return Ok(());
+        }
+        let [w, h] = window;
+        let target = Image::new(
+            &gpu.ctx,
+            ImageDesc {
+                kind: ImageKind::D2,
+                format: gpu.swapchain.format(),
+                extent: [w, h, 1],
+                layers: 1,
+                usage: crate::vk::usage::COLOR_ATTACHMENT,
+            },
+            "warm-up target",
+        )?;
+        let target_view = target.layer_view(0)?;
+        let framebuffer = Framebuffer::new(
+            &gpu.ctx,
+            gpu.tonemap.render_pass(),
+            &[&target_view],
+            w,
+            h,
+            "warm-up framebuffer",
+        )?;
+        let Gpu {
+            ctx,
+            renderer,
+            tonemap,
+            ..
+        } = &mut self.gpu;
+        let t = ctx.execute(|rec| {
+            rec.begin_scope("warm-up");
+            let out = renderer.record_in(rec, slot, view.model, &view.camera, &view.opts)?;
+            let axes = view.axes.then_some(&view.camera);
+            tonemap.record(rec, out.image, &target, &framebuffer, &view.tone, axes)?;
+            rec.end_scope();
+            Ok(())
+        })?;
+        if let Some(ms) = t.get("warm-up") {
+            println!(
+                "previews prepared ({}): {ms:.1} ms GPU",
+                quality.describe(window)
+            );
+        }
+        Ok(())
+    }
+
+    /// --drag: before each of the first N frames, move the camera as a left-drag of
+    /// SCRIPTED_DRAG_PX to the right does.
+    fn scripted_drag(&mut self) {
+        if self
+            .options
+            .drag
+            .is_some_and(|n| self.report.frames < n && !self.dragged(self.report.frames))
+        {
+            orbit(&mut self.state.lock().unwrap(), SCRIPTED_DRAG_PX, 0.0);
+            self.last_drag = Some(self.report.frames);
+        }
+    }
+
+    /// The scripted drag moved the camera before frame `n` already (a frame that was not
+    /// presented is drawn again with the same view).
+    fn dragged(&self, n: u64) -> bool {
+        self.last_drag == Some(n)
+    }
+
+    /// What to draw next: a preview while the view changes (and for SETTLE after), then a
+    /// full frame; None once that is shown and the view has not changed since (with
+    /// `--frames`, full frames go on). Screenshots and the last frame of `--frames` are
+    /// full.
+    fn next_quality(&mut self) -> Option<Quality> {
+        let size = self.gpu.window.inner_size();
+        let mut view = self.state.lock().unwrap().clone();
+        view.opts.width = size.width;
+        view.opts.height = size.height;
+        if self.seen.as_ref() != Some(&view) {
+            if let (Some(p), Some(seen)) = (self.preview.as_mut(), &self.seen) {
+                if seen.model != view.model {
+                    // The rungs' times were the other model's.
+                    p.forget();
+                }
+            }
+            self.seen = Some(view);
+            self.changed_at = Instant::now();
+            self.refined = false;
+        }
+        let last = self
+            .options
+            .frames
+            .is_some_and(|n| self.report.frames + 1 == n);
+        if self.shot_requested || last {
+            return Some(Quality::Full);
+        }
+        match &self.preview {
+            Some(p) if self.changed_at.elapsed() < SETTLE => Some(p.quality()),
+            _ if self.refined && self.options.frames.is_none() => None,
+            _ => Some(Quality::Full),
         }
     }
 
@@ -146,7 +314,7 @@ impl RenderLoop {
         }
         gpu.renderer.set_environment(new.env.as_ref())?;
         self.scene_name = new.name;
-        Ok(())
+        self.preintegrate()
     }
 
     /// --resize: ask for the size before frame N and wait (up to RESIZE_TIMEOUT) until the
@@ -178,8 +346,8 @@ impl RenderLoop {
         }
     }
 
-    /// Record and present one frame.
-    pub(super) fn draw(&mut self) -> Result<()> {
+    /// Record and present one frame of `quality`.
+    pub(super) fn draw(&mut self, quality: Quality) -> Result<()> {
         self.scripted_resize();
         let size = self.gpu.window.inner_size();
         if size.width == 0 || size.height == 0 {
@@ -191,9 +359,8 @@ impl RenderLoop {
             gpu.rebuild_targets()?;
         }
         let [w, h] = gpu.swapchain.extent();
-        let mut view = self.state.lock().unwrap().clone();
-        view.opts.width = w;
-        view.opts.height = h;
+        let (view, slot) = self.frame_view(quality, [w, h]);
+        let gpu = &mut self.gpu;
         // Controls keep every value in range; anything left (a reloaded scene the renderer
         // refuses) is reported once and nothing is drawn until it changes.
         if let Err(e) = gpu.renderer.check(view.model, &view.camera, &view.opts) {
@@ -228,9 +395,17 @@ impl RenderLoop {
         } = &mut self.gpu;
         let status = swapchain.frame(|rec, index, target| {
             rec.begin_scope("frame");
-            let out = renderer.record(rec, view.model, &view.camera, &view.opts)?;
+            let out = renderer.record_in(rec, slot, view.model, &view.camera, &view.opts)?;
             planes = out.sweep.as_ref().map(|s| s.planes.count);
-            tonemap.record(rec, out.image, target, &framebuffers[index], &view.tone)?;
+            let axes = view.axes.then_some(&view.camera);
+            tonemap.record(
+                rec,
+                out.image,
+                target,
+                &framebuffers[index],
+                &view.tone,
+                axes,
+            )?;
             if let Some(shot) = &shot {
                 if let Some(buf) = &shot.shown {
                     rec.copy_image_to_buffer(target, 0, buf);
@@ -241,7 +416,7 @@ impl RenderLoop {
             Ok(())
         })?;
         if let FrameStatus::Presented(n) = status {
-            self.planes.insert(n, planes);
+            self.in_flight.insert(n, (planes, quality));
             self.report.frames += 1;
             if let Some(shot) = shot {
                 self.gpu.swapchain.wait_idle()?;
@@ -292,12 +467,16 @@ impl RenderLoop {
     pub(super) fn collect_timings(&mut self) {
         let done = self.gpu.swapchain.take_timings();
         for (n, t) in done {
-            let planes = self.planes.remove(&n).flatten();
-            let line = summary(&t, planes);
+            let (planes, quality) = self.in_flight.remove(&n).unwrap_or((None, Quality::Full));
+            let [w, h] = self.gpu.swapchain.extent();
+            let line = format!("{}: {}", quality.describe([w, h]), summary(&t, planes));
             if let Some(ms) = t.get("frame") {
                 self.report.frame_ms.push(ms);
+                self.report.frame_quality.push(quality);
+                if let Some(p) = self.preview.as_mut() {
+                    p.observe(quality, ms, [w, h]);
+                }
             }
-            let [w, h] = self.gpu.swapchain.extent();
             let model = self.state.lock().unwrap().model;
             self.gpu.window.set_title(&format!(
                 "refrakt view: {} ({}) {w}x{h} | {line}",
@@ -308,7 +487,8 @@ impl RenderLoop {
                 .last_print
                 .map(|t| t.elapsed() >= Duration::from_secs(1))
                 .unwrap_or(true);
-            if self.options.frames.is_some() || due {
+            // Every full frame is printed: the refined one ends an interaction.
+            if self.options.frames.is_some() || due || quality == Quality::Full {
                 println!("frame {n}: {line}");
                 self.last_print = Some(Instant::now());
             }
