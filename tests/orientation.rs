@@ -196,6 +196,53 @@ fn stated_orientations_put_the_marker_where_the_anatomy_says() {
 }
 
 #[test]
+fn quarter_turns_move_the_marker_as_the_right_hand_rule_says() {
+    // The raw marker, read as plain voxel axes, sits at +x, −y, −z: lower right from the
+    // front. Each turn is right-handed about a world axis (x right, y up, z towards the
+    // camera) and turns are applied in the order given.
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let out = d.join("o.exr");
+    let raw = write(d, "mk_16x16x16_uint8.raw", &marker());
+    let mut turned = Vec::new();
+    for (turns, want) in [
+        // z90: +x → +y, +y → −x.
+        ("z90", "upper right"),
+        ("z180", "upper left"),
+        // x90: +y → +z, −z → +y: the marker comes up, now in front.
+        ("x90", "upper right"),
+        // y90: +z → +x, +x → −z: the marker, at the back, goes left.
+        ("y90", "lower left"),
+        // In order: x90 brings it up (+x, +y), then z90 takes +x to +y and +y to −x.
+        ("x90,z90", "upper left"),
+        ("z90,x90", "upper right"),
+    ] {
+        let (c, px, _) = centroid(&raw, &["--rotate", turns], &out);
+        assert_eq!(quadrant(c), want, "--rotate {turns}: centroid {c:?}");
+        if turns == "z180" {
+            turned = px;
+        }
+    }
+    // Half a turn about z is the mirror in x and in y, voxel for voxel.
+    let (_, flipped, _) = centroid(&raw, &["--flip", "xy"], &out);
+    assert_eq!(turned, flipped, "--rotate z180 and --flip xy differ");
+    let o = refrakt(&[
+        "render",
+        raw.to_str().unwrap(),
+        "--rotate",
+        "x45",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        err.contains("--rotate") && err.contains("quarter turns"),
+        "{err}"
+    );
+}
+
+#[test]
 fn unstated_spacing_is_warned_about_and_a_sidecar_states_it() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();

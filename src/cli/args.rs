@@ -501,6 +501,16 @@ pub struct SceneArgs {
     /// then turned upright, head up and facing the camera. For volume files.
     #[arg(help_heading = "Input", long, value_name = "CODE")]
     pub orientation: Option<String>,
+    /// Turn the volume about the world's axes (x right, y up, z towards the camera) after
+    /// loading and turning it upright, before --flip: quarter turns in the order given,
+    /// right-handed (x90 turns up to towards the camera), e.g. "x90" or "y-90,z180".
+    #[arg(
+        help_heading = "Input",
+        long,
+        value_name = "TURNS",
+        allow_hyphen_values = true
+    )]
+    pub rotate: Option<String>,
     /// Value window "LO,HI" mapped to [0,1] for signed or float data (e.g. CT Hounsfield
     /// units -1000,2000); default: the data's minimum and maximum. See docs/FORMATS.md.
     #[arg(

@@ -144,6 +144,9 @@ pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Resu
     if let Some(code) = &args.orientation {
         o.orientation = Some(refrakt::volume::orientation::parse_code(code)?);
     }
+    if let Some(spec) = &args.rotate {
+        o.rotate = Some(refrakt::volume::orientation::parse_rotation(spec).context("--rotate")?);
+    }
     o.transfer = args.tf.clone().map(TransferSource::Named);
     o.model = args.model.map(|m| match m {
         ModelArg::Ea => Model::Ea,

@@ -41,6 +41,8 @@ struct VolumeTable {
     upright: Option<bool>,
     /// Where the voxel axes point, e.g. "RAS" (replaces the file's; see --orientation).
     orientation: Option<String>,
+    /// Quarter turns about the world's axes, e.g. "x90,z180" (see --rotate).
+    rotate: Option<String>,
     /// "auto", "on", "off" or a colour table file (see --labels).
     labels: Option<String>,
 }
@@ -261,6 +263,10 @@ impl SceneFile {
         if let Some(code) = &v.orientation {
             o.orientation =
                 Some(crate::volume::orientation::parse_code(code).context("[volume] orientation")?);
+        }
+        if let Some(spec) = &v.rotate {
+            o.rotate =
+                Some(crate::volume::orientation::parse_rotation(spec).context("[volume] rotate")?);
         }
         if let Some(n) = self.name {
             // The name is printed with every render: bounded, one line.

@@ -102,6 +102,9 @@ pub struct Scene {
     /// Whether the volume is a label map (`--labels`): detected, forced with the built-in
     /// palette or a colour table, or off.
     pub labels: LabelChoice,
+    /// Quarter turns about the world's axes after loading and turning upright
+    /// (`--rotate`), before `flip`.
+    pub rotate: Option<crate::volume::orientation::QuarterTurns>,
     /// Axes (x, y, z) to mirror the data along after loading and turning upright (two = a
     /// 180° rotation).
     pub flip: [bool; 3],
@@ -191,6 +194,7 @@ pub struct Overrides {
     pub environment: Option<EnvSource>,
     pub env_rotation: Option<f32>,
     pub flip: Option<[bool; 3]>,
+    pub rotate: Option<crate::volume::orientation::QuarterTurns>,
     pub upright: Option<bool>,
     pub orientation: Option<[[f32; 3]; 3]>,
     pub labels: Option<LabelChoice>,
@@ -245,6 +249,9 @@ impl Scene {
         set(&mut self.environment, o.environment);
         set(&mut self.env_rotation, o.env_rotation);
         set(&mut self.flip, o.flip);
+        if o.rotate.is_some() {
+            self.rotate = o.rotate;
+        }
         set(&mut self.upright, o.upright);
         if o.orientation.is_some() {
             self.orientation = o.orientation;
@@ -297,6 +304,7 @@ impl Default for Scene {
             },
             spacing: None,
             flip: [false; 3],
+            rotate: None,
             upright: false,
             orientation: None,
             labels: LabelChoice::Auto,
@@ -572,6 +580,9 @@ impl Scene {
         }
         if self.upright {
             notes.extend(vol.turn_upright());
+        }
+        if let Some(r) = self.rotate {
+            vol.rotate(r);
         }
         vol.flip(self.flip);
         Ok((vol, notes))

@@ -142,6 +142,20 @@ impl Volume {
         self.reorder([0, 1, 2], axes);
     }
 
+    /// Turns the volume about the world's axes by quarter turns
+    /// ([`orientation::parse_rotation`]): new axis k is the old axis row k of `r` names,
+    /// reversed where its entry is −1.
+    pub fn rotate(&mut self, r: orientation::QuarterTurns) {
+        let mut perm = [0usize; 3];
+        let mut reverse = [false; 3];
+        for k in 0..3 {
+            let j = (0..3).find(|&j| r[k][j] != 0).unwrap_or(k);
+            perm[k] = j;
+            reverse[k] = r[k][j] < 0;
+        }
+        self.reorder(perm, reverse);
+    }
+
     /// Rearranges the voxels so that new axis `k` is old axis `perm[k]`, reversed where
     /// `reverse[k]`: dims, spacing and [`Volume::axes`] follow.
     pub fn reorder(&mut self, perm: [usize; 3], reverse: [bool; 3]) {

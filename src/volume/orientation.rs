@@ -10,7 +10,7 @@
 //! - **"from"** (ITK's `SpatialOrientation`, and so MetaImage's `AnatomicalOrientation`):
 //!   each letter names the side the axis comes from; ITK's "RAI" is the "to" code LPS.
 
-use anyhow::{bail, Result};
+use anyhow::{bail, ensure, Result};
 
 /// The unit LPS vector of an anatomical direction letter (the side it points towards).
 fn towards(letter: char) -> Option<[f32; 3]> {
@@ -80,9 +80,119 @@ pub(crate) fn world_to_lps(d: [f32; 3]) -> [f32; 3] {
     [d[0], -d[2], d[1]]
 }
 
+/// A turn of the volume in quarter turns about the world's axes: a signed permutation
+/// matrix, new world coordinates = `R` × old (row k: the old axis new axis k takes, with
+/// its sign).
+pub type QuarterTurns = [[i8; 3]; 3];
+
+/// Parse `--rotate`: turns about the world's axes (x right, y up, z towards the camera),
+/// applied in the order given, each an axis letter and a multiple of 90 degrees,
+/// right-handed (x90 turns +y to +z): "x90", "y-90,z180". Other angles are refused: the
+/// volume's box stays aligned with the world's axes, so only quarter turns keep every
+/// voxel (the camera turns the view by any angle).
+pub fn parse_rotation(spec: &str) -> Result<QuarterTurns> {
+    let mut r: QuarterTurns = [[1, 0, 0], [0, 1, 0], [0, 0, 1]];
+    let spec = spec.trim();
+    ensure!(
+        !spec.is_empty(),
+        "expected turns such as \"x90\" or \"y-90,z180\" (an axis x, y or z and degrees)"
+    );
+    for part in spec.split(',') {
+        let part = part.trim();
+        let mut chars = part.chars();
+        let axis = match chars.next().map(|c| c.to_ascii_lowercase()) {
+            Some('x') => 0,
+            Some('y') => 1,
+            Some('z') => 2,
+            _ => {
+                bail!("'{part}': a turn starts with its axis x, y or z, then degrees, e.g. \"x90\"")
+            }
+        };
+        let degrees = chars.as_str().trim_start_matches(':').trim();
+        let degrees: i64 = degrees.parse().map_err(|_| {
+            anyhow::anyhow!("'{part}': '{degrees}' is not a whole number of degrees")
+        })?;
+        ensure!(
+            degrees % 90 == 0,
+            "'{part}': only quarter turns (multiples of 90 degrees) can turn the volume, \
+             whose box stays aligned with the world's axes; turn the camera for other angles"
+        );
+        let quarters = (degrees / 90).rem_euclid(4);
+        for _ in 0..quarters {
+            r = mul(quarter_turn(axis), r);
+        }
+    }
+    Ok(r)
+}
+
+/// A right-handed quarter turn about world axis `axis` (x90: y → z, z → −y).
+fn quarter_turn(axis: usize) -> QuarterTurns {
+    let (a, b) = ((axis + 1) % 3, (axis + 2) % 3);
+    let mut m = [[0i8; 3]; 3];
+    m[axis][axis] = 1;
+    // new_b = old_a, new_a = −old_b.
+    m[b][a] = 1;
+    m[a][b] = -1;
+    m
+}
+
+fn mul(a: QuarterTurns, b: QuarterTurns) -> QuarterTurns {
+    let mut m = [[0i8; 3]; 3];
+    for (i, row) in m.iter_mut().enumerate() {
+        for (j, v) in row.iter_mut().enumerate() {
+            *v = (0..3).map(|k| a[i][k] * b[k][j]).sum();
+        }
+    }
+    m
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn quarter_turns_are_right_handed_and_compose_in_order() {
+        // x90 turns +y (up) to +z (towards the camera) and +z to −y.
+        assert_eq!(
+            parse_rotation("x90").unwrap(),
+            [[1, 0, 0], [0, 0, -1], [0, 1, 0]]
+        );
+        // y90 turns +z to +x; z90 turns +x to +y.
+        assert_eq!(
+            parse_rotation("y90").unwrap(),
+            [[0, 0, 1], [0, 1, 0], [-1, 0, 0]]
+        );
+        assert_eq!(
+            parse_rotation("z90").unwrap(),
+            [[0, -1, 0], [1, 0, 0], [0, 0, 1]]
+        );
+        // Four quarter turns, or −90 then 90, are no turn; 270 is −90.
+        let id = [[1, 0, 0], [0, 1, 0], [0, 0, 1]];
+        assert_eq!(parse_rotation("x360").unwrap(), id);
+        assert_eq!(parse_rotation("z-90, z90").unwrap(), id);
+        assert_eq!(
+            parse_rotation("y270").unwrap(),
+            parse_rotation("y-90").unwrap()
+        );
+        // In order: x90 then z90 takes +y to +z (x90), which z90 leaves; taken the other
+        // way round, +y goes to −x (z90), which x90 leaves.
+        let xz = parse_rotation("x90,z90").unwrap();
+        let zx = parse_rotation("z90,x90").unwrap();
+        let image = |r: [[i8; 3]; 3], v: [i8; 3]| -> [i8; 3] {
+            [0, 1, 2].map(|i| (0..3).map(|j| r[i][j] * v[j]).sum())
+        };
+        assert_eq!(image(xz, [0, 1, 0]), [0, 0, 1]);
+        assert_eq!(image(zx, [0, 1, 0]), [-1, 0, 0]);
+        for (bad, needle) in [
+            ("x45", "quarter turns"),
+            ("w90", "axis x, y or z"),
+            ("x", "whole number"),
+            ("", "expected turns"),
+        ] {
+            let e = parse_rotation(bad).unwrap_err().to_string();
+            assert!(e.contains(needle), "{bad}: {e}");
+        }
+    }
 
     #[test]
     fn codes_in_both_conventions() {
