@@ -10,15 +10,21 @@
 //! ladder; each step down it halves the preview's side (a quarter of the pixels) or
 //! doubles its sample distance (half the planes), alternately.
 //!
-//! The ladder's rung is learned from the GPU times of the previews themselves: over the
-//! budget, one rung cheaper; one rung dearer when that rung's predicted time is within
-//! [`CLIMB_MARGIN`] of the budget. The prediction is the rung's own last time where it has
-//! one (for this window size and model), else this rung's time times the most the step can
-//! cost: the ratio of the two rungs' pixels for a size step (the sweep's fixed cost per
-//! plane makes the true ratio smaller), 2 for a sample-distance step (the planes). So a
-//! climb never expects to overshoot the budget. The first preview of a session is the
-//! cheapest, so that the first interaction answers at once whatever the device; the rung
-//! found is kept between interactions.
+//! Before the first frame the viewer renders two rungs off screen ([`CALIBRATION`]: the
+//! cheapest, and the one with twice its side and half its sample distance) and fits a
+//! cost model to their GPU times, t ≈ (a + b · pixels) / (sample-distance factor): a
+//! fixed cost per plane and one per pixel and plane ([`PreviewControl::calibrate`]). It
+//! starts at the dearest rung the model puts within [`CLIMB_MARGIN`] of the budget. A CPU
+//! device has a large fixed cost per plane (lavapipe: about 1.5 ms), so its previews can be
+//! larger than the pixels alone would allow; on a GPU the pixels dominate.
+//!
+//! From then on the rung is learned from the previews' own times: over the budget, one
+//! rung cheaper; one rung dearer when that rung's predicted time is within the margin.
+//! The prediction is the rung's own last time where it has one (for this window size and
+//! model), else the model's, else (no model: a window too small for two sizes) this rung's
+//! time times the most the step can cost: the ratio of the two rungs' pixels for a size
+//! step, 2 for a sample-distance step. The rung found is kept between interactions; a new
+//! model forgets the times and the fit, a new window size the times.
 
 use std::time::Duration;
 
@@ -32,6 +38,8 @@ pub const MAX_LEVEL: u8 = 8;
 pub const MIN_PREVIEW_SIDE: u32 = 16;
 /// A dearer rung is taken when its predicted time is at most this share of the budget.
 const CLIMB_MARGIN: f64 = 0.8;
+/// The rungs timed off screen before the first frame: two sizes, for the cost model.
+pub const CALIBRATION: [u8; 2] = [MAX_LEVEL, MAX_LEVEL - 2];
 
 /// The quality of one frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -96,6 +104,13 @@ pub struct PreviewControl {
     window: [u32; 2],
     /// The last GPU time of each rung (index k).
     measured: [Option<f64>; MAX_LEVEL as usize + 1],
+    /// The cost model (a, b): t ≈ (a + b · pixels) / sample-distance factor, in ms.
+    fit: Option<(f64, f64)>,
+}
+
+fn pixels(q: Quality, window: [u32; 2]) -> f64 {
+    let [w, h] = q.size(window);
+    w as f64 * h as f64
 }
 
 impl PreviewControl {
@@ -106,12 +121,81 @@ impl PreviewControl {
             level: MAX_LEVEL,
             window: [0, 0],
             measured: [None; MAX_LEVEL as usize + 1],
+            fit: None,
         }
     }
 
-    /// Forget the rungs' times (the model changed; a new window size does this itself).
+    /// Forget the rungs' times and the cost model (the optical model changed).
     pub fn forget(&mut self) {
         self.measured = [None; MAX_LEVEL as usize + 1];
+        self.fit = None;
+    }
+
+    /// Times are per window size: a new one forgets them (the cost model stays).
+    fn set_window(&mut self, window: [u32; 2]) {
+        if window != self.window {
+            self.window = window;
+            self.measured = [None; MAX_LEVEL as usize + 1];
+        }
+    }
+
+    /// Fit the cost model to GPU times of the [`CALIBRATION`] rungs in a window of
+    /// `window` pixels, and move to the dearest rung it puts within the margin of the
+    /// budget (returned). Without two distinct sizes among `times` nothing is fitted and
+    /// the rung stays.
+    pub fn calibrate(&mut self, times: &[(Quality, f64)], window: [u32; 2]) -> Quality {
+        self.set_window(window);
+        for &(q, ms) in times {
+            if let Quality::Preview(k) = q {
+                self.measured[k as usize] = Some(ms);
+            }
+        }
+        // y = t · factor = a + b · x, x = pixels: through the first two distinct sizes.
+        let points: Vec<(f64, f64)> = times
+            .iter()
+            .map(|&(q, ms)| (pixels(q, window), ms * q.sample_factor() as f64))
+            .collect();
+        let pair = points.iter().enumerate().find_map(|(i, p)| {
+            points[i + 1..]
+                .iter()
+                .find(|q| q.0 != p.0)
+                .map(|q| (*p, *q))
+        });
+        let Some(((x1, y1), (x2, y2))) = pair else {
+            return self.quality();
+        };
+        let mut b = (y2 - y1) / (x2 - x1);
+        let mut a = y1 - b * x1;
+        // Noise can tip a line through two points below zero at one end: then the
+        // steeper, pessimistic model through the origin or the flat one through the top.
+        if b < 0.0 {
+            (a, b) = (y1.max(y2), 0.0);
+        } else if a < 0.0 {
+            (a, b) = (0.0, (y1 / x1).max(y2 / x2));
+        }
+        self.fit = Some((a, b));
+        let mut k = MAX_LEVEL;
+        while k > 1
+            && self
+                .expected(Quality::Preview(k - 1), window)
+                .is_some_and(|t| t <= CLIMB_MARGIN * self.budget_ms)
+        {
+            k -= 1;
+        }
+        self.level = k;
+        self.quality()
+    }
+
+    /// A rung's expected time: its own last one, else the cost model's.
+    fn expected(&self, q: Quality, window: [u32; 2]) -> Option<f64> {
+        let own = match q {
+            Quality::Preview(k) if window == self.window => self.measured[k as usize],
+            _ => None,
+        };
+        own.or_else(|| {
+            let (a, b) = self.fit?;
+            Some((a + b * pixels(q, window)) / q.sample_factor() as f64)
+        })
     }
 
     pub fn budget_ms(&self) -> f64 {
@@ -130,10 +214,7 @@ impl PreviewControl {
         let Quality::Preview(k) = quality else {
             return;
         };
-        if window != self.window {
-            self.window = window;
-            self.forget();
-        }
+        self.set_window(window);
         self.measured[k as usize] = Some(gpu_ms);
         if k != self.level {
             return;
@@ -142,14 +223,10 @@ impl PreviewControl {
             self.level = (k + 1).min(MAX_LEVEL);
         } else if k > 1 {
             let dearer = Quality::Preview(k - 1);
-            let predicted = self.measured[k as usize - 1].unwrap_or_else(|| {
+            let predicted = self.expected(dearer, window).unwrap_or_else(|| {
                 if k % 2 == 1 {
                     // A size step: at most the ratio of the pixels.
-                    let pixels = |q: Quality| {
-                        let [w, h] = q.size(window);
-                        w as f64 * h as f64
-                    };
-                    gpu_ms * pixels(dearer) / pixels(quality)
+                    gpu_ms * pixels(dearer, window) / pixels(quality, window)
                 } else {
                     // A sample-distance step: twice the planes.
                     gpu_ms * 2.0
@@ -165,6 +242,52 @@ impl PreviewControl {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// planes × (fixed ms + ms per pixel), `full` planes at full quality.
+    fn device(full: f64, fixed: f64, per_pixel: f64, window: [u32; 2]) -> impl Fn(Quality) -> f64 {
+        move |q: Quality| {
+            let planes = (full / q.sample_factor() as f64).ceil();
+            planes * (fixed + per_pixel * pixels(q, window))
+        }
+    }
+
+    #[test]
+    fn calibration_starts_at_the_dearest_rung_that_fits_on_a_cpu_and_on_a_gpu() {
+        for (what, window, full, fixed, per_pixel, want) in [
+            // A CPU device, as lavapipe measured on the default scene at 256² (200
+            // planes): 1.5 ms per plane, 2.5 µs per pixel and plane. From rung 8 up: 28,
+            // 54, 102, 203 ms: rung 7 (16², sample distance × 8) is the dearest in 80 ms.
+            ("cpu", [256, 256], 200.0, 1.5, 2.5e-3, 7),
+            // A GPU, where the pixels dominate: 1.6, 3.3, 5.6, 11, 30, 59, 207 ms from
+            // rung 8 to 2 at 512²: rung 3 (128², × 2).
+            ("gpu", [512, 512], 400.0, 0.05, 1.5e-5, 3),
+        ] {
+            let cost = device(full, fixed, per_pixel, window);
+            let mut c = PreviewControl::new(100.0);
+            let times: Vec<(Quality, f64)> = CALIBRATION
+                .iter()
+                .map(|&k| (Quality::Preview(k), cost(Quality::Preview(k))))
+                .collect();
+            let q = c.calibrate(&times, window);
+            let Quality::Preview(k) = q else { panic!() };
+            assert!(cost(q) <= 80.0, "{what}: rung {k} costs {}", cost(q));
+            if k > 1 {
+                assert!(
+                    cost(Quality::Preview(k - 1)) > 80.0,
+                    "{what}: rung {} also fits ({} ms)",
+                    k - 1,
+                    cost(Quality::Preview(k - 1))
+                );
+            }
+            assert_eq!(k, want, "{what}");
+            // The model is exact for such a device, so every later climb is right too.
+            for _ in 0..10 {
+                let q = c.quality();
+                c.observe(q, cost(q), window);
+            }
+            assert_eq!(c.quality(), q, "{what}: the rung moved");
+        }
+    }
 
     #[test]
     fn the_ladder_alternates_size_and_sample_distance() {
@@ -254,7 +377,8 @@ mod tests {
         c.observe(Quality::Preview(7), 19.0, w);
         assert_eq!(c.quality(), Quality::Preview(6), "4 × 19 ms ≤ 80 ms");
         // Rung 6 overshoots in a larger window: one rung back. Back in the first window,
-        // that time is forgotten (it was for another size) and rung 6 is tried again.
+        // that time is forgotten (it was for another size) and rung 6 is tried again
+        // (no cost model here: no calibration).
         c.observe(Quality::Preview(6), 120.0, [512, 512]);
         assert_eq!(c.quality(), Quality::Preview(7));
         c.observe(Quality::Preview(7), 19.0, w);

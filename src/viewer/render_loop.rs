@@ -2,7 +2,7 @@
 //! the view changes and a full frame once it is still, each with the view state as it is
 //! when the frame is recorded; screenshots.
 
-use super::preview::{PreviewControl, Quality, SETTLE};
+use super::preview::{PreviewControl, Quality, CALIBRATION, SETTLE};
 use super::*;
 use crate::render::Slot;
 use crate::vk::{Image, ImageDesc, ImageKind};
@@ -151,25 +151,59 @@ impl RenderLoop {
         (view, slot)
     }
 
-    /// Record the first preview once, off screen, before the window shows anything. A CPU
-    /// device (llvmpipe) compiles a pipeline's shaders when it first runs them, inside the
-    /// frame: about 2 s for the sweep's on an empty Mesa shader cache, which would make
-    /// the first interaction wait; here it is part of the start, like the preintegration.
+    /// Before the first frame: render the calibration rungs off screen, each twice (a
+    /// CPU device such as llvmpipe compiles a pipeline's shaders when it first runs them,
+    /// inside the frame: about 2 s for the sweep's on an empty Mesa shader cache), fit the
+    /// previews' cost model to the second times and run the rung it chooses once, so that
+    /// no interaction waits for a compilation.
     fn warm_up(&mut self) -> Result<()> {
-        let Some(preview) = &self.preview else {
+        if self.preview.is_none() {
+            return Ok(());
+        }
+        let window = self.gpu.swapchain.extent();
+        let mut times = Vec::new();
+        for k in CALIBRATION {
+            let quality = Quality::Preview(k);
+            let Some(_) = self.render_off_screen(quality)? else {
+                // The renderer refuses the view; draw() reports it.
+                return Ok(());
+            };
+            if let Some(ms) = self.render_off_screen(quality)? {
+                times.push((quality, ms));
+            }
+        }
+        let Some(preview) = self.preview.as_mut() else {
             return Ok(());
         };
-        let quality = preview.quality();
-        let gpu = &self.gpu;
-        let window = gpu.swapchain.extent();
+        let start = preview.calibrate(&times, window);
+        if !times.iter().any(|&(q, _)| q == start) {
+            self.render_off_screen(start)?;
+        }
+        let said: Vec<String> = times
+            .iter()
+            .map(|(q, ms)| format!("{} {ms:.1} ms", q.describe(window)))
+            .collect();
+        println!(
+            "previews: {}; starting with {}",
+            said.join(", "),
+            start.describe(window)
+        );
+        Ok(())
+    }
+
+    /// Render a frame of `quality` and tone map it into an image of the swapchain's size
+    /// and format that nobody sees; its GPU milliseconds, None if the renderer refuses
+    /// the view.
+    fn render_off_screen(&mut self, quality: Quality) -> Result<Option<f64>> {
+        let window = self.gpu.swapchain.extent();
         let (view, slot) = self.frame_view(quality, window);
+        let gpu = &mut self.gpu;
         if gpu
             .renderer
             .check(view.model, &view.camera, &view.opts)
             .is_err()
         {
-            // draw() reports it.
-            return Ok(());
+            return Ok(None);
         }
         let [w, h] = window;
         let target = Image::new(
@@ -181,7 +215,7 @@ impl RenderLoop {
                 layers: 1,
                 usage: crate::vk::usage::COLOR_ATTACHMENT,
             },
-            "warm-up target",
+            "off-screen target",
         )?;
         let target_view = target.layer_view(0)?;
         let framebuffer = Framebuffer::new(
@@ -190,29 +224,23 @@ impl RenderLoop {
             &[&target_view],
             w,
             h,
-            "warm-up framebuffer",
+            "off-screen framebuffer",
         )?;
         let Gpu {
             ctx,
             renderer,
             tonemap,
             ..
-        } = &mut self.gpu;
+        } = gpu;
         let t = ctx.execute(|rec| {
-            rec.begin_scope("warm-up");
+            rec.begin_scope("frame");
             let out = renderer.record_in(rec, slot, view.model, &view.camera, &view.opts)?;
             let axes = view.axes.then_some(&view.camera);
             tonemap.record(rec, out.image, &target, &framebuffer, &view.tone, axes)?;
             rec.end_scope();
             Ok(())
         })?;
-        if let Some(ms) = t.get("warm-up") {
-            println!(
-                "previews prepared ({}): {ms:.1} ms GPU",
-                quality.describe(window)
-            );
-        }
-        Ok(())
+        Ok(t.get("frame"))
     }
 
     /// --drag: before each of the first N frames, move the camera as a left-drag of
