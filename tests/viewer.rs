@@ -279,6 +279,47 @@ fn read_png(path: &Path) -> (u32, u32, Vec<u8>) {
     (img.width(), img.height(), img.into_raw())
 }
 
+/// `render` the glass-floor scene with `scene` and `extra` at `size` into `headless`, and
+/// check that the viewer's screenshot `shot` has that size and equals it within 1/255.
+fn assert_shows_the_render(
+    display: &str,
+    scene: &[&str],
+    extra: &[&str],
+    shot: &Path,
+    headless: &Path,
+    size: (u32, u32),
+) {
+    let (width, height) = (size.0.to_string(), size.1.to_string());
+    let mut args = vec![
+        "render",
+        "--scene",
+        "glass-floor",
+        "--width",
+        &width,
+        "--height",
+        &height,
+        "-o",
+        headless.to_str().unwrap(),
+    ];
+    args.extend(scene);
+    args.extend(extra);
+    let o = refrakt(&args, display);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (w, h, shown) = read_png(shot);
+    assert_eq!((w, h), size, "the screenshot has the window's size");
+    let (_, _, expected) = read_png(headless);
+    let (d, at) = max_difference(&shown, &expected);
+    assert!(
+        d <= 1,
+        "viewer and render differ by {d}/255 at pixel ({}, {}) channel {}: {} vs {}",
+        (at / 4) as u32 % w,
+        (at / 4) as u32 / w,
+        at % 4,
+        shown[at],
+        expected[at]
+    );
+}
+
 #[test]
 fn viewer_runs_resizes_and_shows_the_headless_image() {
     let _one = exclusive();
@@ -339,38 +380,7 @@ fn viewer_runs_resizes_and_shows_the_headless_image() {
         "{out}"
     );
 
-    let mut args = vec![
-        "render",
-        "--scene",
-        "glass-floor",
-        "--width",
-        "120",
-        "--height",
-        "80",
-        "-o",
-        headless.to_str().unwrap(),
-    ];
-    args.extend(scene);
-    let o = refrakt(&args, &display);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-
-    let (w, h, shown) = read_png(&shot);
-    assert_eq!(
-        (w, h),
-        (120, 80),
-        "the screenshot has the resized window's size"
-    );
-    let (_, _, expected) = read_png(&headless);
-    let (d, at) = max_difference(&shown, &expected);
-    assert!(
-        d <= 1,
-        "viewer and headless differ by {d}/255 at pixel ({}, {}) channel {}: {} vs {}",
-        (at / 4) as u32 % w,
-        (at / 4) as u32 / w,
-        at % 4,
-        shown[at],
-        expected[at]
-    );
+    assert_shows_the_render(&display, &scene, &[], &shot, &headless, (120, 80));
     assert!(
         dir.path().join("view.exr").is_file(),
         "the linear EXR of the screenshot"
@@ -471,31 +481,13 @@ fn previews_while_dragging_fit_the_budget_and_the_refined_frame_is_the_render() 
     );
 
     // The drag turned the camera from azimuth 40 by 6 × 4 degrees.
-    let mut args = vec![
-        "render",
-        "--scene",
-        "glass-floor",
-        "--width",
-        "256",
-        "--height",
-        "256",
-        "--azimuth",
-        "16",
-        "-o",
-        headless.to_str().unwrap(),
-    ];
-    args.extend(scene);
-    let o = refrakt(&args, &display);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let (w, h, shown) = read_png(&shot);
-    assert_eq!((w, h), (256, 256));
-    let (_, _, expected) = read_png(&headless);
-    let (d, at) = max_difference(&shown, &expected);
-    assert!(
-        d <= 1,
-        "refined frame and render differ by {d}/255 at pixel ({}, {})",
-        (at / 4) as u32 % w,
-        (at / 4) as u32 / w
+    assert_shows_the_render(
+        &display,
+        &scene,
+        &["--azimuth", "16"],
+        &shot,
+        &headless,
+        (256, 256),
     );
     drop(xvfb);
 }
