@@ -514,6 +514,10 @@ fn view_options_and_a_missing_display_are_clear_errors() {
         ),
         (&["view", "--screenshot", "x.png"][..], "--frames"),
         (
+            &["view", "--preview-budget", "-5", "--volume-size", "8"][..],
+            "--preview-budget -5: expected a frame time in ms",
+        ),
+        (
             &["view", "sphere", "--scene", "box"][..],
             "cannot be used with",
         ),

@@ -45,7 +45,7 @@ pub use sat::SummedAreaTable;
 pub use preintegration::{PreintegrationTable, TABLE_SIZE};
 pub use refract::{
     Clamps, Deposit, Dump, Levers, Light, LightTransport, Planes, Region, Splat, StateBuffer,
-    SweepOptions, SweepPath, SweepStats, MAX_ETA_SCALE, MAX_LIGHT_RAYS,
+    SweepOptions, SweepPath, SweepStats, MAX_ETA_SCALE, MAX_LIGHT_RAYS, MAX_LIGHT_SPACING,
 };
 pub use tonemap::ToneMapPass;
 

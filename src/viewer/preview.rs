@@ -6,7 +6,9 @@
 //! The cost levers are the image's size and the sample distance: a sweep's cost is about
 //! (planes) × (a fixed cost per plane + a cost per pixel), and the planes are the volume's
 //! depth over the sample distance. The forward transport's light rays follow the pixels
-//! (a budget per pixel), so a smaller preview also has fewer light rays. The levels form a
+//! (a budget per pixel), so a smaller preview also has fewer light rays, and previews
+//! space them twice as far apart as the view asks (`--light-spacing`, up to its limit):
+//! a quarter of the rays. The levels form a
 //! ladder; each step down it halves the preview's side (a quarter of the pixels) or
 //! doubles its sample distance (half the planes), alternately.
 //!

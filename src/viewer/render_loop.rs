@@ -144,6 +144,12 @@ impl RenderLoop {
         let mut view = self.state.lock().unwrap().clone();
         [view.opts.width, view.opts.height] = quality.size(window);
         view.opts.sample_distance *= quality.sample_factor();
+        if let Quality::Preview(_) = quality {
+            // The forward transport's light rays twice as far apart: a quarter of them (on
+            // a GPU their splat is most of the frame).
+            let s = &mut view.opts.sweep.light_spacing;
+            *s = (*s * 2.0).min(crate::render::MAX_LIGHT_SPACING.max(*s));
+        }
         let slot = match quality {
             Quality::Full => Slot::Main,
             Quality::Preview(k) => Slot::Preview(k),
