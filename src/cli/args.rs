@@ -801,9 +801,10 @@ pub struct ViewArgs {
     #[arg(long)]
     pub no_watch: bool,
     /// GPU time per frame, in ms, that previews must fit while the view changes: they are
-    /// rendered at a reduced size and sample distance (the cheapest first, then the best
-    /// that measured within the budget), and a full-quality frame follows once the view
-    /// has been still for 0.3 s. 0: no previews, every frame at full quality.
+    /// rendered at a reduced size and sample distance (two sizes are timed off screen
+    /// before the first frame to choose; each preview's own time then moves the choice),
+    /// and a full-quality frame follows once the view has been still for 0.3 s. 0: no
+    /// previews, every frame at full quality.
     #[arg(long, value_name = "MS", default_value_t = refrakt::viewer::preview::DEFAULT_BUDGET_MS, allow_negative_numbers = true)]
     pub preview_budget: f64,
     /// Orbit the camera before each of the first N frames as a drag of 10 pixels to the
