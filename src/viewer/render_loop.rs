@@ -348,6 +348,12 @@ impl RenderLoop {
         }
         gpu.renderer.set_environment(new.env.as_ref())?;
         self.scene_name = new.name;
+        // New data under an unchanged view: draw it (previews, then a full frame), and
+        // learn its costs anew.
+        self.seen = None;
+        if let Some(p) = self.preview.as_mut() {
+            p.forget();
+        }
         self.preintegrate()
     }
 
