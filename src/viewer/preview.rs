@@ -43,6 +43,27 @@ const CLIMB_MARGIN: f64 = 0.8;
 /// The rungs timed off screen before the first frame: two sizes, for the cost model.
 pub const CALIBRATION: [u8; 2] = [MAX_LEVEL, MAX_LEVEL - 2];
 
+/// What to draw next: `preview` (the controller's rung; None when previews are off) while
+/// the view changed less than [`SETTLE`] ago, else a full frame, and nothing once that is
+/// shown (`refined`) unless frames are drawn continuously (`--frames`). `forced`: a
+/// screenshot or the last scripted frame, always full.
+pub fn next_frame(
+    preview: Option<Quality>,
+    since_change: Duration,
+    refined: bool,
+    continuous: bool,
+    forced: bool,
+) -> Option<Quality> {
+    if forced {
+        return Some(Quality::Full);
+    }
+    match preview {
+        Some(q) if since_change < SETTLE => Some(q),
+        _ if refined && !continuous => None,
+        _ => Some(Quality::Full),
+    }
+}
+
 /// The quality of one frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Quality {
@@ -244,6 +265,30 @@ impl PreviewControl {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn previews_while_changing_then_one_full_frame_then_nothing() {
+        let p = Some(Quality::Preview(5));
+        let now = Duration::ZERO;
+        let still = SETTLE;
+        assert_eq!(next_frame(p, now, false, false, false), p);
+        // A view that changed within SETTLE stays a preview even after a full frame.
+        assert_eq!(next_frame(p, now, true, false, false), p);
+        assert_eq!(
+            next_frame(p, still, false, false, false),
+            Some(Quality::Full)
+        );
+        assert_eq!(next_frame(p, still, true, false, false), None);
+        // --frames: full frames go on; screenshots and the last frame are full.
+        assert_eq!(next_frame(p, still, true, true, false), Some(Quality::Full));
+        assert_eq!(next_frame(p, now, false, false, true), Some(Quality::Full));
+        // Previews off: a change draws a full frame at once, then nothing.
+        assert_eq!(
+            next_frame(None, now, false, false, false),
+            Some(Quality::Full)
+        );
+        assert_eq!(next_frame(None, now, true, false, false), None);
+    }
 
     /// planes × (fixed ms + ms per pixel), `full` planes at full quality.
     fn device(full: f64, fixed: f64, per_pixel: f64, window: [u32; 2]) -> impl Fn(Quality) -> f64 {

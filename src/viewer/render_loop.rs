@@ -2,7 +2,7 @@
 //! the view changes and a full frame once it is still, each with the view state as it is
 //! when the frame is recorded; screenshots.
 
-use super::preview::{PreviewControl, Quality, CALIBRATION, SETTLE};
+use super::preview::{next_frame, PreviewControl, Quality, CALIBRATION};
 use super::*;
 use crate::render::Slot;
 use crate::vk::{Image, ImageDesc, ImageKind};
@@ -292,14 +292,13 @@ impl RenderLoop {
             .options
             .frames
             .is_some_and(|n| self.report.frames + 1 == n);
-        if self.shot_requested || last {
-            return Some(Quality::Full);
-        }
-        match &self.preview {
-            Some(p) if self.changed_at.elapsed() < SETTLE => Some(p.quality()),
-            _ if self.refined && self.options.frames.is_none() => None,
-            _ => Some(Quality::Full),
-        }
+        next_frame(
+            self.preview.as_ref().map(|p| p.quality()),
+            self.changed_at.elapsed(),
+            self.refined,
+            self.options.frames.is_some(),
+            self.shot_requested || last,
+        )
     }
 
     /// Handle what the main thread sent; false once told to quit. Blocks while paused
