@@ -44,8 +44,9 @@ pub use sat::SummedAreaTable;
 
 pub use preintegration::{PreintegrationTable, TABLE_SIZE};
 pub use refract::{
-    Clamps, Deposit, Dump, Levers, Light, LightTransport, Planes, Region, Splat, StateBuffer,
-    SweepOptions, SweepPath, SweepStats, MAX_ETA_SCALE, MAX_LIGHT_RAYS, MAX_LIGHT_SPACING,
+    Clamps, Deposit, Dump, Levers, Light, LightTransport, PlaneBatch, Planes, Region, Splat,
+    StateBuffer, SweepOptions, SweepPath, SweepStats, MAX_ETA_SCALE, MAX_LIGHT_RAYS,
+    MAX_LIGHT_SPACING,
 };
 pub use tonemap::ToneMapPass;
 
@@ -505,6 +506,12 @@ impl Renderer {
             max_steps: r.max_steps,
             sweep: r.sweep.map(|s| s.stats),
         })
+    }
+
+    /// The linear RGBA32F image the last frame recorded with `model` in `slot` finished
+    /// in (the viewer tone maps it again after a frame submitted in batches).
+    pub fn frame_image(&self, model: Model, slot: Slot) -> Result<&Image> {
+        Ok(&self.target(model, slot)?.image)
     }
 
     fn target(&self, model: Model, slot: Slot) -> Result<&FrameTarget> {

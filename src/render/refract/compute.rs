@@ -52,6 +52,8 @@ pub(crate) struct ComputeFrame<'a> {
     /// The splat's fixed-point unit.
     pub(crate) unit: f32,
     pub(crate) dumps: &'a [(StateBuffer, u32, Buffer)],
+    /// The planes to record ([`SweepOptions::batch`]).
+    pub(crate) batch: std::ops::Range<u32>,
 }
 
 // The gather's workgroup is one tile of 8 × 8 pixels (glsl/sweep_gather.comp).
@@ -119,7 +121,7 @@ impl SweepPass {
                 &pipelines.sweep
             };
             rec.bind_compute(pipeline, &self.compute_set);
-            for i in 0..n {
+            for i in f.batch.clone() {
                 rec.progress(i, n);
                 // The layer the previous plane wrote is read, the one it read is written:
                 // one barrier over the six images.
@@ -135,7 +137,7 @@ impl SweepPass {
                 rec.dispatch_bound(pipeline, bytemuck::bytes_of(&push), groups(area))?;
                 self.compute_dumps(rec, f, i);
             }
-            rec.progress(n, n);
+            rec.progress(f.batch.end, n);
             return Ok(());
         }
 
@@ -157,7 +159,10 @@ impl SweepPass {
         };
         let screen = Area::full(self.width, self.height);
         rec.bind_compute(light, &self.compute_set);
-        for i in 0..=n {
+        // Step i records plane i - 1's viewing rays and plane i's light rays: a batch
+        // whose last plane is the frame's takes one more step for its viewing rays.
+        let steps = f.batch.start..if f.batch.end == n { n + 1 } else { f.batch.end };
+        for i in steps {
             rec.progress(i, n);
             // Stage A: the viewing rays of plane i - 1 and the light rays of plane i.
             let view_prev = i.checked_sub(1);

@@ -161,6 +161,14 @@ pub use super::limits::MIN_FORWARD;
 /// Largest refractive-index scale ([`SweepOptions::eta_scale`]).
 pub const MAX_ETA_SCALE: f32 = 3.0;
 
+/// Planes `start..end` of a sweep (see [`SweepOptions::batch`]); an `end` past the
+/// frame's last plane means "through the last plane".
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PlaneBatch {
+    pub start: u32,
+    pub end: u32,
+}
+
 /// Options of the refractive model beyond the common [`RenderOptions`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct SweepOptions {
@@ -183,6 +191,13 @@ pub struct SweepOptions {
     /// Test-only: skip the inter-plane barrier before this plane, to prove synchronization
     /// validation notices.
     pub drop_barrier_before_plane: Option<u32>,
+    /// Record only these planes of the frame, so that a frame can be submitted in
+    /// batches (the viewer's refinement, which a change of view may abandon between two
+    /// batches): the setup goes with plane 0, the composite with the last plane, and the
+    /// state stays in the pass's images between batches. Batches must follow each other
+    /// in plane order with nothing else recorded into the same slot between them. None:
+    /// the whole frame.
+    pub batch: Option<PlaneBatch>,
     /// Rotation of the environment map about the world's up axis, degrees.
     pub env_rotation: f32,
     /// Average the environment over each pixel's refracted footprint with the summed-area
@@ -244,6 +259,7 @@ impl Default for SweepOptions {
             unlit: false,
             dumps: Vec::new(),
             drop_barrier_before_plane: None,
+            batch: None,
             env_rotation: 0.0,
             env_footprint: true,
             eta_scale: 1.0,

@@ -37,6 +37,20 @@ impl SweepPass {
         let (eye, forward, right, up) = camera.frame();
         let travel = -sweep.light.towards.normalize();
         let planes = check(info, camera, opts, sweep)?;
+        let batch = match sweep.batch {
+            None => 0..planes.count,
+            Some(b) => {
+                ensure!(
+                    b.start < b.end && b.start < planes.count,
+                    "planes {}..{} of a sweep of {} planes",
+                    b.start,
+                    b.end,
+                    planes.count
+                );
+                b.start..b.end.min(planes.count)
+            }
+        };
+        let (first_batch, last_batch) = (batch.start == 0, batch.end == planes.count);
         let view_to_world = Mat4::from_cols(
             right.extend(0.0),
             up.extend(0.0),
@@ -212,26 +226,29 @@ impl SweepPass {
         let unit = sweep.light.colour.into_iter().fold(0.0f32, f32::max);
         let unit = if unit > 0.0 { unit } else { 1.0 };
         let compute_splat = forward_on && (compute || sweep.levers.splat == Splat::Compute);
-        rec.pass("sweep setup", &uses, |rec| {
-            rec.clear_storage(&self.counters);
-            if compute_splat {
-                rec.clear_storage(&self.splat_sums);
-            }
-            if compute && forward_on {
-                // The gather's bin counts start each frame at zero (each plane's bin
-                // scan zeroes them for the next).
-                rec.clear_storage(&self.bins);
-            }
-            // The setup covers the screen and the ray images (rays_per_pixel times taller).
-            let setup_groups = [ray_image[0].div_ceil(8), ray_image[1].div_ceil(8), 1];
-            rec.dispatch(&self.setup, &self.setup_set, &[], setup_groups)?;
-            // Both layers become sampled: every draw's set names both (see module docs).
-            // (The compute planes declare their storage uses themselves.)
-            if !compute {
-                rec.transition_many(&self.every_layer(Access::SampledGeneral));
-            }
-            Ok(())
-        })?;
+        // A later batch goes on from the state the earlier ones left in the images.
+        if first_batch {
+            rec.pass("sweep setup", &uses, |rec| {
+                rec.clear_storage(&self.counters);
+                if compute_splat {
+                    rec.clear_storage(&self.splat_sums);
+                }
+                if compute && forward_on {
+                    // The gather's bin counts start each frame at zero (each plane's bin
+                    // scan zeroes them for the next).
+                    rec.clear_storage(&self.bins);
+                }
+                // The setup covers the screen and the ray images (rays_per_pixel times taller).
+                let setup_groups = [ray_image[0].div_ceil(8), ray_image[1].div_ceil(8), 1];
+                rec.dispatch(&self.setup, &self.setup_set, &[], setup_groups)?;
+                // Both layers become sampled: every draw's set names both (see module docs).
+                // (The compute planes declare their storage uses themselves.)
+                if !compute {
+                    rec.transition_many(&self.every_layer(Access::SampledGeneral));
+                }
+                Ok(())
+            })?;
+        }
 
         // The pixels each plane shades (the `region` lever; region.rs).
         let (regions, shaded_fraction) = match sweep.levers.region {
@@ -264,6 +281,7 @@ impl SweepPass {
                     ray_image,
                     unit,
                     dumps: &dump_buffers,
+                    batch: batch.clone(),
                 },
                 sweep,
             )?;
@@ -283,7 +301,7 @@ impl SweepPass {
             };
             rec.bind_graphics(plane_pipeline, &self.sweep_set, self.width, self.height);
             let light_images = [&self.rays[0].image, &self.rays[1].image];
-            for i in 0..planes.count {
+            for i in batch.clone() {
                 rec.progress(i, planes.count);
                 let write = i % 2;
                 let read = 1 - write;
@@ -450,7 +468,7 @@ impl SweepPass {
                 }
             }
         }
-        rec.progress(planes.count, planes.count);
+        rec.progress(batch.end, planes.count);
         rec.end_scope();
 
         let last = (planes.count - 1) % 2;
@@ -464,14 +482,16 @@ impl SweepPass {
             })
             .collect();
         uses.push(Use::all(&self.output.image, Access::ComputeStorage));
-        rec.pass("composite", &uses, |rec| {
-            rec.dispatch(
-                &self.composite,
-                &self.composite_set,
-                &last.to_le_bytes(),
-                groups,
-            )
-        })?;
+        if last_batch {
+            rec.pass("composite", &uses, |rec| {
+                rec.dispatch(
+                    &self.composite,
+                    &self.composite_set,
+                    &last.to_le_bytes(),
+                    groups,
+                )
+            })?;
+        }
         if let Some(buf) = &clamp_readback {
             rec.copy_storage_to_host(&self.counters, buf);
         }
