@@ -410,6 +410,9 @@ fn previews_while_dragging_fit_the_budget_and_the_refined_frame_is_the_render() 
     // view is still, the frame is full quality and equals `render` of the view the drag
     // ended at. Without previews the frames take seconds each on lavapipe; a refined frame
     // that kept a preview's size or sample distance would differ from the render.
+    // The full frame renders in batches of planes: the scripted interruption turns the
+    // camera once more after the first refinement's second batch, which must abandon that
+    // frame there (and the last frame shows the view after the interruption).
     let Some((display, xvfb)) = display() else {
         return;
     };
@@ -442,6 +445,8 @@ fn previews_while_dragging_fit_the_budget_and_the_refined_frame_is_the_render() 
         "9",
         "--preview-budget",
         "100",
+        "--interrupt-refinement",
+        "2",
         "--no-axes",
         "--screenshot",
         shot.to_str().unwrap(),
@@ -480,11 +485,31 @@ fn previews_while_dragging_fit_the_budget_and_the_refined_frame_is_the_render() 
         last.2
     );
 
-    // The drag turned the camera from azimuth 40 by 6 × 4 degrees.
+    // The refinement under way when the camera moved was abandoned after its second
+    // batch, before its last plane.
+    let abandoned = out
+        .lines()
+        .find_map(|l| {
+            let rest = l.strip_prefix("refinement abandoned after ")?;
+            let mut words = rest.split_whitespace();
+            let done: u32 = words.next()?.parse().ok()?;
+            let of: u32 = words.nth(1)?.parse().ok()?;
+            Some((done, of))
+        })
+        .unwrap_or_else(|| panic!("no refinement was abandoned:\n{out}"));
+    assert!(
+        abandoned.0 >= 2 && abandoned.0 < abandoned.1,
+        "abandoned after {} of {} planes",
+        abandoned.0,
+        abandoned.1
+    );
+
+    // The drag turned the camera from azimuth 40 by 6 × 4 degrees, the interruption by 4
+    // more.
     assert_shows_the_render(
         &display,
         &scene,
-        &["--azimuth", "16"],
+        &["--azimuth", "12"],
         &shot,
         &headless,
         (256, 256),
@@ -516,6 +541,22 @@ fn view_options_and_a_missing_display_are_clear_errors() {
         (
             &["view", "--preview-budget", "-5", "--volume-size", "8"][..],
             "--preview-budget -5: expected a frame time in ms",
+        ),
+        (
+            &["view", "--interrupt-refinement", "0", "--volume-size", "8"][..],
+            "--interrupt-refinement must be at least 1",
+        ),
+        (
+            &[
+                "view",
+                "--interrupt-refinement",
+                "2",
+                "--preview-budget",
+                "0",
+                "--volume-size",
+                "8",
+            ][..],
+            "--interrupt-refinement needs previews",
         ),
         (
             &["view", "sphere", "--scene", "box"][..],

@@ -811,6 +811,11 @@ pub struct ViewArgs {
     /// right would (4 degrees; for tests and scripts, with --frames).
     #[arg(long, value_name = "N")]
     pub drag: Option<u64>,
+    /// Orbit the camera once, as one step of --drag does, after N batches of planes of the
+    /// first full-quality frame (for tests and scripts: a change of view while a frame
+    /// refines, which abandons it).
+    #[arg(long, value_name = "N")]
+    pub interrupt_refinement: Option<u32>,
     /// Do not draw the axes marker (the world's x, y, z in red, green, blue in the
     /// bottom-left corner; X toggles it).
     #[arg(long)]

@@ -28,6 +28,14 @@ pub fn view(desc: &ContextDesc, args: ViewArgs) -> Result<ExitCode> {
             args.preview_budget
         );
     }
+    match args.interrupt_refinement {
+        Some(0) => bail!("--interrupt-refinement must be at least 1 (a batch of planes)"),
+        Some(_) if args.preview_budget == 0.0 => bail!(
+            "--interrupt-refinement needs previews: with --preview-budget 0 every frame is \
+             rendered whole, not refined in batches"
+        ),
+        _ => {}
+    }
     if !args.screenshot_dir.is_dir() {
         bail!(
             "--screenshot-dir {}: the folder does not exist",
@@ -52,6 +60,7 @@ pub fn view(desc: &ContextDesc, args: ViewArgs) -> Result<ExitCode> {
         watch: !args.no_watch,
         preview_budget_ms: (args.preview_budget > 0.0).then_some(args.preview_budget),
         drag: args.drag,
+        interrupt_refinement: args.interrupt_refinement,
         axes: !args.no_axes,
     };
     let report = viewer::run(

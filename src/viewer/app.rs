@@ -166,6 +166,7 @@ impl App {
             changed_at: Instant::now(),
             refined: false,
             last_drag: None,
+            interrupted: false,
         };
         let proxy = self.proxy.clone();
         let handle = std::thread::Builder::new()

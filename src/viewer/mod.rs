@@ -116,6 +116,10 @@ pub struct ViewOptions {
     /// Orbit the camera by a scripted drag of [`SCRIPTED_DRAG_PX`] before each of the
     /// first N frames (tests, scripts).
     pub drag: Option<u64>,
+    /// Orbit the camera as one step of `drag` does after this many batches of the first
+    /// full-quality frame rendered in batches (tests, scripts: a change of view while a
+    /// frame refines).
+    pub interrupt_refinement: Option<u32>,
     /// Draw the axes marker (X toggles it).
     pub axes: bool,
 }

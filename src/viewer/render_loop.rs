@@ -4,7 +4,7 @@
 
 use super::preview::{next_frame, PreviewControl, Quality, CALIBRATION};
 use super::*;
-use crate::render::Slot;
+use crate::render::{Model, PlaneBatch, Slot};
 use crate::vk::{Image, ImageDesc, ImageKind};
 
 /// How long the render thread sleeps between looks at the view while it has nothing to
@@ -86,8 +86,10 @@ pub(super) struct RenderLoop {
     pub(super) shot_requested: bool,
     pub(super) shot_counter: u32,
     pub(super) resize_done: bool,
-    /// Planes and quality of each frame in flight, for the title once its timings arrive.
-    pub(super) in_flight: HashMap<u64, (Option<u32>, Quality)>,
+    /// Planes and quality of each frame in flight, for the title once its timings arrive,
+    /// and the timings of its batches when it was refined in batches (its own timings
+    /// then cover only the tone map).
+    pub(super) in_flight: HashMap<u64, (Option<u32>, Quality, Option<Timings>)>,
     pub(super) last_print: Option<Instant>,
     pub(super) last_check_error: Option<String>,
     /// The previews' rung; None when previews are off.
@@ -99,7 +101,21 @@ pub(super) struct RenderLoop {
     pub(super) refined: bool,
     /// The frame the scripted drag last moved the camera before.
     pub(super) last_drag: Option<u64>,
+    /// `--interrupt-refinement` has moved the camera.
+    pub(super) interrupted: bool,
 }
+
+/// A full-quality frame rendered in batches and waiting in the renderer's
+/// [`Slot::Main`] image to be presented: its batches' GPU timings and plane count.
+pub(super) struct Refined {
+    timings: Timings,
+    planes: u32,
+}
+
+/// How many batches' plane count may grow by per batch: the first batch's one plane can
+/// carry one-off costs (a first use compiles the pass's shaders on a CPU device), and the
+/// planes near the volume's middle cover more pixels than the first ones.
+const BATCH_GROWTH: u32 = 4;
 
 impl RenderLoop {
     pub(super) fn run(&mut self) -> Result<()> {
@@ -116,8 +132,13 @@ impl RenderLoop {
             }
             self.scripted_drag();
             match self.next_quality() {
+                Some(Quality::Full) if self.refines_in_batches() => {
+                    if !self.refine()? {
+                        return Ok(());
+                    }
+                }
                 Some(quality) => {
-                    self.draw(quality)?;
+                    self.draw(quality, None)?;
                     if quality == Quality::Full {
                         self.refined = true;
                     }
@@ -268,6 +289,92 @@ impl RenderLoop {
         self.last_drag == Some(n)
     }
 
+    /// Full frames of the refractive model are rendered in batches of planes while
+    /// previews are on: the view can change while one renders (seconds on a CPU device).
+    fn refines_in_batches(&self) -> bool {
+        self.preview.is_some() && self.state.lock().unwrap().model == Model::Refract
+    }
+
+    /// Render a full-quality frame of the refractive model in batches of planes, each
+    /// submitted and waited for on its own (`SweepOptions::batch`), looking at the view
+    /// between them: when it changed, the frame is abandoned (the next previews start at
+    /// once: an interaction waits for one batch, not a frame), and once the last batch
+    /// is done the frame is presented. A batch is sized by the last one's GPU time per
+    /// plane to take about the previews' budget. False once told to quit.
+    fn refine(&mut self) -> Result<bool> {
+        let Some([w, h]) = self.prepare_target()? else {
+            return Ok(true);
+        };
+        let (view, slot) = self.frame_view(Quality::Full, [w, h]);
+        if self.refuses(&view) {
+            return Ok(true);
+        }
+        let budget = self
+            .preview
+            .as_ref()
+            .map_or(super::preview::DEFAULT_BUDGET_MS, |p| p.budget_ms());
+        let mut timings = Timings::default();
+        let (mut start, mut len, mut batches) = (0u32, 1u32, 0u32);
+        loop {
+            let mut batch = view.clone();
+            batch.opts.sweep.batch = Some(PlaneBatch {
+                start,
+                end: start + len,
+            });
+            let Gpu { ctx, renderer, .. } = &mut self.gpu;
+            let mut planes = None;
+            let t = ctx.execute(|rec| {
+                rec.begin_scope("frame");
+                let out = renderer.record_in(rec, slot, batch.model, &batch.camera, &batch.opts)?;
+                planes = out.sweep.as_ref().map(|s| s.planes.count);
+                rec.end_scope();
+                Ok(())
+            })?;
+            let n = planes.context("the refractive model's frame has planes")?;
+            let ms = t.get("frame").unwrap_or(0.0);
+            timings.extend(t);
+            batches += 1;
+            start = (start + len).min(n);
+            if start == n {
+                self.draw(Quality::Full, Some(Refined { timings, planes: n }))?;
+                self.refined = true;
+                return Ok(true);
+            }
+            let per_plane = (ms / len as f64).max(1e-3);
+            len = ((budget / per_plane) as u32).clamp(1, len * BATCH_GROWTH);
+            if !self.messages()? {
+                return Ok(false);
+            }
+            self.scripted_interrupt(batches);
+            if self.view_changed() {
+                println!(
+                    "refinement abandoned after {start} of {n} planes ({batches} batches, \
+                     {:.1} ms GPU): the view changed",
+                    timings.get("frame").unwrap_or(0.0)
+                );
+                return Ok(true);
+            }
+        }
+    }
+
+    /// --interrupt-refinement N: after the N-th batch of the first refinement, move the
+    /// camera as one step of --drag does.
+    fn scripted_interrupt(&mut self, batches: u32) {
+        if !self.interrupted && self.options.interrupt_refinement == Some(batches) {
+            self.interrupted = true;
+            orbit(&mut self.state.lock().unwrap(), SCRIPTED_DRAG_PX, 0.0);
+        }
+    }
+
+    /// The view (or the window's size) differs from the one last looked at.
+    fn view_changed(&self) -> bool {
+        let size = self.gpu.window.inner_size();
+        let mut view = self.state.lock().unwrap().clone();
+        view.opts.width = size.width;
+        view.opts.height = size.height;
+        self.seen.as_ref() != Some(&view)
+    }
+
     /// What to draw next: a preview while the view changes (and for SETTLE after), then a
     /// full frame; None once that is shown and the view has not changed since (with
     /// `--frames`, full frames go on). Screenshots and the last frame of `--frames` are
@@ -385,33 +492,54 @@ impl RenderLoop {
         }
     }
 
-    /// Record and present one frame of `quality`.
-    pub(super) fn draw(&mut self, quality: Quality) -> Result<()> {
+    /// The swapchain at the window's size (recreated if it is not), or None while the
+    /// window has no area.
+    fn prepare_target(&mut self) -> Result<Option<[u32; 2]>> {
         self.scripted_resize();
         let size = self.gpu.window.inner_size();
         if size.width == 0 || size.height == 0 {
-            return Ok(());
+            return Ok(None);
         }
         let gpu = &mut self.gpu;
         if gpu.swapchain.is_stale() || gpu.swapchain.extent() != [size.width, size.height] {
             gpu.swapchain.recreate([size.width, size.height])?;
             gpu.rebuild_targets()?;
         }
-        let [w, h] = gpu.swapchain.extent();
-        let (view, slot) = self.frame_view(quality, [w, h]);
-        let gpu = &mut self.gpu;
-        // Controls keep every value in range; anything left (a reloaded scene the renderer
-        // refuses) is reported once and nothing is drawn until it changes.
-        if let Err(e) = gpu.renderer.check(view.model, &view.camera, &view.opts) {
+        Ok(Some(gpu.swapchain.extent()))
+    }
+
+    /// The renderer refuses `view`. Controls keep every value in range; anything left (a
+    /// reloaded scene the renderer refuses) is reported once and nothing is drawn until it
+    /// changes.
+    fn refuses(&mut self, view: &ViewState) -> bool {
+        if let Err(e) = self
+            .gpu
+            .renderer
+            .check(view.model, &view.camera, &view.opts)
+        {
             let msg = format!("{e:#}");
             if self.last_check_error.as_deref() != Some(&msg) {
                 eprintln!("cannot render: {msg}");
                 self.last_check_error = Some(msg);
             }
             std::thread::sleep(Duration::from_millis(100));
-            return Ok(());
+            return true;
         }
         self.last_check_error = None;
+        false
+    }
+
+    /// Record and present one frame of `quality`; with `refined`, the frame is already
+    /// rendered in the renderer's main slot ([`RenderLoop::refine`]) and is only tone
+    /// mapped (and copied for a screenshot).
+    pub(super) fn draw(&mut self, quality: Quality, refined: Option<Refined>) -> Result<()> {
+        let Some([w, h]) = self.prepare_target()? else {
+            return Ok(());
+        };
+        let (view, slot) = self.frame_view(quality, [w, h]);
+        if refined.is_none() && self.refuses(&view) {
+            return Ok(());
+        }
         let frame_no = self.report.frames;
         let last = self
             .options
@@ -424,7 +552,7 @@ impl RenderLoop {
         } else {
             None
         };
-        let mut planes = None;
+        let mut planes = refined.as_ref().map(|r| r.planes);
         let Gpu {
             framebuffers,
             tonemap,
@@ -434,28 +562,29 @@ impl RenderLoop {
         } = &mut self.gpu;
         let status = swapchain.frame(|rec, index, target| {
             rec.begin_scope("frame");
-            let out = renderer.record_in(rec, slot, view.model, &view.camera, &view.opts)?;
-            planes = out.sweep.as_ref().map(|s| s.planes.count);
+            let image = match refined {
+                Some(_) => renderer.frame_image(view.model, slot)?,
+                None => {
+                    let out =
+                        renderer.record_in(rec, slot, view.model, &view.camera, &view.opts)?;
+                    planes = out.sweep.as_ref().map(|s| s.planes.count);
+                    out.image
+                }
+            };
             let axes = view.axes.then_some(&view.camera);
-            tonemap.record(
-                rec,
-                out.image,
-                target,
-                &framebuffers[index],
-                &view.tone,
-                axes,
-            )?;
+            tonemap.record(rec, image, target, &framebuffers[index], &view.tone, axes)?;
             if let Some(shot) = &shot {
                 if let Some(buf) = &shot.shown {
                     rec.copy_image_to_buffer(target, 0, buf);
                 }
-                rec.copy_image_to_buffer(out.image, 0, &shot.linear);
+                rec.copy_image_to_buffer(image, 0, &shot.linear);
             }
             rec.end_scope();
             Ok(())
         })?;
         if let FrameStatus::Presented(n) = status {
-            self.in_flight.insert(n, (planes, quality));
+            self.in_flight
+                .insert(n, (planes, quality, refined.map(|r| r.timings)));
             self.report.frames += 1;
             if let Some(shot) = shot {
                 self.gpu.swapchain.wait_idle()?;
@@ -506,7 +635,12 @@ impl RenderLoop {
     pub(super) fn collect_timings(&mut self) {
         let done = self.gpu.swapchain.take_timings();
         for (n, t) in done {
-            let (planes, quality) = self.in_flight.remove(&n).unwrap_or((None, Quality::Full));
+            let (planes, quality, batches) =
+                self.in_flight
+                    .remove(&n)
+                    .unwrap_or((None, Quality::Full, None));
+            // A frame refined in batches: its batches' times (its own is the tone map's).
+            let t = batches.unwrap_or(t);
             let [w, h] = self.gpu.swapchain.extent();
             let line = format!("{}: {}", quality.describe([w, h]), summary(&t, planes));
             if let Some(ms) = t.get("frame") {
