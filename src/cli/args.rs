@@ -816,6 +816,11 @@ pub struct ViewArgs {
     /// refines, which abandons it).
     #[arg(long, value_name = "N")]
     pub interrupt_refinement: Option<u32>,
+    /// Start with the on-screen panel hidden (Tab shows it): model, transfer functions,
+    /// light, softness, refractive-index scale, sample distance, clipping, environment
+    /// rotation and exposure. Screenshots (PNG) show it when it is shown.
+    #[arg(long)]
+    pub no_panel: bool,
     /// Do not draw the axes marker (the world's x, y, z in red, green, blue in the
     /// bottom-left corner; X toggles it).
     #[arg(long)]

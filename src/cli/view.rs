@@ -61,6 +61,7 @@ pub fn view(desc: &ContextDesc, args: ViewArgs) -> Result<ExitCode> {
         preview_budget_ms: (args.preview_budget > 0.0).then_some(args.preview_budget),
         drag: args.drag,
         interrupt_refinement: args.interrupt_refinement,
+        panel: !args.no_panel,
         axes: !args.no_axes,
     };
     let report = viewer::run(

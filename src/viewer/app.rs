@@ -1,6 +1,7 @@
 //! The main thread's winit application: input to view state and messages, file watching,
 //! the window's title and size.
 
+use super::panel::{Panel, PanelAction};
 use super::*;
 
 /// Mouse and keyboard state between events.
@@ -37,6 +38,8 @@ pub(super) struct App {
     pub(super) last_watch: Instant,
     pub(super) watched: Vec<(PathBuf, Option<SystemTime>)>,
     pub(super) last_minimised_poll: Instant,
+    /// The on-screen panel (made with the window).
+    pub(super) panel: Option<Panel>,
 }
 
 pub(super) fn mtime(path: &Path) -> Option<SystemTime> {
@@ -80,6 +83,7 @@ impl App {
             last_watch: Instant::now(),
             watched,
             last_minimised_poll: Instant::now(),
+            panel: None,
         }
     }
 
@@ -110,6 +114,9 @@ impl App {
                 .context("creating the window")?,
         );
         self.window = Some(window.clone());
+        let panel = Panel::new(&window, self.options.panel, self.volume_radius);
+        let panel_frame = panel.shared.clone();
+        self.panel = Some(panel);
         let mut desc = self.desc.clone();
         desc.window = Some(window.clone());
         let ctx = Context::new(&desc)?;
@@ -136,6 +143,7 @@ impl App {
         );
         println!("press H in the window for the keys");
         let mut gpu = Gpu {
+            overlay: None,
             framebuffers: Vec::new(),
             views: Vec::new(),
             tonemap,
@@ -167,6 +175,9 @@ impl App {
             refined: false,
             last_drag: None,
             interrupted: false,
+            panel: panel_frame,
+            panel_drawn: 0,
+            shown: None,
         };
         let proxy = self.proxy.clone();
         let handle = std::thread::Builder::new()
@@ -200,6 +211,9 @@ impl App {
             Ok(new) => {
                 self.watched = new.files.iter().map(|f| (f.clone(), mtime(f))).collect();
                 self.volume_radius = 0.5 * Vec3::from(new.volume.normalised_extent()).length();
+                if let Some(p) = self.panel.as_mut() {
+                    p.set_radius(self.volume_radius);
+                }
                 println!(
                     "reloaded the {} scene (transfer functions {}) in {:.0} ms",
                     new.name,
@@ -243,6 +257,12 @@ impl App {
         let mut said = None;
         match &event.logical_key {
             Key::Named(NamedKey::Escape) => event_loop.exit(),
+            Key::Named(NamedKey::Tab) => {
+                if let Some(p) = self.panel.as_mut() {
+                    let on = p.toggle();
+                    said = Some(format!("panel {}", if on { "on" } else { "off" }));
+                }
+            }
             Key::Named(NamedKey::ArrowLeft) => self.light_moved(-KEY_LIGHT_DEG, 0.0),
             Key::Named(NamedKey::ArrowRight) => self.light_moved(KEY_LIGHT_DEG, 0.0),
             Key::Named(NamedKey::ArrowUp) => self.light_moved(0.0, KEY_LIGHT_DEG),
@@ -344,6 +364,24 @@ impl App {
     }
 
     pub(super) fn window_event_inner(&mut self, event_loop: &ActiveEventLoop, event: WindowEvent) {
+        // The panel sees every event first; input it takes (the pointer over it, a slider
+        // being dragged, a key while a widget has focus) does not reach the view.
+        let taken = match (self.panel.as_mut(), self.window.as_ref()) {
+            (Some(p), Some(w)) => p.on_event(w, &event),
+            _ => false,
+        };
+        if taken {
+            match event {
+                WindowEvent::CursorMoved { position, .. } => {
+                    self.input.cursor = Some((position.x, position.y));
+                    return;
+                }
+                WindowEvent::MouseInput { .. }
+                | WindowEvent::MouseWheel { .. }
+                | WindowEvent::KeyboardInput { .. } => return,
+                _ => {}
+            }
+        }
         match event {
             WindowEvent::CloseRequested => event_loop.exit(),
             WindowEvent::Resized(size) => {
@@ -420,6 +458,24 @@ impl ApplicationHandler<FromRender> for App {
             return;
         };
         self.watch();
+        let mut actions = Vec::new();
+        let animating = match self.panel.as_mut() {
+            Some(p) => p.update(&window, &self.state, &mut actions),
+            None => false,
+        };
+        for action in actions {
+            match action {
+                PanelAction::TransferFunctions(name) => {
+                    match crate::transfer::TransferFunctions::load(&name) {
+                        Ok(tf) => {
+                            println!("transfer functions: {name}");
+                            self.send(ToRender::TransferFunctions(Box::new(tf)));
+                        }
+                        Err(e) => eprintln!("transfer functions {name}: {e:#}"),
+                    }
+                }
+            }
+        }
         // A minimised X11 window may get no event at all; poll its state a few times a
         // second (the render thread sleeps meanwhile).
         if self.last_minimised_poll.elapsed() >= Duration::from_millis(250) {
@@ -429,9 +485,11 @@ impl ApplicationHandler<FromRender> for App {
                 window.is_minimized() == Some(true) || size.width == 0 || size.height == 0;
             self.update_pause();
         }
-        // Wake up for the file watch and the minimised poll; input wakes us anyway.
+        // Wake up for the file watch, the minimised poll and the panel's status line
+        // (input wakes us anyway), soon while the panel animates.
+        let wait = if animating { 16 } else { 250 };
         event_loop.set_control_flow(ControlFlow::WaitUntil(
-            Instant::now() + Duration::from_millis(250),
+            Instant::now() + Duration::from_millis(wait),
         ));
     }
 }

@@ -47,8 +47,8 @@ use crate::output::ToneMap;
 use crate::render::{Camera, Frame, Model, RenderOptions, Renderer, ToneMapPass, MAX_ETA_SCALE};
 use crate::scene::LoadedScene;
 use crate::vk::{
-    Buffer, Context, ContextDesc, FrameStatus, Framebuffer, LayerView, Swapchain, SwapchainDesc,
-    Timings, ValidationLog,
+    Buffer, Context, ContextDesc, FrameStatus, Framebuffer, LayerView, Overlay, Swapchain,
+    SwapchainDesc, Timings, ValidationLog,
 };
 
 /// Reloads the scene from its sources (the command line's options and files).
@@ -86,6 +86,8 @@ pub(super) enum ToRender {
     Reload(Box<LoadedScene>),
     /// Write a screenshot of the next frame.
     Screenshot,
+    /// New transfer functions (the panel's preset).
+    TransferFunctions(Box<crate::transfer::TransferFunctions>),
     Quit,
 }
 
@@ -122,6 +124,8 @@ pub struct ViewOptions {
     pub interrupt_refinement: Option<u32>,
     /// Draw the axes marker (X toggles it).
     pub axes: bool,
+    /// Show the on-screen panel at the start (Tab toggles it).
+    pub panel: bool,
 }
 
 /// Pixels to the right per frame of `--drag` (4 degrees of azimuth).
@@ -153,6 +157,7 @@ refrakt view keys:
   M                 model: refract > ea > ao > single > ambient (cycles)
   C                 clipping plane on / off
   X                 axes marker on / off (x red, y green, z blue; darker: pointing away)
+  Tab               the panel on / off (model, transfer functions, light, softness, ...)
   R                 reload the scene and transfer-function files (also automatic on change)
   P                 screenshot (PNG as shown + linear EXR)
   H                 this help
@@ -227,6 +232,7 @@ pub fn run(
 }
 
 mod app;
+mod panel;
 pub mod preview;
 mod render_loop;
 

@@ -2,6 +2,7 @@
 //! the view changes and a full frame once it is still, each with the view state as it is
 //! when the frame is recorded; screenshots.
 
+use super::panel::PanelFrame;
 use super::preview::{next_frame, PreviewControl, Quality, CALIBRATION};
 use super::*;
 use crate::render::{Model, PlaneBatch, Slot};
@@ -15,6 +16,8 @@ const IDLE_POLL: Duration = Duration::from_millis(10);
 /// [`Gpu::drop`] waited for the device: what the frames use, then the swapchain, the
 /// context (device, surface).
 pub(super) struct Gpu {
+    /// The panel's renderer, made when the panel first has something to draw.
+    pub(super) overlay: Option<Overlay>,
     pub(super) framebuffers: Vec<Framebuffer>,
     pub(super) views: Vec<LayerView>,
     pub(super) tonemap: ToneMapPass,
@@ -41,6 +44,9 @@ impl Gpu {
                 self.swapchain.format(),
                 self.swapchain.encodes_srgb(),
             )?;
+            if let Some(o) = self.overlay.as_mut() {
+                o.set_render_pass(self.tonemap.render_pass())?;
+            }
         }
         let [w, h] = self.swapchain.extent();
         for image in self.swapchain.images() {
@@ -89,7 +95,7 @@ pub(super) struct RenderLoop {
     /// Planes and quality of each frame in flight, for the title once its timings arrive,
     /// and the timings of its batches when it was refined in batches (its own timings
     /// then cover only the tone map).
-    pub(super) in_flight: HashMap<u64, (Option<u32>, Quality, Option<Timings>)>,
+    pub(super) in_flight: HashMap<u64, Shown>,
     pub(super) last_print: Option<Instant>,
     pub(super) last_check_error: Option<String>,
     /// The previews' rung; None when previews are off.
@@ -103,6 +109,34 @@ pub(super) struct RenderLoop {
     pub(super) last_drag: Option<u64>,
     /// `--interrupt-refinement` has moved the camera.
     pub(super) interrupted: bool,
+    /// The panel as the main thread last left it, and the generation drawn last.
+    pub(super) panel: Arc<Mutex<PanelFrame>>,
+    pub(super) panel_drawn: u64,
+    /// The quality of the frame on screen (None before the first and after a reload).
+    pub(super) shown: Option<Quality>,
+}
+
+/// A presented frame whose timings have not arrived yet.
+pub(super) struct Shown {
+    /// The frame's number in the log ([`ViewReport::frames`] before it; frames shown
+    /// again for the panel are not counted).
+    index: u64,
+    planes: Option<u32>,
+    quality: Quality,
+    /// A frame refined in batches: their timings (its own cover the tone map only).
+    batches: Option<Timings>,
+    /// The frame on screen drawn again for the panel: not a frame of its own.
+    again: bool,
+}
+
+/// Where the image a frame shows comes from.
+pub(super) enum Source {
+    /// Recorded into the frame's command buffer.
+    Record,
+    /// Rendered in batches already ([`RenderLoop::refine`]).
+    Refined(Refined),
+    /// The frame on screen, shown again (the panel changed).
+    Again,
 }
 
 /// A full-quality frame rendered in batches and waiting in the renderer's
@@ -138,12 +172,15 @@ impl RenderLoop {
                     }
                 }
                 Some(quality) => {
-                    self.draw(quality, None)?;
+                    self.draw(quality, Source::Record)?;
                     if quality == Quality::Full {
                         self.refined = true;
                     }
                 }
-                None => std::thread::sleep(IDLE_POLL),
+                None => match self.shown {
+                    Some(q) if self.panel_changed() => self.draw(q, Source::Again)?,
+                    _ => std::thread::sleep(IDLE_POLL),
+                },
             }
             self.collect_timings();
         }
@@ -336,7 +373,10 @@ impl RenderLoop {
             batches += 1;
             start = (start + len).min(n);
             if start == n {
-                self.draw(Quality::Full, Some(Refined { timings, planes: n }))?;
+                self.draw(
+                    Quality::Full,
+                    Source::Refined(Refined { timings, planes: n }),
+                )?;
                 self.refined = true;
                 return Ok(true);
             }
@@ -346,6 +386,12 @@ impl RenderLoop {
                 return Ok(false);
             }
             self.scripted_interrupt(batches);
+            if !self.view_changed() && self.panel_changed() {
+                // The panel answers while the frame refines (the frame on screen again).
+                if let Some(q) = self.shown {
+                    self.draw(q, Source::Again)?;
+                }
+            }
             if self.view_changed() {
                 println!(
                     "refinement abandoned after {start} of {n} planes ({batches} batches, \
@@ -431,6 +477,13 @@ impl RenderLoop {
                 ToRender::Pause(p) => self.paused = p,
                 ToRender::Reload(scene) => self.reload(*scene)?,
                 ToRender::Screenshot => self.shot_requested = true,
+                ToRender::TransferFunctions(tf) => {
+                    self.gpu.swapchain.wait_idle()?;
+                    self.gpu.renderer.set_transfer_functions(&tf)?;
+                    // Drawn again: previews, then a full frame.
+                    self.seen = None;
+                    self.preintegrate()?;
+                }
                 ToRender::Quit => return Ok(false),
             }
         }
@@ -454,6 +507,8 @@ impl RenderLoop {
         }
         gpu.renderer.set_environment(new.env.as_ref())?;
         self.scene_name = new.name;
+        // A new renderer has no frames to show again.
+        self.shown = None;
         // New data under an unchanged view: draw it (previews, then a full frame), and
         // learn its costs anew.
         self.seen = None;
@@ -529,42 +584,88 @@ impl RenderLoop {
         false
     }
 
-    /// Record and present one frame of `quality`; with `refined`, the frame is already
-    /// rendered in the renderer's main slot ([`RenderLoop::refine`]) and is only tone
-    /// mapped (and copied for a screenshot).
-    pub(super) fn draw(&mut self, quality: Quality, refined: Option<Refined>) -> Result<()> {
+    /// The panel has changed since it was last drawn.
+    fn panel_changed(&self) -> bool {
+        self.panel.lock().unwrap().generation != self.panel_drawn
+    }
+
+    /// The panel's texture updates applied (after the frames in flight, which may read
+    /// the textures), and what to draw of it: None when hidden or empty.
+    fn panel_overlay(&mut self) -> Result<Option<(Arc<Vec<egui::ClippedPrimitive>>, f32)>> {
+        let (set, free, shapes) = {
+            let mut p = self.panel.lock().unwrap();
+            self.panel_drawn = p.generation;
+            let shapes = (p.visible && !p.primitives.is_empty())
+                .then(|| (p.primitives.clone(), p.pixels_per_point));
+            (
+                std::mem::take(&mut p.textures_set),
+                std::mem::take(&mut p.textures_free),
+                shapes,
+            )
+        };
+        let gpu = &mut self.gpu;
+        if gpu.overlay.is_none() && (shapes.is_some() || !set.is_empty()) {
+            gpu.overlay = Some(Overlay::new(
+                &gpu.ctx,
+                gpu.tonemap.render_pass(),
+                crate::vk::FRAMES_IN_FLIGHT,
+                gpu.swapchain.encodes_srgb(),
+            )?);
+        }
+        if let Some(o) = gpu.overlay.as_mut() {
+            if !set.is_empty() || !free.is_empty() {
+                gpu.swapchain.wait_idle()?;
+                o.set_textures(&set)?;
+                o.free_textures(&free)?;
+            }
+        }
+        Ok(shapes)
+    }
+
+    /// Record and present one frame of `quality` from `source`: recorded now, or already
+    /// in the renderer's slot (refined in batches, or the frame on screen again), then
+    /// only tone mapped (and copied for a screenshot). The panel is drawn over it.
+    pub(super) fn draw(&mut self, quality: Quality, source: Source) -> Result<()> {
         let Some([w, h]) = self.prepare_target()? else {
             return Ok(());
         };
         let (view, slot) = self.frame_view(quality, [w, h]);
-        if refined.is_none() && self.refuses(&view) {
+        if matches!(source, Source::Record) && self.refuses(&view) {
             return Ok(());
         }
+        let again = matches!(source, Source::Again);
+        let overlay = self.panel_overlay()?;
         let frame_no = self.report.frames;
         let last = self
             .options
             .frames
             .map(|n| frame_no + 1 == n)
             .unwrap_or(false);
-        let shot = if self.shot_requested || (last && self.options.screenshot.is_some()) {
+        let shot = if !again && (self.shot_requested || (last && self.options.screenshot.is_some()))
+        {
             self.shot_requested = false;
             Some(self.prepare_shot(last, w, h)?)
         } else {
             None
         };
-        let mut planes = refined.as_ref().map(|r| r.planes);
+        let record = matches!(source, Source::Record);
+        let (mut planes, batches) = match source {
+            Source::Refined(r) => (Some(r.planes), Some(r.timings)),
+            _ => (None, None),
+        };
         let Gpu {
             framebuffers,
             tonemap,
             renderer,
             swapchain,
+            overlay: panel,
             ..
         } = &mut self.gpu;
         let status = swapchain.frame(|rec, index, target| {
             rec.begin_scope("frame");
-            let image = match refined {
-                Some(_) => renderer.frame_image(view.model, slot)?,
-                None => {
+            let image = match record {
+                false => renderer.frame_image(view.model, slot)?,
+                true => {
                     let out =
                         renderer.record_in(rec, slot, view.model, &view.camera, &view.opts)?;
                     planes = out.sweep.as_ref().map(|s| s.planes.count);
@@ -573,6 +674,13 @@ impl RenderLoop {
             };
             let axes = view.axes.then_some(&view.camera);
             tonemap.record(rec, image, target, &framebuffers[index], &view.tone, axes)?;
+            if let (Some((primitives, ppp)), Some(panel)) = (&overlay, panel.as_mut()) {
+                // A second instance of the tone map's render pass: it loads what the first
+                // stored, and the recorder orders the two.
+                rec.begin_render_pass(tonemap.render_pass(), &framebuffers[index], &[(target, 0)])?;
+                panel.draw(rec, [w, h], *ppp, primitives)?;
+                rec.end_render_pass();
+            }
             if let Some(shot) = &shot {
                 if let Some(buf) = &shot.shown {
                     rec.copy_image_to_buffer(target, 0, buf);
@@ -583,8 +691,20 @@ impl RenderLoop {
             Ok(())
         })?;
         if let FrameStatus::Presented(n) = status {
-            self.in_flight
-                .insert(n, (planes, quality, refined.map(|r| r.timings)));
+            self.in_flight.insert(
+                n,
+                Shown {
+                    index: self.report.frames,
+                    planes,
+                    quality,
+                    batches,
+                    again,
+                },
+            );
+            self.shown = Some(quality);
+            if again {
+                return Ok(());
+            }
             self.report.frames += 1;
             if let Some(shot) = shot {
                 self.gpu.swapchain.wait_idle()?;
@@ -635,10 +755,19 @@ impl RenderLoop {
     pub(super) fn collect_timings(&mut self) {
         let done = self.gpu.swapchain.take_timings();
         for (n, t) in done {
-            let (planes, quality, batches) =
-                self.in_flight
-                    .remove(&n)
-                    .unwrap_or((None, Quality::Full, None));
+            let Some(Shown {
+                index,
+                planes,
+                quality,
+                batches,
+                again,
+            }) = self.in_flight.remove(&n)
+            else {
+                continue;
+            };
+            if again {
+                continue;
+            }
             // A frame refined in batches: its batches' times (its own is the tone map's).
             let t = batches.unwrap_or(t);
             let [w, h] = self.gpu.swapchain.extent();
@@ -650,6 +779,7 @@ impl RenderLoop {
                     p.observe(quality, ms, [w, h]);
                 }
             }
+            self.panel.lock().unwrap().status = line.clone();
             let model = self.state.lock().unwrap().model;
             self.gpu.window.set_title(&format!(
                 "refrakt view: {} ({}) {w}x{h} | {line}",
@@ -662,7 +792,7 @@ impl RenderLoop {
                 .unwrap_or(true);
             // Every full frame is printed: the refined one ends an interaction.
             if self.options.frames.is_some() || due || quality == Quality::Full {
-                println!("frame {n}: {line}");
+                println!("frame {index}: {line}");
                 self.last_print = Some(Instant::now());
             }
         }

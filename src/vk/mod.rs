@@ -11,6 +11,7 @@ mod barriers;
 mod commands;
 mod context;
 mod graphics;
+mod overlay;
 mod pipeline;
 mod resources;
 pub mod spirv;
@@ -23,6 +24,7 @@ pub use context::{
     device_type_name, version_string, Context, ContextDesc, DeviceInfo, ValidationLog, WindowSource,
 };
 pub use graphics::{Framebuffer, GraphicsDesc, GraphicsPipeline, Primitives, RenderPass};
+pub use overlay::Overlay;
 pub use pipeline::{Binding, ComputePipeline, DescriptorSet};
 pub use resources::{
     format_size, Buffer, Filter, Image, ImageDesc, ImageKind, LayerView, Memory, Sampler,
