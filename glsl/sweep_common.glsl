@@ -33,6 +33,8 @@ layout(set = 0, binding = 0) uniform SweepParams {
     float termination_alpha;  // a viewing ray stops compositing at this opacity
     uint unlit;          // 1: diagnostic, i_d = 1 and no highlights
     uint pad0;
+    vec4 ambient;        // rgb: the ambient level every sample is lit by, unoccluded, besides
+                         //   the light (--light env: the map's mean radiance); 0 = the thesis
 } P;
 
 layout(set = 0, binding = 1) uniform sampler3D volume;

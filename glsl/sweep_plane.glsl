@@ -554,6 +554,7 @@ void PLANE_MAIN() {
         vec3 ldir = normalize(READ_BUFFER(light_direction, R, uv_v).xyz);
 #endif
         vec3 i_s = vec3(0.0);
+        vec3 c_ambient = vec3(0.0);
         bool unlit = P.unlit != 0u;
         chain_code = 0.0;
         if (unlit) {
@@ -589,6 +590,8 @@ void PLANE_MAIN() {
                 r = across / max(abs(dot(n, ldir)), MIN_FORWARD);
             }
             float k = 1.0 + r;
+            // (The ambient level lights the whole segment, unoccluded: it keeps c.)
+            c_ambient = c;
             c *= a > 1e-4 ? (1.0 - pow(1.0 - a, k)) / (k * a) : 1.0 - 0.5 * r * a;
             // (2) Through a surface's skin the light at the segment's front is chained from
             // the previous segment (its light times (1-a)^r, the same layer model), not
@@ -748,7 +751,7 @@ void PLANE_MAIN() {
         }
         // Oddy-Willis compositing (eq. 4.13): the medium factor once, specular not
         // multiplied by opacity.
-        C += (1.0 - A) * M * (c * i_d + i_s);
+        C += (1.0 - A) * M * (c * i_d + c_ambient * P.ambient.rgb + i_s);
         A += (1.0 - A) * a;
         M *= m;
     }

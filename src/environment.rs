@@ -324,17 +324,18 @@ impl EnvironmentMap {
         let cos_max = 25f64.to_radians().cos();
         let pixel_area = (2.0 * PI / w as f64) * (PI / h as f64);
         let (mut flux_dir, mut colour, mut solid_angle) = (glam::DVec3::ZERO, [0.0f64; 3], 0.0);
+        let mut rest = [0.0f64; 3];
         for row in 0..h {
             for x in 0..w {
                 let p = &self.pixels[row * w + x];
-                if y[row * w + x] < 0.5 * peak {
-                    continue;
-                }
                 let (d, theta) = dir(x, row);
-                if d.dot(centre) < cos_max {
+                let dw = pixel_area * theta.cos();
+                if y[row * w + x] < 0.5 * peak || d.dot(centre) < cos_max {
+                    for c in 0..3 {
+                        rest[c] += p[c] as f64 * dw;
+                    }
                     continue;
                 }
-                let dw = pixel_area * theta.cos();
                 for c in 0..3 {
                     colour[c] += p[c] as f64 * dw;
                 }
@@ -351,6 +352,8 @@ impl EnvironmentMap {
             towards: towards.as_vec3().to_array(),
             colour: colour.map(|c| c as f32),
             solid_angle: solid_angle as f32,
+            // The rest's mean radiance over the whole sphere (the region counted as dark).
+            ambient: rest.map(|c| (c / (4.0 * PI)) as f32),
         })
     }
 
@@ -474,6 +477,11 @@ pub struct KeyLight {
     pub colour: [f32; 3],
     /// The region's solid angle, steradians.
     pub solid_angle: f32,
+    /// The rest of the map as an ambient level: its mean radiance over the sphere, ∫ L dω /
+    /// 4π over the pixels outside the region. A white medium lit by it alone returns it,
+    /// so a white object in a uniform map of radiance L is as bright as the map behind it
+    /// (the furnace test: `tests/ambient_level.rs`). Linear RGB, the map's units.
+    pub ambient: [f32; 3],
 }
 
 impl KeyLight {

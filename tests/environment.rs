@@ -718,12 +718,36 @@ fn the_environment_lights_the_scene_from_its_brightest_spot() {
         log.contains("light from the environment's brightest region"),
         "{log}"
     );
+    // The rest of the map, uniform radiance `dim` over 4π − Ω, as the ambient level: its
+    // mean radiance over the sphere, dim (4π − Ω) / 4π.
+    let omega = 2.0 * std::f32::consts::PI * (1.0 - radius.cos());
+    let ambient = dim * (1.0 - omega / (4.0 * std::f32::consts::PI));
+    let said: f32 = log
+        .split("ambient (")
+        .nth(1)
+        .and_then(|r| r.split(',').next())
+        .and_then(|a| a.trim().parse().ok())
+        .unwrap_or_else(|| panic!("no ambient level in: {log}"));
+    println!("ambient level: {said} (expected {ambient:.4})");
+    assert!(
+        (said - ambient).abs() < 2e-4,
+        "ambient {said}, expected {ambient}"
+    );
     let v = |d: glam::Vec3| format!("{},{},{}", d.x, d.y, d.z);
     let c = format!("{e},{e},{e}");
-    let (explicit, _) = run(&["--light", &v(spot), "--light-colour", &c], "explicit.exr");
+    let a = format!("{ambient},{ambient},{ambient}");
+    let lit_by = |towards: glam::Vec3, out: &str| {
+        let l = v(towards);
+        run(
+            &["--light", &l, "--light-colour", &c, "--ambient-level", &a],
+            out,
+        )
+        .0
+    };
+    let explicit = lit_by(spot, "explicit.exr");
     // 30° further round the vertical: the shadow moves.
     let turned = glam::Quat::from_rotation_y(30f32.to_radians()) * spot;
-    let (elsewhere, _) = run(&["--light", &v(turned), "--light-colour", &c], "turned.exr");
+    let elsewhere = lit_by(turned, "turned.exr");
     let mean_diff = |a: &[[f32; 3]], b: &[[f32; 3]]| {
         a.iter()
             .zip(b)

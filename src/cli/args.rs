@@ -590,6 +590,13 @@ pub struct SceneArgs {
     /// Light colour, linear "r,g,b" (refract, ao) [default: 1,1,1].
     #[arg(help_heading = "Light", long)]
     pub light_colour: Option<String>,
+    /// Ambient level, linear "r,g,b": every sample of the refract model is lit by it
+    /// besides the light, unoccluded (particles return colour × ambient, as they return
+    /// colour × the light's colour; a uniform environment of radiance L gives L)
+    /// [default: 0,0,0; with --light env the environment map's mean radiance outside the
+    /// light's region].
+    #[arg(help_heading = "Light", long, value_name = "R,G,B")]
+    pub ambient_level: Option<String>,
     /// Ambient occlusion (--model ao): half-size, in voxels, of the largest cube around a
     /// sample whose extinction occludes it; a power of two (the cubes double from 1)
     /// [default: 16].

@@ -208,6 +208,9 @@ pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Resu
     if let Some(c) = &args.light_colour {
         o.light_colour = Some(parse_floats::<3>("--light-colour", c)?);
     }
+    if let Some(a) = &args.ambient_level {
+        o.ambient_level = Some(parse_floats::<3>("--ambient-level", a)?);
+    }
     if let Some(c) = &args.clip {
         o.clip = Some(if c == "none" {
             None
@@ -335,6 +338,7 @@ fn refract_only_flags(args: &SceneArgs) -> Vec<&'static str> {
     [
         ("--light", args.light.is_some()),
         ("--light-colour", args.light_colour.is_some()),
+        ("--ambient-level", args.ambient_level.is_some()),
         ("--softness", args.softness.is_some()),
         ("--roughness", args.roughness.is_some()),
         ("--specular", args.specular.is_some()),

@@ -176,6 +176,14 @@ impl RenderOptions {
             self.background
         );
         ensure!(
+            self.sweep
+                .ambient
+                .iter()
+                .all(|c| c.is_finite() && *c >= 0.0),
+            "ambient irradiance {:?} must be finite and non-negative",
+            self.sweep.ambient
+        );
+        ensure!(
             (0.0..=1.0).contains(&self.termination_alpha),
             "termination alpha {} must be in [0, 1]",
             self.termination_alpha

@@ -74,6 +74,8 @@ struct CameraTable {
 struct LightTable {
     towards: Option<Towards>,
     colour: Option<[f32; 3]>,
+    /// The ambient level, linear RGB irradiance (`--ambient-level`).
+    ambient_level: Option<[f32; 3]>,
     softness: Option<f32>,
 }
 
@@ -371,6 +373,7 @@ impl SceneFile {
                 None => {}
             }
             o.light_colour = l.colour;
+            o.ambient_level = l.ambient_level;
             o.softness = l.softness;
         }
         if let Some(e) = self.environment {

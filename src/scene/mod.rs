@@ -117,6 +117,9 @@ pub struct Scene {
     /// map's brightest region ([`EnvironmentMap::key_light`]) when the scene is loaded.
     pub light_from_env: bool,
     pub light_colour: [f32; 3],
+    /// The ambient level (`SweepOptions::ambient`); None: 0, or with `light_from_env` the
+    /// environment map's ([`crate::environment::KeyLight::ambient`]).
+    pub ambient_level: Option<[f32; 3]>,
     pub softness: f32,
     pub environment: EnvSource,
     pub env_rotation: f32,
@@ -190,6 +193,7 @@ pub struct Overrides {
     pub light_towards: Option<Vec3>,
     pub light_from_env: Option<bool>,
     pub light_colour: Option<[f32; 3]>,
+    pub ambient_level: Option<[f32; 3]>,
     pub softness: Option<f32>,
     pub environment: Option<EnvSource>,
     pub env_rotation: Option<f32>,
@@ -245,6 +249,9 @@ impl Scene {
             self.light_towards = None;
         }
         set(&mut self.light_colour, o.light_colour);
+        if o.ambient_level.is_some() {
+            self.ambient_level = o.ambient_level;
+        }
         set(&mut self.softness, o.softness);
         set(&mut self.environment, o.environment);
         set(&mut self.env_rotation, o.env_rotation);
@@ -314,6 +321,7 @@ impl Default for Scene {
             light_from_env: false,
             light_colour: Light::DEFAULT_COLOUR,
             softness: Light::DEFAULT_SOFTNESS,
+            ambient_level: None,
             environment: EnvSource::Sky,
             env_rotation: 0.0,
             model: Model::Refract,
@@ -636,6 +644,7 @@ impl Scene {
                 reflections: self.reflections,
                 clip: self.clip,
                 env_rotation: self.env_rotation,
+                ambient: self.ambient_level.unwrap_or([0.0; 3]),
                 ..Default::default()
             },
             ao: self.ao,
@@ -706,9 +715,20 @@ impl Scene {
             }
             opts.sweep.light.towards = towards;
             opts.sweep.light.colour = key.colour;
+            // An ambient level given explicitly wins over the map's.
+            if self.ambient_level.is_none() {
+                opts.sweep.ambient = key.ambient;
+            }
+            let ambient = opts.sweep.ambient;
+            let whose = match (self.ambient_level.is_some(), self.model == Model::Refract) {
+                (true, _) => "as given",
+                (false, true) => "the rest of the map's mean radiance",
+                (false, false) => "the rest of the map's mean radiance; the refract model's only",
+            };
             light_note = Some(format!(
                 "light from the environment's brightest region: towards ({:.3}, {:.3}, {:.3}) \
-                 ({:.0}° above the horizon), {:.4} sr, irradiance ({:.3}, {:.3}, {:.3})",
+                 ({:.0}° above the horizon), {:.4} sr, irradiance ({:.3}, {:.3}, {:.3}); \
+                 ambient ({:.4}, {:.4}, {:.4}: {whose})",
                 towards.x,
                 towards.y,
                 towards.z,
@@ -716,7 +736,10 @@ impl Scene {
                 key.solid_angle,
                 key.colour[0],
                 key.colour[1],
-                key.colour[2]
+                key.colour[2],
+                ambient[0],
+                ambient[1],
+                ambient[2]
             ));
             opts.validate()?;
         }

@@ -206,6 +206,13 @@ pub struct SweepOptions {
     /// Refractive-index scale k: the sweep uses η' = 1 + k (η_tf − 1), so 0 turns refraction
     /// off and 1 (default) is the transfer function's η.
     pub eta_scale: f32,
+    /// An ambient level (linear RGB) every sample receives besides the light, unoccluded
+    /// and from no direction: particles return `colour × ambient` (as they return `colour
+    /// × irradiance` of the light, the thesis' model). A uniform environment of radiance L
+    /// in-scatters L into a white medium, so that is the level it gives. `--light env`
+    /// sets it to the environment's mean radiance outside the key light's region
+    /// ([`crate::environment::KeyLight::ambient`]); 0 (default) is the thesis' model.
+    pub ambient: [f32; 3],
     /// How light travels between planes.
     pub light_transport: LightTransport,
     /// Forward transport: light rays per screen pixel (1 to `MAX_LIGHT_RAYS`). The rays
@@ -263,6 +270,7 @@ impl Default for SweepOptions {
             env_rotation: 0.0,
             env_footprint: true,
             eta_scale: 1.0,
+            ambient: [0.0; 3],
             light_transport: LightTransport::Forward,
             light_rays: 2,
             light_spacing: 1.0,

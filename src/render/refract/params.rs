@@ -25,6 +25,7 @@ pub(crate) struct SweepParams {
     pub(crate) termination_alpha: f32,
     pub(crate) unlit: u32,
     pub(crate) pad0: u32,
+    pub(crate) ambient: [f32; 4],
 }
 
 /// std140 mirror of `EnvParams` in glsl/sweep_composite.comp.
@@ -164,6 +165,7 @@ mod tests {
             termination_alpha,
             unlit,
             pad0,
+            ambient,
         })
     }
 

@@ -162,6 +162,11 @@ impl SweepPass {
             termination_alpha: opts.termination_alpha,
             unlit: sweep.unlit as u32,
             pad0: 0,
+            // The diagnostic's light is 1 everywhere: nothing besides it.
+            ambient: match sweep.unlit {
+                true => [0.0; 4],
+                false => [sweep.ambient[0], sweep.ambient[1], sweep.ambient[2], 0.0],
+            },
         };
         let e = EnvParams {
             info: [
