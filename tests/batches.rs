@@ -7,26 +7,12 @@
 mod common;
 
 use common::*;
-use refrakt::render::{
-    Camera, Levers, LightTransport, Model, PlaneBatch, Renderer, Slot, SweepPath,
-};
-use refrakt::scene::Scene;
+use refrakt::render::{Levers, LightTransport, Model, PlaneBatch, Slot, SweepPath};
 
 #[test]
 fn a_sweep_submitted_in_batches_of_planes_is_the_whole_frame() {
     with_context(|ctx| {
-        let scene = Scene::builtin("sphere-on-floor").unwrap().unwrap();
-        let volume = scene.load_volume(&std::env::temp_dir(), None).unwrap();
-        let tf = scene.transfer_functions().unwrap();
-        let mut renderer = Renderer::new(ctx, &volume, &tf).unwrap();
-        renderer
-            .set_environment(scene.environment_map().unwrap().as_ref())
-            .unwrap();
-        let cam = Camera {
-            azimuth: scene.camera.azimuth + 35.0,
-            elevation: 40.0,
-            ..scene.camera
-        };
+        let (scene, mut renderer, cam) = sphere_on_floor_oblique(ctx);
         for (path, transport) in [
             (SweepPath::Compute, LightTransport::Forward),
             (SweepPath::Fragment, LightTransport::Forward),

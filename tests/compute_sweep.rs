@@ -16,7 +16,6 @@ use refrakt::render::{
     Camera, Deposit, Levers, LightTransport, Model, Planes, RenderOptions, Renderer, Splat,
     StateBuffer, SweepPath,
 };
-use refrakt::scene::Scene;
 use refrakt::transfer::TransferFunctions;
 use refrakt::volume::procedural;
 
@@ -33,18 +32,7 @@ fn path(sweep: SweepPath) -> Levers {
 #[test]
 fn compute_and_fragment_sweeps_render_the_same_glass_sphere_on_its_floor() {
     with_context(|ctx| {
-        let scene = Scene::builtin("sphere-on-floor").unwrap().unwrap();
-        let volume = scene.load_volume(&std::env::temp_dir(), None).unwrap();
-        let tf = scene.transfer_functions().unwrap();
-        let mut renderer = Renderer::new(ctx, &volume, &tf).unwrap();
-        renderer
-            .set_environment(scene.environment_map().unwrap().as_ref())
-            .unwrap();
-        let cam = Camera {
-            azimuth: scene.camera.azimuth + 35.0,
-            elevation: 40.0,
-            ..scene.camera
-        };
+        let (scene, mut renderer, cam) = sphere_on_floor_oblique(ctx);
         for (transport, sd, softness) in [
             (LightTransport::Forward, 1.0, 0.0),
             (LightTransport::Forward, 0.5, 1.0),

@@ -341,3 +341,24 @@ pub fn read_exr_rgb(path: &std::path::Path) -> (usize, Vec<[f32; 3]>) {
     .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     img.layer_data.channel_data.pixels
 }
+
+/// The built-in glass sphere on its floor (a caustic, a shadow, Fresnel reflections, the
+/// sky) with its environment, seen obliquely (35° round from the scene's camera, 40°
+/// up): the scene, a renderer for it and the camera.
+pub fn sphere_on_floor_oblique(ctx: &Context) -> (refrakt::scene::Scene, Renderer, Camera) {
+    let scene = refrakt::scene::Scene::builtin("sphere-on-floor")
+        .unwrap()
+        .unwrap();
+    let volume = scene.load_volume(&std::env::temp_dir(), None).unwrap();
+    let tf = scene.transfer_functions().unwrap();
+    let mut renderer = Renderer::new(ctx, &volume, &tf).unwrap();
+    renderer
+        .set_environment(scene.environment_map().unwrap().as_ref())
+        .unwrap();
+    let cam = Camera {
+        azimuth: scene.camera.azimuth + 35.0,
+        elevation: 40.0,
+        ..scene.camera
+    };
+    (scene, renderer, cam)
+}
