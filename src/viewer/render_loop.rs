@@ -386,13 +386,14 @@ impl RenderLoop {
                 return Ok(false);
             }
             self.scripted_interrupt(batches);
-            if !self.view_changed() && self.panel_changed() {
+            let changed = self.view_changed();
+            if !changed && self.panel_changed() {
                 // The panel answers while the frame refines (the frame on screen again).
                 if let Some(q) = self.shown {
                     self.draw(q, Source::Again)?;
                 }
             }
-            if self.view_changed() {
+            if changed {
                 println!(
                     "refinement abandoned after {start} of {n} planes ({batches} batches, \
                      {:.1} ms GPU): the view changed",
@@ -412,13 +413,18 @@ impl RenderLoop {
         }
     }
 
-    /// The view (or the window's size) differs from the one last looked at.
-    fn view_changed(&self) -> bool {
+    /// The view as the controls left it, at the window's size.
+    fn current_view(&self) -> ViewState {
         let size = self.gpu.window.inner_size();
         let mut view = self.state.lock().unwrap().clone();
         view.opts.width = size.width;
         view.opts.height = size.height;
-        self.seen.as_ref() != Some(&view)
+        view
+    }
+
+    /// The view (or the window's size) differs from the one last looked at.
+    fn view_changed(&self) -> bool {
+        self.seen.as_ref() != Some(&self.current_view())
     }
 
     /// What to draw next: a preview while the view changes (and for SETTLE after), then a
@@ -426,10 +432,7 @@ impl RenderLoop {
     /// `--frames`, full frames go on). Screenshots and the last frame of `--frames` are
     /// full.
     fn next_quality(&mut self) -> Option<Quality> {
-        let size = self.gpu.window.inner_size();
-        let mut view = self.state.lock().unwrap().clone();
-        view.opts.width = size.width;
-        view.opts.height = size.height;
+        let view = self.current_view();
         if self.seen.as_ref() != Some(&view) {
             if let (Some(p), Some(seen)) = (self.preview.as_mut(), &self.seen) {
                 if seen.model != view.model {
