@@ -118,10 +118,10 @@ uint bin_of(int level, ivec2 t) {
     return fine_bins() + coarse_bins();
 }
 
-// A 64-bit fixed-point sum in registers: (lo, hi) words as light_splat_fixed.glsl has them.
-void add_fixed_reg(inout uvec2 sum, float v) {
-    // Branch-free (llvmpipe runs both sides of a branch): 0 adds nothing, a negative
-    // value its two's complement.
+// v truncated to 32.32 fixed point, as (lo, hi) words of a 64-bit two's complement
+// number (light_splat_fixed.glsl). Branch-free (llvmpipe runs both sides of a branch): 0
+// is (0, 0), a negative value the two's complement of its magnitude's.
+uvec2 to_fixed(float v) {
     float m = abs(v);
     float f = floor(m);
     uint hi = uint(f);
@@ -129,11 +129,15 @@ void add_fixed_reg(inout uvec2 sum, float v) {
     bool negative = v < 0.0;
     uint hi_n = ~hi + (lo == 0u ? 1u : 0u);
     uint lo_n = 0u - lo;
-    hi = negative ? hi_n : hi;
-    lo = negative ? lo_n : lo;
+    return negative ? uvec2(lo_n, hi_n) : uvec2(lo, hi);
+}
+
+// A 64-bit fixed-point sum in registers: (lo, hi) words as light_splat_fixed.glsl has them.
+void add_fixed_reg(inout uvec2 sum, float v) {
+    uvec2 w = to_fixed(v);
     uint carry;
-    sum.x = uaddCarry(sum.x, lo, carry);
-    sum.y = sum.y + hi + carry;
+    sum.x = uaddCarry(sum.x, w.x, carry);
+    sum.y = sum.y + w.y + carry;
 }
 
 float fixed_to_float(uvec2 sum) {

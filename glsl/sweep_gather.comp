@@ -1,20 +1,30 @@
 #version 460
-// The compute sweep's splat, last of four dispatches (light_gather.glsl): each 8 x 8 tile
-// of pixels reads the rays listed in its bin, its coarse tile's bin and the global bin,
-// and each pixel sums the deposits of those rays over its own area, in 32.32 fixed point
-// in registers (the atomic splat's integer sums, bit for bit), into this plane's
-// irradiance and light direction (layer `read_layer`, the layer the rays were written
-// to). The candidates are taken 64 at a time into shared memory (index and footprint; a
-// candidate of a coarse or the global bin that misses this tile is dropped there). Every
-// loop's trip count is the same for the whole workgroup: llvmpipe runs a loop's body at
-// least once even with every lane masked.
+// The compute sweep's splat, last of four dispatches (light_gather.glsl), the `gather=pairs`
+// lever (the default): each 8 x 8 tile of pixels reads the rays listed in its bin, its
+// coarse tile's bin and the global bin, 64 at a time, and spreads the work over the
+// (ray, pixel) pairs where a deposit lands: every invocation evaluates one deposit at one
+// pixel of the tile, and adds it to that pixel's seven 32.32 fixed-point sums in shared
+// memory with integer atomics (light_splat_fixed.glsl's two-word carry: the sums are the
+// atomic splat's and sweep_gather_pixels.comp's, bit for bit, in any order).
 //
-// Tried and measured (NVIDIA H200, supernova at the thesis' size, forward transport): one
-// ray per invocation adding its deposit to the tile's fixed-point sums in shared memory
-// with integer atomics evaluates each deposit only where it lands, but took 1229 ms a
-// frame against this loop's 690 ms (the deposits of neighbouring rays contend for the
-// same pixels' words, 7 to 14 atomics per pixel); on llvmpipe it was the faster of the
-// two (docs/BENCH.md, "The gather splat, binned").
+// Why pairs: in sweep_gather_pixels.comp (`gather=pixels`) each invocation is a pixel and
+// loops over every candidate, so a ray whose deposit covers 2 to 4 of the tile's pixels
+// costs the whole 32-wide subgroup one deposit evaluation and seven 64-bit adds; here it
+// costs 2 to 4 invocations. And why not one ray per invocation looping over its pixels
+// (tried, docs/bench/2026-11-26-nvidia-h200-gather.md): a subgroup then waits for its
+// widest ray (a coarse ray covers up to all 64 pixels of a tile); pairs are dealt out
+// evenly whatever the rays' sizes.
+//
+// Per batch of 64 candidates, three steps with a barrier after each:
+//   1. invocation t takes candidate t: its ray and the rectangle of the tile's pixels its
+//      footprint overlaps with positive area (deposit_overlap > 0), possibly empty;
+//   2. each invocation sums the pair counts up to its candidate (the batch's pairs are
+//      numbered candidate by candidate), and the invocations copy the batch's deposits
+//      into shared memory, consecutive invocations reading consecutive vec4s;
+//   3. pair k = base + t: its candidate by binary search in the running sums, its pixel in
+//      that candidate's rectangle, row by row; deposit_at and seven fixed-point adds.
+// Every loop's trip count is the same for the whole workgroup (llvmpipe runs a loop's
+// body even with every lane masked).
 #extension GL_GOOGLE_include_directive : require
 #define SWEEP_COMPUTE 1
 #include "sweep_common.glsl"
@@ -33,17 +43,61 @@ layout(push_constant) uniform Push {
     float unit;       // the fixed-point unit (the light's brightest channel)
 } pc;
 
-shared int candidate[64];
-shared vec4 candidate_footprint[64];
+const uint BATCH = 64u;
+
+// The tile's sums: word [channel][pixel], low and high halves of 32.32 fixed point.
+shared uint sum_lo[SPLAT_GATHER_CHANNELS][64];
+shared uint sum_hi[SPLAT_GATHER_CHANNELS][64];
+// The batch: each candidate's rectangle in the tile (x0, y0, width, height, 8 bits each;
+// zero pixels for a ray that misses the tile), its pairs' running end, and its deposit.
+shared uint candidate_rect[BATCH];
+shared uint candidate_end[BATCH];
+shared int candidate_ray[BATCH];
+shared vec4 candidate_deposit[BATCH * uint(DEPOSIT_VEC4S)];
+
+// The rectangle of the tile's pixels (tile-local, x0 y0 x1 y1 exclusive) that footprint
+// f overlaps with positive area: pixel p (the square [p, p + 1]) overlaps [lo, hi] where
+// lo < p + 1 and p < hi, so p runs from floor(lo) to ceil(hi) - 1.
+ivec4 tile_rect(vec4 f, ivec2 tile_lo, ivec2 tile_size) {
+    ivec2 p0 = ivec2(clamp(floor(f.xy), vec2(tile_lo), vec2(tile_lo + tile_size)));
+    ivec2 p1 = ivec2(clamp(ceil(f.zw), vec2(tile_lo), vec2(tile_lo + tile_size)));
+    bool empty = !(f.x < f.z && f.y < f.w) || any(lessThanEqual(p1, p0));
+    return empty ? ivec4(0) : ivec4(p0 - tile_lo, p1 - tile_lo);
+}
+
+RayDeposit shared_deposit(uint c) {
+    uint k = c * uint(DEPOSIT_VEC4S);
+    RayDeposit d;
+    d.flux_a = candidate_deposit[k];
+    d.flux_b = candidate_deposit[k + 1u];
+    d.footprint = candidate_deposit[k + 2u];
+    d.corners_ab = candidate_deposit[k + 3u];
+    d.corners_cd = candidate_deposit[k + 4u];
+    d.direction = candidate_deposit[k + 5u].xyz;
+    d.box_amplitude = candidate_deposit[k + 6u];
+    d.box = candidate_deposit[k + 7u];
+    d.flux_c = candidate_deposit[k + 8u];
+    d.flux_d = candidate_deposit[k + 9u];
+    return d;
+}
+
+// Add v, truncated to 32.32 fixed point as add_fixed_reg does, to the shared sum of
+// (channel, pixel): the low word's old value tells whether it wrapped, and the carry goes
+// into the high word with its half (light_splat_fixed.glsl).
+void add_fixed_shared(uint channel, uint px, float v) {
+    uvec2 w = to_fixed(v);
+    uint old = atomicAdd(sum_lo[channel][px], w.x);
+    uint carry = old + w.x < old ? 1u : 0u;
+    atomicAdd(sum_hi[channel][px], w.y + carry);
+}
 
 void main() {
     ivec2 size = screen_size();
-    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
     uint t = gl_LocalInvocationIndex;
-    vec2 tile_lo = vec2(gl_WorkGroupID.xy * GATHER_TILE);
-    vec2 tile_hi = min(tile_lo + float(GATHER_TILE), vec2(size));
-    uint n = bin_count();
     ivec2 tile = ivec2(gl_WorkGroupID.xy);
+    ivec2 tile_lo = tile * int(GATHER_TILE);
+    ivec2 tile_size = min(ivec2(GATHER_TILE), size - tile_lo);
+    uint n = bin_count();
     uint fine = bin_of(BIN_FINE, tile);
     uint coarse = bin_of(BIN_COARSE, tile / FINE_PER_COARSE);
     uint wide = bin_of(BIN_GLOBAL, ivec2(0));
@@ -51,45 +105,84 @@ void main() {
     uint n_wide = bins[2u * n + wide];
     uint total = n_fine + n_coarse + n_wide;
 
-    uvec2 sum[SPLAT_GATHER_CHANNELS];
-    for (int k = 0; k < SPLAT_GATHER_CHANNELS; ++k) sum[k] = uvec2(0u);
-    for (uint base = 0u; base < total; base += 64u) {
+    for (int k = 0; k < SPLAT_GATHER_CHANNELS; ++k) {
+        sum_lo[k][t] = 0u;
+        sum_hi[k][t] = 0u;
+    }
+    for (uint base = 0u; base < total; base += BATCH) {
+        // 1. Candidate t and its rectangle in the tile.
         uint k = base + t;
         int r = -1;
-        vec4 footprint = vec4(0.0);
+        ivec4 rect = ivec4(0);
         if (k < total) {
             uint slot = k < n_fine ? bins[n + fine] + k
                       : k < n_fine + n_coarse ? bins[n + coarse] + (k - n_fine)
                       : bins[n + wide] + (k - n_fine - n_coarse);
             r = int(bin_list[slot]);
-            footprint = stored_footprint(r);
-            // Overlap of positive area with the tile, as deposit_overlap counts it.
-            if (!(footprint.x < tile_hi.x && footprint.z > tile_lo.x && footprint.y < tile_hi.y
-                  && footprint.w > tile_lo.y)) r = -1;
+            rect = tile_rect(stored_footprint(r), tile_lo, tile_size);
         }
-        candidate[t] = r;
-        candidate_footprint[t] = footprint;
+        ivec2 extent = rect.zw - rect.xy;
+        candidate_rect[t] = uint(rect.x) | uint(rect.y) << 8 | uint(extent.x) << 16
+                            | uint(extent.y) << 24;
+        candidate_ray[t] = extent.x * extent.y > 0 ? r : -1;
         barrier();
-        for (int q = 0; q < 64; ++q) {
-            int c = candidate[q];
-            if (c < 0) continue;
-            if (deposit_overlap(candidate_footprint[q], vec2(pixel)) <= 0.0) continue;
-            vec3 e;
-            vec4 d;
-            deposit_at(load_deposit(c), vec2(pixel), pc.unit, e, d);
-            add_fixed_reg(sum[0], e.r);
-            add_fixed_reg(sum[1], e.g);
-            add_fixed_reg(sum[2], e.b);
-            add_fixed_reg(sum[3], d.x);
-            add_fixed_reg(sum[4], d.y);
-            add_fixed_reg(sum[5], d.z);
-            add_fixed_reg(sum[6], d.w);
+        // 2. The running end of the pairs up to candidate t, and the deposits.
+        uint end = 0u, pairs = 0u;
+        for (uint c = 0u; c < BATCH; ++c) {
+            uint e = candidate_rect[c];
+            uint count = (e >> 16 & 0xffu) * (e >> 24);
+            pairs += count;
+            end += c <= t ? count : 0u;
+        }
+        candidate_end[t] = end;
+        for (uint q = t; q < BATCH * uint(DEPOSIT_VEC4S); q += BATCH) {
+            int ray = candidate_ray[q / uint(DEPOSIT_VEC4S)];
+            if (ray >= 0) {
+                candidate_deposit[q] =
+                    deposits[DEPOSIT_VEC4S * ray + int(q % uint(DEPOSIT_VEC4S))];
+            }
+        }
+        barrier();
+        // 3. The pairs, 64 at a time.
+        for (uint p0 = 0u; p0 < pairs; p0 += BATCH) {
+            uint pair = p0 + t;
+            // The first candidate whose running end exceeds `pair` (candidate_end is
+            // non-decreasing; 6 halvings of 64).
+            uint lo = 0u, hi = BATCH - 1u;
+            for (int s = 0; s < 6; ++s) {
+                uint mid = (lo + hi) / 2u;
+                bool right = candidate_end[mid] <= pair;
+                lo = right ? mid + 1u : lo;
+                hi = right ? hi : mid;
+            }
+            if (pair < pairs) {
+                uint c = lo;
+                uint e = candidate_rect[c];
+                uint width = e >> 16 & 0xffu, height = e >> 24;
+                uint local = pair - (candidate_end[c] - width * height);
+                ivec2 at = ivec2(e & 0xffu, e >> 8 & 0xffu) + ivec2(local % width, local / width);
+                vec3 irr;
+                vec4 dir;
+                deposit_at(shared_deposit(c), vec2(tile_lo + at), pc.unit, irr, dir);
+                uint px = uint(at.y) * GATHER_TILE + uint(at.x);
+                add_fixed_shared(0u, px, irr.r);
+                add_fixed_shared(1u, px, irr.g);
+                add_fixed_shared(2u, px, irr.b);
+                add_fixed_shared(3u, px, dir.x);
+                add_fixed_shared(4u, px, dir.y);
+                add_fixed_shared(5u, px, dir.z);
+                add_fixed_shared(6u, px, dir.w);
+            }
         }
         barrier();
     }
+    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(pixel, size))) return;
+    uint px = gl_LocalInvocationID.y * GATHER_TILE + gl_LocalInvocationID.x;
     float c[SPLAT_GATHER_CHANNELS];
-    for (int k = 0; k < SPLAT_GATHER_CHANNELS; ++k) c[k] = fixed_to_float(sum[k]) * pc.unit;
+    for (int k = 0; k < SPLAT_GATHER_CHANNELS; ++k) {
+        c[k] = fixed_to_float(uvec2(sum_lo[k][px], sum_hi[k][px])) * pc.unit;
+    }
     ivec3 at = ivec3(pixel, pc.read_layer);
     imageStore(irradiance, at, vec4(c[0], c[1], c[2], 0.0));
     imageStore(irradiance_direction, at, vec4(c[3], c[4], c[5], c[6]));

@@ -227,8 +227,17 @@ impl SweepPass {
             };
             let ray_groups = [f.grid[0].div_ceil(8), f.grid[1].div_ceil(8), 1];
             let p = &pipelines;
+            // Within the splat's scope, one scope per step, so that a GPU's timings say
+            // which of them to work on.
+            if timed {
+                rec.begin_scope("sweep: splat: deposits");
+            }
             rec.bind_compute_pipeline(&p.deposit);
             rec.dispatch_bound(&p.deposit, bytemuck::bytes_of(&push), ray_groups)?;
+            if timed {
+                rec.end_scope();
+                rec.begin_scope("sweep: splat: bins");
+            }
             // The bins' list offsets, then the lists.
             rec.compute_storage_barriers(&[], &splat_buffers);
             rec.bind_compute_pipeline(&p.bin_scan);
@@ -236,12 +245,17 @@ impl SweepPass {
             rec.compute_storage_barriers(&[], &splat_buffers);
             rec.bind_compute_pipeline(&p.bin_fill);
             rec.dispatch_bound(&p.bin_fill, bytemuck::bytes_of(&push), ray_groups)?;
+            if timed {
+                rec.end_scope();
+                rec.begin_scope("sweep: splat: gather");
+            }
             // Stage C: the gather into irradiance layer i % 2 (after the viewing rays of
             // plane i - 1 read it as plane i - 2's).
             rec.compute_storage_barriers(&Self::storage(&self.irradiance), &splat_buffers);
             rec.bind_compute_pipeline(&p.gather);
             rec.dispatch_bound(&p.gather, bytemuck::bytes_of(&push), groups(screen))?;
             if timed {
+                rec.end_scope();
                 rec.end_scope();
             }
         }

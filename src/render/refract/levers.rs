@@ -62,6 +62,30 @@ impl Deposit {
     }
 }
 
+/// How the compute sweep's splat sums the deposits of a tile's rays (issue 31,
+/// glsl/sweep_gather.comp): both add the same 32.32 fixed-point values, so the two give
+/// the same irradiance bit for bit; only their speed differs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Gather {
+    /// One invocation per (ray, pixel) pair where a deposit lands, adding into the tile's
+    /// sums in shared memory with integer atomics.
+    Pairs,
+    /// One invocation per pixel, looping over every ray listed for its tile and summing
+    /// in registers (glsl/sweep_gather_pixels.comp: a subgroup evaluates a deposit for
+    /// all its pixels where any of them needs it).
+    Pixels,
+}
+
+impl Gather {
+    fn name(self) -> &'static str {
+        match self {
+            Gather::Pairs => "pairs",
+            Gather::Pixels => "pixels",
+        }
+    }
+}
+
 /// How the planes of the sweep run (issue 31).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -153,6 +177,14 @@ pub struct Levers {
     /// What a forward light ray deposits (not a speed lever: see [`Deposit`]).
     #[serde(default = "boxes")]
     pub deposit: Deposit,
+    /// How the compute sweep's splat sums a tile's deposits (the fragment path's splat
+    /// is the `splat` lever's).
+    #[serde(default = "pairs")]
+    pub gather: Gather,
+}
+
+fn pairs() -> Gather {
+    Gather::Pairs
 }
 
 fn boxes() -> Deposit {
@@ -178,6 +210,7 @@ impl Default for Levers {
             sweep: SweepPath::Auto,
             clear: true,
             deposit: Deposit::Boxes,
+            gather: Gather::Pairs,
         }
     }
 }
@@ -193,12 +226,13 @@ impl Levers {
         sweep: SweepPath::Fragment,
         clear: false,
         deposit: Deposit::Boxes,
+        gather: Gather::Pixels,
     };
 
     /// The keys of [`Levers::parse`], with their values, for help texts.
     pub const SYNTAX: &'static str =
         "region=full|rect, field=off|on, arrays=off|on, specialize=off|on, splat=raster|compute, \
-         sweep=auto|fragment|compute, clear=off|on, deposit=cells|boxes";
+         sweep=auto|fragment|compute, clear=off|on, deposit=cells|boxes, gather=pairs|pixels";
 
     /// `default`, `reference`, or comma-separated `key=value` pairs applied to the
     /// default (e.g. `region=full,field=off`); a pair may also follow `reference,` to
@@ -260,6 +294,13 @@ impl Levers {
                         "cells" => Deposit::Cells,
                         "boxes" => Deposit::Boxes,
                         _ => bail!("deposit={value}: expected cells or boxes"),
+                    }
+                }
+                "gather" => {
+                    levers.gather = match value {
+                        "pairs" => Gather::Pairs,
+                        "pixels" => Gather::Pixels,
+                        _ => bail!("gather={value}: expected pairs or pixels"),
                     }
                 }
                 "sweep" => {
@@ -324,7 +365,8 @@ impl fmt::Display for Levers {
         let on = |b: bool| if b { "on" } else { "off" };
         write!(
             f,
-            "region={},field={},arrays={},specialize={},splat={},sweep={},clear={},deposit={}",
+            "region={},field={},arrays={},specialize={},splat={},sweep={},clear={},deposit={},\
+             gather={}",
             match self.region {
                 Region::Full => "full",
                 Region::Rect => "rect",
@@ -338,7 +380,8 @@ impl fmt::Display for Levers {
             },
             self.sweep.name(),
             on(self.clear),
-            self.deposit.name()
+            self.deposit.name(),
+            self.gather.name()
         )
     }
 }
@@ -362,6 +405,11 @@ mod tests {
                         Deposit::Cells
                     },
                     region,
+                    gather: if bits % 7 == 0 {
+                        Gather::Pixels
+                    } else {
+                        Gather::Pairs
+                    },
                     field: bits & 1 != 0,
                     arrays: bits & 2 != 0,
                     specialize: bits & 4 != 0,
@@ -401,6 +449,7 @@ mod tests {
             ("splat=gather", "raster or compute"),
             ("sweep=vertex", "auto, fragment or compute"),
             ("deposit=points", "cells or boxes"),
+            ("gather=rays", "pairs or pixels"),
             ("field=maybe", "on or off"),
             ("speed=11", "unknown lever 'speed'"),
             ("field", "not key=value"),

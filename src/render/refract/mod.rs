@@ -612,7 +612,7 @@ mod record;
 mod region;
 
 use compute::ComputeFrame;
-pub use levers::{Deposit, Levers, Region, Splat, SweepPath};
+pub use levers::{Deposit, Gather, Levers, Region, Splat, SweepPath};
 pub(crate) use params::EnvInputs;
 use params::*;
 pub(crate) use pass::{Features, StateImage, SweepPass, TrafficInputs};

@@ -118,6 +118,10 @@ pub(crate) struct Features {
     pub(crate) clear: bool,
     /// The `deposit` lever: the forward light rays deposit cells, not boxes.
     pub(crate) cells: bool,
+    /// The `gather` lever: the compute sweep's splat sums by (ray, pixel) pairs
+    /// (glsl/sweep_gather.comp), not by pixels (sweep_gather_pixels.comp). Not a
+    /// constant: it chooses the gather's shader.
+    pub(crate) gather_pairs: bool,
 }
 
 impl Features {
@@ -131,6 +135,7 @@ impl Features {
         films: true,
         clear: true,
         cells: true,
+        gather_pairs: true,
     };
 
     /// `have_field`: whether the field texture exists (it may not fit in memory);
@@ -142,6 +147,7 @@ impl Features {
             field: levers.field && have_field,
             clear: levers.clear,
             cells: levers.deposit == super::Deposit::Cells,
+            gather_pairs: levers.gather == super::Gather::Pairs,
             ..Self::ALL
         };
         if !levers.specialize {
@@ -293,7 +299,12 @@ pub(crate) struct ComputePlanes {
 }
 
 impl ComputePlanes {
-    fn new(ctx: &Context, set: &DescriptorSet, constants: [u32; 10]) -> Result<Self> {
+    fn new(
+        ctx: &Context,
+        set: &DescriptorSet,
+        constants: [u32; 10],
+        gather_pairs: bool,
+    ) -> Result<Self> {
         let push = std::mem::size_of::<ComputePush>() as u32;
         let make = |spirv, name: &str| {
             ComputePipeline::with_constants(ctx, spirv, set, push, &constants, name)
@@ -329,7 +340,13 @@ impl ComputePlanes {
                 shaders::SWEEP_BIN_FILL_COMP,
                 "light bin lists (compute sweep)",
             )?,
-            gather: make(shaders::SWEEP_GATHER_COMP, "light gather (compute sweep)")?,
+            gather: match gather_pairs {
+                true => make(shaders::SWEEP_GATHER_COMP, "light gather (compute sweep)")?,
+                false => make(
+                    shaders::SWEEP_GATHER_PIXELS_COMP,
+                    "light gather by pixels (compute sweep)",
+                )?,
+            },
         })
     }
 }
@@ -702,6 +719,7 @@ impl SweepPass {
                 ctx,
                 &self.compute_set,
                 features.constants(self.have_gradient),
+                features.gather_pairs,
             )?;
             self.compute_planes.insert(features, planes);
         }
