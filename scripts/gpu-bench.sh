@@ -15,6 +15,7 @@
 #      in that order, each as two `refrakt bench variants` invocations:
 #        --light-transport forward  --variant sweep=compute --variant sweep=fragment
 #                                   --variant sweep=fragment,splat=compute
+#                                   --variant sweep=compute,gather=pixels
 #        --light-transport backward --variant sweep=compute --variant sweep=fragment
 #      each with --scale, --frames, --warmup, --json and wrapped in `timeout` with what is
 #      left of the time budget. Rows stop when the budget is spent; the report says which
@@ -217,7 +218,8 @@ runs="$work/runs.tsv"
 # --- 3. The benchmark -------------------------------------------------------------------
 
 common=(--device "$dev_index" --scale "$scale" --frames "$frames" --warmup "$warmup" --quiet)
-variants_forward=(--variant sweep=compute --variant sweep=fragment --variant sweep=fragment,splat=compute)
+variants_forward=(--variant sweep=compute --variant sweep=fragment --variant sweep=fragment,splat=compute
+                  --variant sweep=compute,gather=pixels)
 variants_backward=(--variant sweep=compute --variant sweep=fragment)
 
 t_start=$(date +%s)
@@ -460,6 +462,8 @@ def lever_map(levers):
 def classify(var, pos):
     lv = lever_map(var.get("levers"))
     sweep, splat = lv.get("sweep"), lv.get("splat")
+    if sweep == "compute" and lv.get("gather") == "pixels":
+        return "compute_gather_pixels"
     if sweep == "compute":
         return "compute"
     if sweep == "fragment" and splat == "compute":
@@ -476,7 +480,8 @@ for inv in invocations:
     transport = rep.get("settings", {}).get("light_transport") or inv["light_transport"]
     for r in rep.get("rows", []):
         line = {"row": r.get("dataset"), "light_transport": transport,
-                "compute_ms": None, "fragment_ms": None, "fragment_splat_compute_ms": None}
+                "compute_ms": None, "fragment_ms": None, "fragment_splat_compute_ms": None,
+                "compute_gather_pixels_ms": None}
         for pos, var in enumerate(r.get("variants", [])):
             c = classify(var, pos)
             if c:
@@ -492,16 +497,18 @@ def fmt_ratio(v):
     return "—" if v is None else "%.3f" % v
 
 table = [
-    "| Row | Transport | sweep=compute ms | sweep=fragment ms | compute / fragment | sweep=fragment,splat=compute ms |",
-    "|---|---|---:|---:|---:|---:|",
+    "| Row | Transport | sweep=compute ms | sweep=fragment ms | compute / fragment | sweep=fragment,splat=compute ms | sweep=compute,gather=pixels ms |",
+    "|---|---|---:|---:|---:|---:|---:|",
 ]
 for s in summary:
-    table.append("| %s | %s | %s | %s | %s | %s |" % (
+    fwd = s["light_transport"] == "forward"
+    table.append("| %s | %s | %s | %s | %s | %s | %s |" % (
         s["row"], s["light_transport"], fmt_ms(s["compute_ms"]), fmt_ms(s["fragment_ms"]),
         fmt_ratio(s["compute_over_fragment"]),
-        fmt_ms(s["fragment_splat_compute_ms"]) if s["light_transport"] == "forward" else "n/a"))
+        fmt_ms(s["fragment_splat_compute_ms"]) if fwd else "n/a",
+        fmt_ms(s["compute_gather_pixels_ms"]) if fwd else "n/a"))
 if not summary:
-    table.append("| (no row ran) | | | | | |")
+    table.append("| (no row ran) | | | | | | |")
 
 # Baselines.
 base_inv = next((v for v in invocations if v["kind"] == "thesis-baselines"), None)
@@ -567,7 +574,8 @@ report = {
         "min_start_s": int(E["GB_MIN_START"]),
         "rows_requested": rows_requested,
         "variants": {
-            "forward": ["sweep=compute", "sweep=fragment", "sweep=fragment,splat=compute"],
+            "forward": ["sweep=compute", "sweep=fragment", "sweep=fragment,splat=compute",
+                        "sweep=compute,gather=pixels"],
             "backward": ["sweep=compute", "sweep=fragment"],
         },
         "allow_cpu": E["GB_ALLOW_CPU"] == "1",
