@@ -56,6 +56,7 @@ fn main() {
         // A float literal GLSL reads back exactly (`{:?}` prints the shortest round trip).
         options.add_macro_definition("MIN_FORWARD", Some(&format!("{MIN_FORWARD:?}")));
         options.add_macro_definition("GATHER_TILE", Some(&format!("{GATHER_TILE}u")));
+        options.add_macro_definition("GATHER_CHUNK", Some(&format!("{GATHER_CHUNK}u")));
         options.add_macro_definition(
             "GATHER_COARSE_TILE",
             Some(&format!("{GATHER_COARSE_TILE}u")),

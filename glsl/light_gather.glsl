@@ -88,6 +88,7 @@ uint bin_count() { return fine_bins() + coarse_bins() + 1u; }
 
 const int BIN_NONE = 0, BIN_FINE = 1, BIN_COARSE = 2, BIN_GLOBAL = 3;
 
+
 // The level a footprint (lo.xy, hi.xy in pixels) is binned at, and the inclusive range of
 // that level's tiles (xy first, zw last) it overlaps with positive area inside the screen
 // (a tile of side s holds the pixels [s t, s t + s), pixel p the square [p, p + 1]:
@@ -116,6 +117,67 @@ uint bin_of(int level, ivec2 t) {
     if (level == BIN_FINE) return uint(t.y * fine_tiles().x + t.x);
     if (level == BIN_COARSE) return fine_bins() + uint(t.y * coarse_tiles().x + t.x);
     return fine_bins() + coarse_bins();
+}
+
+// The pair gather's chunks (sweep_gather.comp): a fine tile's candidates (its bin's, its
+// coarse tile's and the global bin's) are split into chunks of GATHER_CHUNK, one
+// workgroup each, so that a tile where a caustic focuses tens of thousands of rays is
+// summed by as many workgroups as it needs rather than by one for all of them (the
+// dispatch waits for its slowest workgroup). After the three arrays above, `bins` holds
+// fine_bins() + 1 words: the first chunk of each fine tile (sweep_bin_scan.comp, an
+// exclusive prefix sum of max(1, ceil(candidates / GATHER_CHUNK))), the last word the
+// number of chunks; then the fixed-point sums of the tiles of more than one chunk, 64
+// pixels by SPLAT_GATHER_CHANNELS channels by (low, high) words per fine tile, which
+// their chunks add into with atomics and sweep_gather_resolve.comp turns into irradiance
+// and zeroes for the next plane.
+uint chunk_start_word() { return 3u * bin_count(); }
+uint tile_sums_word(uint tile, uint px, uint channel) {
+    return 3u * bin_count() + fine_bins() + 1u
+           + 2u * ((tile * 64u + px) * uint(SPLAT_GATHER_CHANNELS) + channel);
+}
+// Candidates of fine tile `tile` (index t.y * columns + t.x): its bin's, its coarse
+// tile's, the global bin's, as array `array` of `bins` counts them (0: the counts, before
+// sweep_bin_scan.comp zeroes them; 2: the lengths, after sweep_bin_fill.comp).
+uint tile_candidates(uint tile, uint array) {
+    uint a = array * bin_count();
+    ivec2 t = ivec2(int(tile) % fine_tiles().x, int(tile) / fine_tiles().x);
+    return bins[a + tile] + bins[a + bin_of(BIN_COARSE, t / FINE_PER_COARSE)]
+           + bins[a + bin_of(BIN_GLOBAL, ivec2(0))];
+}
+
+// The bins' atomics aggregated per workgroup (sweep_deposit.comp, sweep_bin_fill.comp):
+// the 64 rays of a workgroup are neighbours, and where a caustic focuses they all fall into
+// the same one or two bins, so one atomic per bin and workgroup replaces one per ray (on
+// an H100 the deposits' per-ray count atomics took 66 of 271 ms of the default scene's
+// frame at 768², most of it waiting on the few counters of a focus). A table of
+// BIN_SLOTS bins in shared memory (open addressing, keys bin + 1, 0 empty): each entry
+// claims its bin's slot and takes its rank among the slot's entries; a bin that finds the
+// table full falls back to its own global atomic.
+#define BIN_SLOTS 64u
+shared uint slot_bin[BIN_SLOTS];
+shared uint slot_count[BIN_SLOTS];
+shared uint slot_base[BIN_SLOTS];
+
+// Empty the table: one slot per invocation (the workgroups are 8 x 8); a barrier must
+// follow before slot_add.
+void slots_clear() {
+    slot_bin[gl_LocalInvocationIndex] = 0u;
+    slot_count[gl_LocalInvocationIndex] = 0u;
+}
+
+// Bin b's slot and this entry's rank in it; -1 when the table is full.
+int slot_add(uint b, out uint rank) {
+    uint h = (b * 2654435761u) >> 26;   // 6 bits: BIN_SLOTS = 64
+    for (uint probe = 0u; probe < BIN_SLOTS; ++probe) {
+        uint s = (h + probe) & (BIN_SLOTS - 1u);
+        uint prev = atomicCompSwap(slot_bin[s], 0u, b + 1u);
+        if (prev == 0u || prev == b + 1u) {
+            rank = atomicAdd(slot_count[s], 1u);
+            return int(s);
+        }
+    }
+    rank = 0u;
+    return -1;
 }
 
 // v truncated to 32.32 fixed point, as (lo, hi) words of a 64-bit two's complement

@@ -1,8 +1,8 @@
 #version 460
 // The compute sweep's splat, third of four dispatches (light_gather.glsl): each light ray
 // lists itself in the bins sweep_deposit.comp counted it in, at its bin's offset plus a
-// cursor. The order within a bin varies from run to run; the gather's integer sums do
-// not depend on it.
+// cursor, claimed once per bin and workgroup (slot_add). The order within a bin varies
+// from run to run; the gather's integer sums do not depend on it.
 #extension GL_GOOGLE_include_directive : require
 #define SWEEP_COMPUTE 1
 #include "sweep_common.glsl"
@@ -14,17 +14,42 @@
 layout(local_size_x = 8, local_size_y = 8) in;
 
 void main() {
+    slots_clear();
+    barrier();
     ivec2 ij = ivec2(gl_GlobalInvocationID.xy);
-    if (!ray_exists(ij)) return;
-    int r = ray_index(ij);
-    ivec4 range;
-    int level = footprint_bins(stored_footprint(r), range);
-    if (level == BIN_NONE) return;
     uint n = bin_count();
-    for (int y = range.y; y <= range.w; ++y) {
-        for (int x = range.x; x <= range.z; ++x) {
-            uint b = bin_of(level, ivec2(x, y));
-            bin_list[bins[n + b] + atomicAdd(bins[2u * n + b], 1u)] = uint(r);
+    int r = ray_exists(ij) ? ray_index(ij) : -1;
+    ivec4 range = ivec4(0);
+    int level = r >= 0 ? footprint_bins(stored_footprint(r), range) : BIN_NONE;
+    // Up to four entries (a footprint spans at most 2 x 2 tiles of its level): the bin, and
+    // its slot and rank, or slot -1 for an entry listed at once through its own atomic.
+    uint entry_bin[4];
+    int entry_slot[4];
+    uint entry_rank[4];
+    for (int k = 0; k < 4; ++k) {
+        ivec2 at = range.xy + ivec2(k % 2, k / 2);
+        bool listed = level != BIN_NONE && all(lessThanEqual(at, range.zw));
+        entry_bin[k] = listed ? bin_of(level, at) : 0u;
+        entry_slot[k] = -2;   // not listed
+        entry_rank[k] = 0u;
+        if (listed) {
+            entry_slot[k] = slot_add(entry_bin[k], entry_rank[k]);
+            if (entry_slot[k] < 0) {
+                uint b = entry_bin[k];
+                bin_list[bins[n + b] + atomicAdd(bins[2u * n + b], 1u)] = uint(r);
+            }
+        }
+    }
+    barrier();
+    // Each bin's place for the workgroup's entries: one atomic per bin.
+    uint t = gl_LocalInvocationIndex;
+    uint key = slot_bin[t];
+    if (key != 0u) slot_base[t] = atomicAdd(bins[2u * n + key - 1u], slot_count[t]);
+    barrier();
+    for (int k = 0; k < 4; ++k) {
+        if (entry_slot[k] >= 0) {
+            uint b = entry_bin[k];
+            bin_list[bins[n + b] + slot_base[entry_slot[k]] + entry_rank[k]] = uint(r);
         }
     }
 }

@@ -3,7 +3,8 @@
 // counts become the offsets of their lists in `bin_list` (an exclusive prefix sum), the
 // counts are zeroed for the next plane's deposits and the fill cursors for this plane's
 // fill. One workgroup: each invocation sums a run of consecutive bins, invocation 0 scans
-// the 256 run sums, each invocation then writes its run's offsets. Every loop's trip
+// the 256 run sums, each invocation then writes its run's offsets; the same again for the
+// pair gather's chunks per fine tile (light_gather.glsl). Every loop's trip
 // count is the same for the whole workgroup (llvmpipe runs a loop's body for masked
 // lanes too).
 #extension GL_GOOGLE_include_directive : require
@@ -40,6 +41,40 @@ void main() {
     }
     barrier();
     uint offset = run_start[t];
+    // The pair gather's chunks (light_gather.glsl), from the counts before they are zeroed:
+    // each invocation sums a run of fine tiles' chunks, invocation 0 scans the sums, each
+    // writes its run's first chunks.
+    uint tiles = fine_bins();
+    uint per_tile = (tiles + 255u) / 256u;
+    uint first_tile = t * per_tile;
+    uint chunks = 0u;
+    for (uint k = 0u; k < per_tile; ++k) {
+        uint tile = first_tile + k;
+        if (tile < tiles) chunks += max(1u, (tile_candidates(tile, 0u) + GATHER_CHUNK - 1u) / GATHER_CHUNK);
+    }
+    barrier();   // every invocation has its offset: run_start is reused
+    run_start[t] = chunks;
+    barrier();
+    if (t == 0u) {
+        uint running = 0u;
+        for (uint k = 0u; k < 256u; ++k) {
+            uint s = run_start[k];
+            run_start[k] = running;
+            running += s;
+        }
+        bins[chunk_start_word() + tiles] = running;
+    }
+    barrier();
+    uint chunk = run_start[t];
+    for (uint k = 0u; k < per_tile; ++k) {
+        uint tile = first_tile + k;
+        if (tile < tiles) {
+            bins[chunk_start_word() + tile] = chunk;
+            chunk += max(1u, (tile_candidates(tile, 0u) + GATHER_CHUNK - 1u) / GATHER_CHUNK);
+        }
+    }
+    // Every invocation has read the counts it needs before any is zeroed.
+    barrier();
     for (uint k = 0u; k < per; ++k) {
         uint b = first + k;
         if (b < n) {

@@ -1,7 +1,8 @@
 #version 460
 // The compute sweep's splat, first of four dispatches (light_gather.glsl): each light
 // ray's deposit on this plane, and its count in the bins of the screen tiles its deposit
-// overlaps. One invocation per ray.
+// overlaps. One invocation per ray; the counts are added once per bin and workgroup
+// (slot_add).
 #extension GL_GOOGLE_include_directive : require
 #define SWEEP_COMPUTE 1
 #include "sweep_common.glsl"
@@ -20,20 +21,30 @@ layout(push_constant) uniform Push {
 } pc;
 
 void main() {
+    slots_clear();
+    barrier();
     ivec2 ij = ivec2(gl_GlobalInvocationID.xy);
-    if (!ray_exists(ij)) return;
-    int r = ray_index(ij);
-    RayDeposit d;
-    if (!ray_deposit(r, pc.read_layer, pc.depth, d)) {
-        clear_deposit(d);   // no deposit: an empty footprint, in no bin
-    }
-    store_deposit(r, d);
-    ivec4 range;
-    int level = footprint_bins(d.footprint, range);
-    if (level == BIN_NONE) return;
-    for (int y = range.y; y <= range.w; ++y) {
-        for (int x = range.x; x <= range.z; ++x) {
-            atomicAdd(bins[bin_of(level, ivec2(x, y))], 1u);
+    if (ray_exists(ij)) {
+        int r = ray_index(ij);
+        RayDeposit d;
+        if (!ray_deposit(r, pc.read_layer, pc.depth, d)) {
+            clear_deposit(d);   // no deposit: an empty footprint, in no bin
+        }
+        store_deposit(r, d);
+        ivec4 range;
+        int level = footprint_bins(d.footprint, range);
+        if (level != BIN_NONE) {
+            for (int y = range.y; y <= range.w; ++y) {
+                for (int x = range.x; x <= range.z; ++x) {
+                    uint b = bin_of(level, ivec2(x, y));
+                    uint rank;
+                    if (slot_add(b, rank) < 0) atomicAdd(bins[b], 1u);
+                }
+            }
         }
     }
+    barrier();
+    // One atomic per bin the workgroup's rays fell into.
+    uint key = slot_bin[gl_LocalInvocationIndex];
+    if (key != 0u) atomicAdd(bins[key - 1u], slot_count[gl_LocalInvocationIndex]);
 }

@@ -1,7 +1,9 @@
 #version 460
-// The compute sweep's splat, last of four dispatches (light_gather.glsl), the `gather=pairs`
-// lever (the default): each 8 x 8 tile of pixels reads the rays listed in its bin, its
-// coarse tile's bin and the global bin, 64 at a time, and spreads the work over the
+// The compute sweep's splat, fourth of five dispatches (light_gather.glsl), the
+// `gather=pairs` lever (the default): each 8 x 8 tile of pixels reads the rays listed in
+// its bin, its coarse tile's bin and the global bin, in chunks of GATHER_CHUNK, one
+// workgroup per chunk (a tile of more than one chunk adds its sums into `bins` for
+// sweep_gather_resolve.comp), 64 rays at a time, and spreads the work over the
 // (ray, pixel) pairs where a deposit lands: every invocation evaluates one deposit at one
 // pixel of the tile, and adds it to that pixel's seven 32.32 fixed-point sums in shared
 // memory with integer atomics (light_splat_fixed.glsl's two-word carry: the sums are the
@@ -14,6 +16,9 @@
 // (tried, docs/bench/2026-11-26-nvidia-h200-gather.md): a subgroup then waits for its
 // widest ray (a coarse ray covers up to all 64 pixels of a tile); pairs are dealt out
 // evenly whatever the rays' sizes.
+//
+// The workgroups are fewer than the chunks only where many tiles have more than one: a
+// workgroup then takes every so many chunks in turn.
 //
 // Per batch of 64 candidates, three steps with a barrier after each:
 //   1. invocation t takes candidate t: its ray and the rectangle of the tile's pixels its
@@ -91,10 +96,24 @@ void add_fixed_shared(uint channel, uint px, float v) {
     atomicAdd(sum_hi[channel][px], w.y + carry);
 }
 
-void main() {
-    ivec2 size = screen_size();
+// Chunk `chunk` of the frame: its tile's candidates from (chunk - the tile's first chunk)
+// * GATHER_CHUNK, at most GATHER_CHUNK of them, summed into the tile's pixels.
+void gather_chunk(uint chunk, ivec2 size) {
     uint t = gl_LocalInvocationIndex;
-    ivec2 tile = ivec2(gl_WorkGroupID.xy);
+    uint tiles = fine_bins();
+    // The last tile whose first chunk is at or before `chunk` (first chunks ascend; the
+    // loop runs for any number of tiles up to 2^24, the same for every invocation).
+    uint lo = 0u, hi = tiles - 1u;
+    for (int s = 0; s < 24; ++s) {
+        uint mid = (lo + hi + 1u) / 2u;
+        bool left = bins[chunk_start_word() + mid] <= chunk;
+        lo = left ? mid : lo;
+        hi = left ? hi : mid - 1u;
+    }
+    uint tile_index = lo;
+    uint first_chunk = bins[chunk_start_word() + tile_index];
+    uint chunks = bins[chunk_start_word() + tile_index + 1u] - first_chunk;
+    ivec2 tile = ivec2(int(tile_index) % fine_tiles().x, int(tile_index) / fine_tiles().x);
     ivec2 tile_lo = tile * int(GATHER_TILE);
     ivec2 tile_size = min(ivec2(GATHER_TILE), size - tile_lo);
     uint n = bin_count();
@@ -104,17 +123,19 @@ void main() {
     uint n_fine = bins[2u * n + fine], n_coarse = bins[2u * n + coarse];
     uint n_wide = bins[2u * n + wide];
     uint total = n_fine + n_coarse + n_wide;
+    uint begin = (chunk - first_chunk) * GATHER_CHUNK;
+    uint end = min(total, begin + GATHER_CHUNK);
 
     for (int k = 0; k < SPLAT_GATHER_CHANNELS; ++k) {
         sum_lo[k][t] = 0u;
         sum_hi[k][t] = 0u;
     }
-    for (uint base = 0u; base < total; base += BATCH) {
+    for (uint base = begin; base < end; base += BATCH) {
         // 1. Candidate t and its rectangle in the tile.
         uint k = base + t;
         int r = -1;
         ivec4 rect = ivec4(0);
-        if (k < total) {
+        if (k < end) {
             uint slot = k < n_fine ? bins[n + fine] + k
                       : k < n_fine + n_coarse ? bins[n + coarse] + (k - n_fine)
                       : bins[n + wide] + (k - n_fine - n_coarse);
@@ -127,14 +148,14 @@ void main() {
         candidate_ray[t] = extent.x * extent.y > 0 ? r : -1;
         barrier();
         // 2. The running end of the pairs up to candidate t, and the deposits.
-        uint end = 0u, pairs = 0u;
+        uint pair_end = 0u, pairs = 0u;
         for (uint c = 0u; c < BATCH; ++c) {
             uint e = candidate_rect[c];
             uint count = (e >> 16 & 0xffu) * (e >> 24);
             pairs += count;
-            end += c <= t ? count : 0u;
+            pair_end += c <= t ? count : 0u;
         }
-        candidate_end[t] = end;
+        candidate_end[t] = pair_end;
         for (uint q = t; q < BATCH * uint(DEPOSIT_VEC4S); q += BATCH) {
             int ray = candidate_ray[q / uint(DEPOSIT_VEC4S)];
             if (ray >= 0) {
@@ -148,15 +169,15 @@ void main() {
             uint pair = p0 + t;
             // The first candidate whose running end exceeds `pair` (candidate_end is
             // non-decreasing; 6 halvings of 64).
-            uint lo = 0u, hi = BATCH - 1u;
+            uint c_lo = 0u, c_hi = BATCH - 1u;
             for (int s = 0; s < 6; ++s) {
-                uint mid = (lo + hi) / 2u;
+                uint mid = (c_lo + c_hi) / 2u;
                 bool right = candidate_end[mid] <= pair;
-                lo = right ? mid + 1u : lo;
-                hi = right ? hi : mid;
+                c_lo = right ? mid + 1u : c_lo;
+                c_hi = right ? c_hi : mid;
             }
             if (pair < pairs) {
-                uint c = lo;
+                uint c = c_lo;
                 uint e = candidate_rect[c];
                 uint width = e >> 16 & 0xffu, height = e >> 24;
                 uint local = pair - (candidate_end[c] - width * height);
@@ -176,14 +197,34 @@ void main() {
         }
         barrier();
     }
-    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
-    if (any(greaterThanEqual(pixel, size))) return;
-    uint px = gl_LocalInvocationID.y * GATHER_TILE + gl_LocalInvocationID.x;
-    float c[SPLAT_GATHER_CHANNELS];
-    for (int k = 0; k < SPLAT_GATHER_CHANNELS; ++k) {
-        c[k] = fixed_to_float(uvec2(sum_lo[k][px], sum_hi[k][px])) * pc.unit;
+    // Invocation t's pixel: stored when the tile is one chunk, else added into the tile's
+    // sums in `bins` for sweep_gather_resolve.comp.
+    ivec2 local_px = ivec2(t % GATHER_TILE, t / GATHER_TILE);
+    ivec2 pixel = tile_lo + local_px;
+    if (chunks > 1u) {
+        for (int k = 0; k < SPLAT_GATHER_CHANNELS; ++k) {
+            uint w = tile_sums_word(tile_index, t, uint(k));
+            uint lo_word = sum_lo[k][t];
+            uint old = atomicAdd(bins[w], lo_word);
+            uint carry = old + lo_word < old ? 1u : 0u;
+            atomicAdd(bins[w + 1u], sum_hi[k][t] + carry);
+        }
+    } else if (all(lessThan(pixel, size))) {
+        float c[SPLAT_GATHER_CHANNELS];
+        for (int k = 0; k < SPLAT_GATHER_CHANNELS; ++k) {
+            c[k] = fixed_to_float(uvec2(sum_lo[k][t], sum_hi[k][t])) * pc.unit;
+        }
+        ivec3 at = ivec3(pixel, pc.read_layer);
+        imageStore(irradiance, at, vec4(c[0], c[1], c[2], 0.0));
+        imageStore(irradiance_direction, at, vec4(c[3], c[4], c[5], c[6]));
     }
-    ivec3 at = ivec3(pixel, pc.read_layer);
-    imageStore(irradiance, at, vec4(c[0], c[1], c[2], 0.0));
-    imageStore(irradiance_direction, at, vec4(c[3], c[4], c[5], c[6]));
+    barrier();   // the next chunk of this workgroup reuses the shared sums
+}
+
+void main() {
+    ivec2 size = screen_size();
+    uint chunks = bins[chunk_start_word() + fine_bins()];
+    for (uint chunk = gl_WorkGroupID.x; chunk < chunks; chunk += gl_NumWorkGroups.x) {
+        gather_chunk(chunk, size);
+    }
 }

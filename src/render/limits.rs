@@ -14,6 +14,9 @@ pub const MIN_FORWARD: f32 = 0.1;
 // pixels (a multiple of GATHER_TILE), or else into one bin every tile reads.
 pub const GATHER_TILE: u32 = 8;
 pub const GATHER_COARSE_TILE: u32 = 64;
+// The pair gather (glsl/sweep_gather.comp) sums a tile's candidate rays in chunks of this
+// many, one workgroup per chunk.
+pub const GATHER_CHUNK: u32 = 256;
 
 // The light rays' empty-space test (render::value_ranges, glsl/value_range*.comp): the
 // volume in bricks of VALUE_BRICK^3 voxels, each with the range of values around it.

@@ -44,8 +44,8 @@ pub use sat::SummedAreaTable;
 
 pub use preintegration::{PreintegrationTable, TABLE_SIZE};
 pub use refract::{
-    Clamps, Deposit, Dump, Gather, Levers, Light, LightTransport, PlaneBatch, Planes, Region, Splat,
-    StateBuffer, SweepOptions, SweepPath, SweepStats, MAX_ETA_SCALE, MAX_LIGHT_RAYS,
+    Clamps, Deposit, Dump, Gather, Levers, Light, LightTransport, PlaneBatch, Planes, Region,
+    Splat, StateBuffer, SweepOptions, SweepPath, SweepStats, MAX_ETA_SCALE, MAX_LIGHT_RAYS,
     MAX_LIGHT_SPACING,
 };
 pub use tonemap::ToneMapPass;

@@ -34,7 +34,9 @@
 //! and the viewing rays of the last plane after the loop. The backward transport is one
 //! dispatch per plane with one barrier before it.
 
+use super::pass::gather_tiles;
 use super::*;
+use crate::render::limits::GATHER_CHUNK;
 use crate::vk::Area;
 
 /// What one frame's compute planes need from [`SweepPass::record_sweep`].
@@ -253,7 +255,20 @@ impl SweepPass {
             // plane i - 1 read it as plane i - 2's).
             rec.compute_storage_barriers(&Self::storage(&self.irradiance), &splat_buffers);
             rec.bind_compute_pipeline(&p.gather);
-            rec.dispatch_bound(&p.gather, bytemuck::bytes_of(&push), groups(screen))?;
+            if p.gather_pairs {
+                // One workgroup per chunk of a tile's candidates: at least one per tile,
+                // and one more per GATHER_CHUNK rays the ray images hold (a workgroup
+                // takes several chunks in turn where there are more).
+                let workgroups = gather_tiles(self.width, self.height) as u32
+                    + (f.ray_image[0] * f.ray_image[1]).div_ceil(GATHER_CHUNK);
+                rec.dispatch_bound(&p.gather, bytemuck::bytes_of(&push), [workgroups, 1, 1])?;
+                // The tiles of several chunks, from their sums.
+                rec.compute_storage_barriers(&Self::storage(&self.irradiance), &splat_buffers);
+                rec.bind_compute_pipeline(&p.gather_resolve);
+                rec.dispatch_bound(&p.gather_resolve, bytemuck::bytes_of(&push), groups(screen))?;
+            } else {
+                rec.dispatch_bound(&p.gather, bytemuck::bytes_of(&push), groups(screen))?;
+            }
             if timed {
                 rec.end_scope();
                 rec.end_scope();

@@ -278,9 +278,23 @@ impl PlanePipelines {
 /// per tile of GATHER_TILE pixels, one per coarse tile of GATHER_COARSE_TILE pixels, and
 /// the one for deposits wider than 2 × 2 coarse tiles.
 pub(crate) fn gather_bins(width: u32, height: u32) -> u64 {
-    use crate::render::limits::{GATHER_COARSE_TILE, GATHER_TILE};
+    use crate::render::limits::GATHER_COARSE_TILE;
     let tiles = |side: u32| width.div_ceil(side) as u64 * height.div_ceil(side) as u64;
-    tiles(GATHER_TILE) + tiles(GATHER_COARSE_TILE) + 1
+    gather_tiles(width, height) + tiles(GATHER_COARSE_TILE) + 1
+}
+
+/// The fine tiles (GATHER_TILE pixels a side) of a `width` × `height` screen.
+pub(crate) fn gather_tiles(width: u32, height: u32) -> u64 {
+    use crate::render::limits::GATHER_TILE;
+    width.div_ceil(GATHER_TILE) as u64 * height.div_ceil(GATHER_TILE) as u64
+}
+
+/// Words of the `bins` buffer (glsl/light_gather.glsl): three per bin (count, offset,
+/// cursor), the pair gather's first chunk per fine tile and their total, and the sums of
+/// the tiles of more than one chunk (64 pixels × 7 channels × 2 words per fine tile).
+pub(crate) fn gather_words(width: u32, height: u32) -> u64 {
+    let fine = gather_tiles(width, height);
+    3 * gather_bins(width, height) + fine + 1 + fine * 64 * 7 * 2
 }
 
 pub(crate) struct ComputePlanes {
@@ -296,6 +310,10 @@ pub(crate) struct ComputePlanes {
     pub(crate) bin_scan: ComputePipeline,
     pub(crate) bin_fill: ComputePipeline,
     pub(crate) gather: ComputePipeline,
+    /// Whether `gather` is the pair gather (the `gather` lever): one workgroup per chunk
+    /// of a tile's candidates, then `gather_resolve` for the tiles of several chunks.
+    pub(crate) gather_pairs: bool,
+    pub(crate) gather_resolve: ComputePipeline,
 }
 
 impl ComputePlanes {
@@ -347,6 +365,11 @@ impl ComputePlanes {
                     "light gather by pixels (compute sweep)",
                 )?,
             },
+            gather_pairs,
+            gather_resolve: make(
+                shaders::SWEEP_GATHER_RESOLVE_COMP,
+                "light gather, tiles of several chunks (compute sweep)",
+            )?,
         })
     }
 }
@@ -558,7 +581,7 @@ impl SweepPass {
         compute_bindings[14] = Binding::StorageImage(&rays[1].image);
         // 20-22: the gather splat's deposits, tile bins and bin lists (glsl/light_gather.glsl),
         // sized for the ray images' capacity C: C deposits; a ray is listed in at most four
-        // bins, so 4 C list entries; three words per bin (count, offset, cursor).
+        // bins, so 4 C list entries; the bins' words (gather_words).
         let capacity = ray_size[0] as u64 * ray_size[1] as u64;
         let deposits = Buffer::new(
             ctx,
@@ -569,7 +592,7 @@ impl SweepPass {
         )?;
         let bins = Buffer::new(
             ctx,
-            gather_bins(width, height) * 3 * 4,
+            gather_words(width, height) * 4,
             vk::usage::STORAGE_BUFFER | vk::usage::BUFFER_TRANSFER_DST,
             vk::Memory::Gpu,
             "light deposit bins",
