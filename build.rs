@@ -57,6 +57,7 @@ fn main() {
         options.add_macro_definition("MIN_FORWARD", Some(&format!("{MIN_FORWARD:?}")));
         options.add_macro_definition("GATHER_TILE", Some(&format!("{GATHER_TILE}u")));
         options.add_macro_definition("GATHER_CHUNK", Some(&format!("{GATHER_CHUNK}u")));
+        options.add_macro_definition("GATHER_FINE_SPAN", Some(&format!("{GATHER_FINE_SPAN}u")));
         options.add_macro_definition(
             "GATHER_COARSE_TILE",
             Some(&format!("{GATHER_COARSE_TILE}u")),

@@ -14,44 +14,59 @@
 #define SPLAT_GATHER_CHANNELS 7
 
 // Per ray r (of the grid, r = j * columns + i): its RayDeposit (light_splat_ray.glsl) in
-// DEPOSIT_VEC4S vec4s from 10 r: corner fluxes A, B, footprint (an empty one, zero
-// width: no deposit), corners A B, corners C D, direction (xyz), box amplitude, box,
-// corner fluxes C, D.
+// DEPOSIT_VEC4S vec4s from DEPOSIT_VEC4S r: footprint (an empty one, zero width: no
+// deposit), direction (xyz), box amplitude, box, and with the cells deposit corner
+// fluxes A, B, C, D, corners A B, corners C D. The boxes deposit uses only the first
+// four: stored packed, 64 bytes a ray instead of 160 (each ray's deposit is written and
+// read once or more per plane: on the H100 the deposits' pass was a quarter of the
+// forward frame).
 layout(std430, set = 0, binding = 20) buffer Deposits {
     vec4 deposits[];
 };
-const int DEPOSIT_VEC4S = 10;
+const int DEPOSIT_VEC4S = DEPOSIT_CELLS ? 10 : 4;
+const int DEPOSIT_VEC4S_MAX = 10;
 
 void store_deposit(int r, RayDeposit d) {
     int k = DEPOSIT_VEC4S * r;
-    deposits[k] = d.flux_a;
-    deposits[k + 1] = d.flux_b;
-    deposits[k + 2] = d.footprint;
-    deposits[k + 3] = d.corners_ab;
-    deposits[k + 4] = d.corners_cd;
-    deposits[k + 5] = vec4(d.direction, 0.0);
-    deposits[k + 6] = d.box_amplitude;
-    deposits[k + 7] = d.box;
-    deposits[k + 8] = d.flux_c;
-    deposits[k + 9] = d.flux_d;
+    deposits[k] = d.footprint;
+    deposits[k + 1] = vec4(d.direction, 0.0);
+    deposits[k + 2] = d.box_amplitude;
+    deposits[k + 3] = d.box;
+    if (DEPOSIT_CELLS) {
+        deposits[k + 4] = d.flux_a;
+        deposits[k + 5] = d.flux_b;
+        deposits[k + 6] = d.flux_c;
+        deposits[k + 7] = d.flux_d;
+        deposits[k + 8] = d.corners_ab;
+        deposits[k + 9] = d.corners_cd;
+    }
 }
 
-vec4 stored_footprint(int r) { return deposits[DEPOSIT_VEC4S * r + 2]; }
+vec4 stored_footprint(int r) { return deposits[DEPOSIT_VEC4S * r]; }
+
+// A deposit from its DEPOSIT_VEC4S vec4s (`v`, as stored; the cells' fields zero with
+// the boxes deposit).
+RayDeposit deposit_from(vec4 v[DEPOSIT_VEC4S_MAX]) {
+    RayDeposit d;
+    d.footprint = v[0];
+    d.direction = v[1].xyz;
+    d.box_amplitude = v[2];
+    d.box = v[3];
+    d.flux_a = DEPOSIT_CELLS ? v[4] : vec4(0.0);
+    d.flux_b = DEPOSIT_CELLS ? v[5] : vec4(0.0);
+    d.flux_c = DEPOSIT_CELLS ? v[6] : vec4(0.0);
+    d.flux_d = DEPOSIT_CELLS ? v[7] : vec4(0.0);
+    d.corners_ab = DEPOSIT_CELLS ? v[8] : vec4(0.0);
+    d.corners_cd = DEPOSIT_CELLS ? v[9] : vec4(0.0);
+    return d;
+}
 
 RayDeposit load_deposit(int r) {
-    int k = DEPOSIT_VEC4S * r;
-    RayDeposit d;
-    d.flux_a = deposits[k];
-    d.flux_b = deposits[k + 1];
-    d.footprint = deposits[k + 2];
-    d.corners_ab = deposits[k + 3];
-    d.corners_cd = deposits[k + 4];
-    d.direction = deposits[k + 5].xyz;
-    d.box_amplitude = deposits[k + 6];
-    d.box = deposits[k + 7];
-    d.flux_c = deposits[k + 8];
-    d.flux_d = deposits[k + 9];
-    return d;
+    vec4 v[DEPOSIT_VEC4S_MAX];
+    for (int k = 0; k < DEPOSIT_VEC4S_MAX; ++k) {
+        v[k] = k < DEPOSIT_VEC4S ? deposits[DEPOSIT_VEC4S * r + k] : vec4(0.0);
+    }
+    return deposit_from(v);
 }
 // The bins (a counting sort of the rays by the screen tiles their deposits overlap, per
 // plane): every ray whose footprint spans at most 2 x 2 tiles of GATHER_TILE pixels goes
@@ -101,7 +116,7 @@ int footprint_bins(vec4 footprint, out ivec4 range) {
     if (!(lo.x < hi.x && lo.y < hi.y)) return BIN_NONE;
     ivec2 t0 = ivec2(floor(lo / float(GATHER_TILE)));
     ivec2 t1 = ivec2(ceil(hi / float(GATHER_TILE))) - 1;
-    if (all(lessThanEqual(t1 - t0, ivec2(1)))) {
+    if (all(lessThanEqual(t1 - t0, ivec2(int(GATHER_FINE_SPAN) - 1)))) {
         range = ivec4(t0, t1);
         return BIN_FINE;
     }

@@ -21,13 +21,16 @@ void main() {
     int r = ray_exists(ij) ? ray_index(ij) : -1;
     ivec4 range = ivec4(0);
     int level = r >= 0 ? footprint_bins(stored_footprint(r), range) : BIN_NONE;
-    // Up to four entries (a footprint spans at most 2 x 2 tiles of its level): the bin, and
-    // its slot and rank, or slot -1 for an entry listed at once through its own atomic.
-    uint entry_bin[4];
-    int entry_slot[4];
-    uint entry_rank[4];
-    for (int k = 0; k < 4; ++k) {
-        ivec2 at = range.xy + ivec2(k % 2, k / 2);
+    // Up to MAX_ENTRIES entries (a footprint spans at most GATHER_FINE_SPAN fine or 2
+    // coarse tiles a side): the bin, and its slot and rank, or slot -1 for an entry listed
+    // at once through its own atomic.
+    const int SPAN = max(int(GATHER_FINE_SPAN), 2);
+    const int MAX_ENTRIES = SPAN * SPAN;
+    uint entry_bin[MAX_ENTRIES];
+    int entry_slot[MAX_ENTRIES];
+    uint entry_rank[MAX_ENTRIES];
+    for (int k = 0; k < MAX_ENTRIES; ++k) {
+        ivec2 at = range.xy + ivec2(k % SPAN, k / SPAN);
         bool listed = level != BIN_NONE && all(lessThanEqual(at, range.zw));
         entry_bin[k] = listed ? bin_of(level, at) : 0u;
         entry_slot[k] = -2;   // not listed
@@ -46,7 +49,7 @@ void main() {
     uint key = slot_bin[t];
     if (key != 0u) slot_base[t] = atomicAdd(bins[2u * n + key - 1u], slot_count[t]);
     barrier();
-    for (int k = 0; k < 4; ++k) {
+    for (int k = 0; k < MAX_ENTRIES; ++k) {
         if (entry_slot[k] >= 0) {
             uint b = entry_bin[k];
             bin_list[bins[n + b] + slot_base[entry_slot[k]] + entry_rank[k]] = uint(r);

@@ -58,7 +58,7 @@ shared uint sum_hi[SPLAT_GATHER_CHANNELS][64];
 shared uint candidate_rect[BATCH];
 shared uint candidate_end[BATCH];
 shared int candidate_ray[BATCH];
-shared vec4 candidate_deposit[BATCH * uint(DEPOSIT_VEC4S)];
+shared vec4 candidate_deposit[BATCH * uint(DEPOSIT_VEC4S_MAX)];
 
 // The rectangle of the tile's pixels (tile-local, x0 y0 x1 y1 exclusive) that footprint
 // f overlaps with positive area: pixel p (the square [p, p + 1]) overlaps [lo, hi] where
@@ -72,18 +72,11 @@ ivec4 tile_rect(vec4 f, ivec2 tile_lo, ivec2 tile_size) {
 
 RayDeposit shared_deposit(uint c) {
     uint k = c * uint(DEPOSIT_VEC4S);
-    RayDeposit d;
-    d.flux_a = candidate_deposit[k];
-    d.flux_b = candidate_deposit[k + 1u];
-    d.footprint = candidate_deposit[k + 2u];
-    d.corners_ab = candidate_deposit[k + 3u];
-    d.corners_cd = candidate_deposit[k + 4u];
-    d.direction = candidate_deposit[k + 5u].xyz;
-    d.box_amplitude = candidate_deposit[k + 6u];
-    d.box = candidate_deposit[k + 7u];
-    d.flux_c = candidate_deposit[k + 8u];
-    d.flux_d = candidate_deposit[k + 9u];
-    return d;
+    vec4 v[DEPOSIT_VEC4S_MAX];
+    for (int q = 0; q < DEPOSIT_VEC4S_MAX; ++q) {
+        v[q] = q < DEPOSIT_VEC4S ? candidate_deposit[k + uint(q)] : vec4(0.0);
+    }
+    return deposit_from(v);
 }
 
 // Add v, truncated to 32.32 fixed point as add_fixed_reg does, to the shared sum of

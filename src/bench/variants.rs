@@ -542,6 +542,11 @@ mod tests {
                         Splat::Raster
                     },
                     sweep: crate::render::SweepPath::Auto,
+                    gather: if bits % 5 == 0 {
+                        crate::render::Gather::Pixels
+                    } else {
+                        crate::render::Gather::Pairs
+                    },
                     deposit: if bits % 3 == 0 {
                         crate::render::Deposit::Boxes
                     } else {

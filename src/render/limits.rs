@@ -13,7 +13,10 @@ pub const MIN_FORWARD: f32 = 0.1;
 // when a deposit spans more than 2 x 2 of those, by coarse tiles of GATHER_COARSE_TILE
 // pixels (a multiple of GATHER_TILE), or else into one bin every tile reads.
 pub const GATHER_TILE: u32 = 8;
-pub const GATHER_COARSE_TILE: u32 = 64;
+pub const GATHER_COARSE_TILE: u32 = 32;
+// A deposit is binned by fine tiles when it spans at most this many of them along each
+// axis (so a ray is listed at most GATHER_FINE_SPAN² times), else by coarse tiles.
+pub const GATHER_FINE_SPAN: u32 = 2;
 // The pair gather (glsl/sweep_gather.comp) sums a tile's candidate rays in chunks of this
 // many, one workgroup per chunk.
 pub const GATHER_CHUNK: u32 = 256;

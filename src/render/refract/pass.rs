@@ -283,6 +283,13 @@ pub(crate) fn gather_bins(width: u32, height: u32) -> u64 {
     gather_tiles(width, height) + tiles(GATHER_COARSE_TILE) + 1
 }
 
+/// The most bins one ray is listed in (glsl/light_gather.glsl, footprint_bins): the fine
+/// tiles of a GATHER_FINE_SPAN-square, or 2 × 2 coarse tiles.
+pub(crate) fn gather_entries_per_ray() -> u64 {
+    use crate::render::limits::GATHER_FINE_SPAN;
+    (GATHER_FINE_SPAN.max(2) as u64).pow(2)
+}
+
 /// The fine tiles (GATHER_TILE pixels a side) of a `width` × `height` screen.
 pub(crate) fn gather_tiles(width: u32, height: u32) -> u64 {
     use crate::render::limits::GATHER_TILE;
@@ -599,7 +606,7 @@ impl SweepPass {
         )?;
         let bin_list = Buffer::new(
             ctx,
-            capacity * 4 * 4,
+            capacity * gather_entries_per_ray() * 4,
             vk::usage::STORAGE_BUFFER,
             vk::Memory::Gpu,
             "light deposit bin lists",
