@@ -13,7 +13,7 @@ mod common;
 
 use common::*;
 use refrakt::render::{
-    Camera, Deposit, Levers, LightTransport, Model, Planes, RenderOptions, Renderer, Splat,
+    Camera, Deposit, Gather, Levers, LightTransport, Model, Planes, RenderOptions, Renderer, Splat,
     StateBuffer, SweepPath,
 };
 use refrakt::transfer::TransferFunctions;
@@ -79,18 +79,21 @@ fn compute_and_fragment_sweeps_render_the_same_glass_sphere_on_its_floor() {
 /// the frame. Two frames of the compute path are bit-identical (order-independent sums).
 #[test]
 fn the_gather_splat_deposits_exactly_the_atomic_splats_sums() {
-    with_context(|ctx| gather_matches_atomic(ctx, [48, 40], 1.0, Deposit::Boxes));
+    with_context(|ctx| {
+        gather_matches_atomic(ctx, [48, 40], 1.0, Deposit::Boxes);
+    });
 }
 
 /// The gather's bins (glsl/light_gather.glsl): a ray whose deposit spans at most 2 × 2
-/// tiles of 8 pixels is listed in those tiles' bins, a wider one in the bins of 64-pixel
+/// tiles of 8 pixels is listed in those tiles' bins, a wider one in the bins of 32-pixel
 /// tiles. Rays 4 pixels apart (the widest spacing allowed) with the light from the side
 /// spread far apart again behind the ball's focus and tear at its shadow's edge, so many
 /// deposits there span three or more 8-pixel tiles and go through the coarse bins
 /// (checked by breaking them: a gather that skips its coarse bin fails this test, at
 /// plane 22 of the first case, and the one above); on a screen of 3 × 3 coarse tiles
 /// whose borders the deposits straddle, with both deposits. The sums must still be the
-/// atomic splat's, bit for bit.
+/// atomic splat's, bit for bit. (Written for coarse tiles of 64 pixels, 3 × 3 of them on
+/// this screen; with 32-pixel ones, 5 × 5.)
 #[test]
 fn the_gather_splat_bins_narrow_and_wide_deposits_exactly() {
     with_context(|ctx| {
@@ -100,12 +103,34 @@ fn the_gather_splat_bins_narrow_and_wide_deposits_exactly() {
     });
 }
 
+/// The pair gather (glsl/sweep_gather.comp) sums a tile's candidate rays in chunks of
+/// GATHER_CHUNK (256), one workgroup each, and a tile of several chunks through fixed-point
+/// sums in memory resolved by a fifth dispatch. Rays asked 0.25 pixels apart within the
+/// budget of 8 a pixel (launched 0.56 apart along the cells' longer side) put the lit
+/// tiles near the ball's focus into several chunks: the sums must still be the atomic
+/// splat's, bit for bit, with both deposits and with the per-pixel gather
+/// (`gather=pixels`) too. Checked by breaking it: a resolve that stores nothing fails
+/// this test (light colour at plane 6, linear max |Δ| 4.7e-3), so tiles of several
+/// chunks occur here.
+#[test]
+fn the_gather_splat_sums_tiles_of_several_chunks_exactly() {
+    with_context(|ctx| {
+        for deposit in [Deposit::Boxes, Deposit::Cells] {
+            let launched = gather_matches_atomic(ctx, [48, 40], 0.25, deposit);
+            assert!(
+                launched <= 0.6,
+                "{deposit:?}: rays {launched} px apart, sparser than this test was checked at"
+            );
+        }
+    });
+}
+
 fn gather_matches_atomic(
     ctx: &refrakt::vk::Context,
     size: [u32; 2],
     spacing: f32,
     deposit: Deposit,
-) {
+) -> f32 {
     let vol = ball(32, 0.3);
     let tf = glass(1.5);
     let cam = face_on(2.5, 40.0);
@@ -116,6 +141,12 @@ fn gather_matches_atomic(
     };
     opts.sweep.light_transport = LightTransport::Forward;
     opts.sweep.light_spacing = spacing;
+    // Rays enough for the spacing asked for, within the budget's bound (8 a pixel).
+    opts.sweep.light_rays = opts
+        .sweep
+        .light_rays
+        .max((1.0 / (spacing * spacing)).ceil() as u32)
+        .min(refrakt::render::MAX_LIGHT_RAYS);
     // Light from the side: the rays' cells shear, a caustic forms behind the ball.
     opts.sweep.light = refrakt::render::Light {
         towards: glam::Vec3::new(0.4, 0.3, 1.0).normalize(),
@@ -142,6 +173,10 @@ fn gather_matches_atomic(
     });
     let gather = frame(path(SweepPath::Compute));
     let again = frame(path(SweepPath::Compute));
+    let by_pixels = frame(Levers {
+        gather: Gather::Pixels,
+        ..path(SweepPath::Compute)
+    });
     let what = format!(
         "{}x{}, rays {spacing} px apart, {deposit:?}",
         size[0], size[1]
@@ -169,8 +204,23 @@ fn gather_matches_atomic(
         gather.pixels == again.pixels,
         "{what}: the compute sweep is not reproducible"
     );
+    for (a, g) in atomic.dumps.iter().zip(&by_pixels.dumps) {
+        assert!(
+            a.pixels == g.pixels,
+            "{what}: {:?} at plane {}: the gather by pixels differs from the atomic splat \
+             (linear max |Δ| {})",
+            a.buffer,
+            a.plane,
+            linear_max(&a.pixels, &g.pixels)
+        );
+    }
     let d = linear_max(&atomic.pixels, &gather.pixels);
     assert!(d <= 1e-6, "{what}: frames differ by {d}");
+    // The spacing launched (the larger cell side, in pixels of plane 0).
+    gather
+        .sweep
+        .expect("the refract model reports its sweep")
+        .light_spacing[1]
 }
 
 /// Dropping the barrier before one plane's dispatches is a hazard the synchronization

@@ -256,11 +256,11 @@ pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
         }
         for name in names {
             let ms = frame.timings.get(name).unwrap_or(0.0);
-            println!("  {name:<20} {ms:9.3} ms");
+            println!("  {name:<24} {ms:9.3} ms");
         }
         if let Some(ms) = frame.timings.get("render") {
             println!(
-                "  {:<16} {ms:9.3} ms (the frame's passes above and their barriers)",
+                "  {:<24} {ms:9.3} ms (the frame's passes above and their barriers)",
                 "frame"
             );
         }

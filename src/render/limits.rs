@@ -10,12 +10,14 @@ pub const MIN_FORWARD: f32 = 0.1;
 
 // The compute sweep's gather splat (glsl/light_gather.glsl): rays are binned by the screen
 // tiles of GATHER_TILE pixels (the gather's workgroup side) their deposits overlap, or,
-// when a deposit spans more than 2 x 2 of those, by coarse tiles of GATHER_COARSE_TILE
-// pixels (a multiple of GATHER_TILE), or else into one bin every tile reads.
+// when a deposit spans more than GATHER_FINE_SPAN of those a side, by coarse tiles of
+// GATHER_COARSE_TILE pixels (a multiple of GATHER_TILE), or else into one bin every tile
+// reads. Every fine tile reads its coarse tile's whole bin: coarse tiles of 32 pixels (a
+// deposit of up to 2 * MAX_SPLAT_HALF_WIDTH = 32 pixels spans at most two a side) are
+// read by 16 fine tiles, not 64 (H100, supernova row: 621 ms a frame against 677 with
+// 64-pixel ones). A fine span of 3 (a ray listed up to 9 times) was no faster (628 ms).
 pub const GATHER_TILE: u32 = 8;
 pub const GATHER_COARSE_TILE: u32 = 32;
-// A deposit is binned by fine tiles when it spans at most this many of them along each
-// axis (so a ray is listed at most GATHER_FINE_SPAN² times), else by coarse tiles.
 pub const GATHER_FINE_SPAN: u32 = 2;
 // The pair gather (glsl/sweep_gather.comp) sums a tile's candidate rays in chunks of this
 // many, one workgroup per chunk.

@@ -11,28 +11,34 @@
 //! `Access::ComputeStorage` and the recorder puts a barrier wherever a dispatch follows
 //! a write of an image it uses. A pipeline barrier waits for all earlier dispatches, so
 //! the passes are ordered to let independent work share the interval between two
-//! barriers. Forward transport, per plane i (five barriers a plane):
+//! barriers. Forward transport, per plane i (six barriers a plane):
 //!
 //! ```text
-//!   barrier | viewing rays of plane i-1   (state, irradiance of planes i-2 and i-1)
+//!   barrier | viewing rays of plane i-1   (state, irradiance of planes i-2 and i-1;
+//!                                          the last plane's after the loop)
 //!           | light rays of plane i       (rays only: independent of the view)
 //!   barrier | deposits of plane i         (rays -> each ray's deposit, counted into
-//!                                          the bins of the screen tiles it overlaps)
-//!   barrier | bin offsets                 (one workgroup: a prefix sum of the counts)
+//!                                          the bins of the screen tiles it overlaps,
+//!                                          one atomic per bin and workgroup)
+//!   barrier | bin offsets                 (one workgroup: a prefix sum of the counts,
+//!                                          and each fine tile's first chunk)
 //!   barrier | bin lists                   (each ray listed in its bins)
 //!   barrier | gather of plane i           (deposits -> irradiance layer i % 2, which
 //!                                          the viewing rays of plane i-1 have read)
+//!   barrier | resolve                     (`gather=pairs`: the tiles of more than one
+//!                                          chunk, from their sums)
 //! ```
 //!
 //! The splat is a tile-binned gather (glsl/light_gather.glsl): the rays are sorted by
-//! counting into bins of 8 × 8-pixel tiles (64-pixel tiles, or one bin for all, for wide
-//! deposits); each tile's pixels sum the deposits of the rays listed for it over their
-//! area in 32.32 fixed point in registers. No atomics on the sums (the atomic
-//! compute splat's integer atomics cost more than the point sprites on lavapipe), the
-//! same integer sums, so bit for bit the atomic splat's irradiance.
+//! counting into bins of 8 × 8-pixel tiles (32-pixel tiles, or one bin for all, for wide
+//! deposits); each tile's candidate rays are split into chunks of 256, one workgroup
+//! each, which deals out the (ray, pixel) pairs where a deposit lands and adds them into
+//! the tile's 32.32 fixed-point sums in shared memory (glsl/sweep_gather.comp; a tile of
+//! several chunks adds its chunks' sums in memory, resolved by the next dispatch). The
+//! same integer sums as the atomic compute splat, so bit for bit its irradiance. On the
+//! H100 the splat is bound by the deposits' bytes (docs/BENCH.md, "the splat rebuilt").
 //!
-//! and the viewing rays of the last plane after the loop. The backward transport is one
-//! dispatch per plane with one barrier before it.
+//! The backward transport is one dispatch per plane with one barrier before it.
 
 use super::pass::gather_tiles;
 use super::*;
@@ -258,9 +264,12 @@ impl SweepPass {
             if p.gather_pairs {
                 // One workgroup per chunk of a tile's candidates: at least one per tile,
                 // and one more per GATHER_CHUNK rays the ray images hold (a workgroup
-                // takes several chunks in turn where there are more).
-                let workgroups = gather_tiles(self.width, self.height) as u32
-                    + (f.ray_image[0] * f.ray_image[1]).div_ceil(GATHER_CHUNK);
+                // takes several chunks in turn where there are more), at most 65535, the
+                // dispatch size every device must take (large screens: 2048² has 65536
+                // tiles).
+                let workgroups = (gather_tiles(self.width, self.height)
+                    + (f.ray_image[0] as u64 * f.ray_image[1] as u64).div_ceil(GATHER_CHUNK as u64))
+                .min(65535) as u32;
                 rec.dispatch_bound(&p.gather, bytemuck::bytes_of(&push), [workgroups, 1, 1])?;
                 // The tiles of several chunks, from their sums.
                 rec.compute_storage_barriers(&Self::storage(&self.irradiance), &splat_buffers);
