@@ -25,6 +25,8 @@
 #      it does not count the build. Then, if budget remains, one
 #      `refrakt bench thesis --baselines` on the rows that ran (default transport: forward;
 #      baselines = EA ray marcher, sweep floor, skeleton).
+#      Then, if budget remains, `refrakt render --pass-timings --variant sweep=compute` of
+#      the default scene at 768² times the scale: each pass, and each step of the splat.
 #   4. Writes the report and prints the summary table (per row and transport, the median
 #      frame ms of sweep=compute and sweep=fragment and their ratio) on stdout. Progress
 #      goes to stderr.
@@ -240,7 +242,7 @@ shq() {
 # appends a line to $runs and sets $last_status.
 run() {
   local kind="$1" rows_arg="$2" transport="$3" json="$4"; shift 4
-  local logf="${json%.json}.log" left rc=0 t0 t1 status before after new cmd_str
+  local logf="${json%.*}.log" left rc=0 t0 t1 status before after new cmd_str
   cmd_str="$(shq "$@")"
   cmd_str="${cmd_str//$root\/target\/release\/refrakt/./target/release/refrakt}"
   cmd_str="${cmd_str//$root\//}"
@@ -325,6 +327,19 @@ else
   run thesis-baselines "$rows_ok_csv" forward "$json" \
     "$bin" bench thesis --baselines "${common[@]}" --rows "$rows_ok_csv" --json "$json"
 fi
+# The default scene's passes, each step of the splat timed on its own (--pass-timings):
+# where a frame's time goes, on the compute path and at the thesis' viewport (times the
+# scale). A second or two on a GPU.
+if ((budget_spent)); then
+  log "pass timings: skipped (time budget spent)"
+  printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' pass-timings "" forward budget "" 0 "" "" "" "" >>"$runs"
+else
+  side="$(python3 -c "print(max(16, round(768 * $scale)))")"
+  log "pass timings: render --pass-timings, the default scene at ${side}², sweep=compute"
+  run pass-timings "" forward "$work/pass-timings.exr" \
+    "$bin" render --device "$dev_index" --width "$side" --height "$side" --variant sweep=compute \
+    --pass-timings -o "$work/pass-timings.exr"
+fi
 used_s=$(($(date +%s) - t_start))
 finished_utc="$(date -u +%Y-%m-%dT%H:%M:%SZ)"
 log "bench invocations took ${used_s} s of the ${budget} s budget"
@@ -379,7 +394,16 @@ with open(E["GB_RUNS"]) as f:
             "log_path": rel(logf) if logf else None,
             "report": None,
         }
-        if status == "ok":
+        if status == "ok" and kind == "pass-timings":
+            # render's own lines, from "GPU time of the frame" on.
+            with open(logf) as lf:
+                text = lf.read()
+            at = text.find("GPU time of the frame")
+            text = text[at:] if at >= 0 else text
+            # Not the "wrote <absolute path>" line: the image stays in the work folder.
+            kept = [l for l in text.strip().splitlines() if not l.startswith("wrote ")]
+            inv["report"] = {"pass_timings": "\n".join(kept)}
+        elif status == "ok":
             with open(js) as jf:
                 inv["report"] = json.load(jf)
         invocations.append(inv)
@@ -663,6 +687,19 @@ if base_inv and base_inv["status"] == "ok":
     md += base_lines
 else:
     md.append("Not run: %s." % (reason(base_inv) if base_inv else "no row ran"))
+md.append("")
+md.append("## Pass timings")
+md.append("")
+pt_inv = next((v for v in invocations if v["kind"] == "pass-timings"), None)
+if pt_inv and pt_inv["status"] == "ok":
+    md.append("The default scene with `render --pass-timings --variant sweep=compute` (GPU ms per "
+              "frame, each per-plane pass summed over the planes):")
+    md.append("")
+    md.append("```")
+    md.append(pt_inv["report"]["pass_timings"])
+    md.append("```")
+else:
+    md.append("Not run: %s." % (reason(pt_inv) if pt_inv else "not reached"))
 md.append("")
 md.append("## Command lines")
 md.append("")
