@@ -1,13 +1,16 @@
-// The compute sweep's splat as a tile-binned gather (issue 31): no atomics on the sums.
-// Per plane, four dispatches: sweep_deposit.comp computes each light ray's deposit
-// (light_splat_ray.glsl: the same deposit as the point sprites and the atomic compute
-// splat) into `deposits` and counts the ray into the bins of the tiles it overlaps;
-// sweep_bin_scan.comp turns the counts into list offsets; sweep_bin_fill.comp lists each
-// ray in its bins; sweep_gather.comp lets each 8 x 8 tile of pixels read the rays listed
-// for it and each pixel sum their deposits. The sum is the atomic splat's: every
-// deposit truncated to 32.32 fixed point (light_splat_fixed.glsl) and added as a 64-bit
-// integer, here in registers (integer addition is associative: the result does not
-// depend on the order, and is bit for bit the atomic splat's).
+// The compute sweep's splat as a tile-binned gather (issue 31): no global atomics on the
+// sums. Per plane, four dispatches and, with `gather=pairs`, a fifth: sweep_deposit.comp
+// computes each light ray's deposit (light_splat_ray.glsl: the same deposit as the point
+// sprites and the atomic compute splat) into `deposits` and counts the ray into the bins
+// of the tiles it overlaps; sweep_bin_scan.comp turns the counts into list offsets (and
+// each tile's first chunk); sweep_bin_fill.comp lists each ray in its bins;
+// sweep_gather.comp (pairs: each workgroup a chunk of a tile's rays, each invocation a
+// ray and a pixel) or sweep_gather_pixels.comp (each pixel over all its tile's rays) sums
+// the deposits; sweep_gather_resolve.comp stores the tiles of several chunks. The sum is
+// the atomic splat's: every deposit truncated to 32.32 fixed point
+// (light_splat_fixed.glsl) and added as a 64-bit integer, in registers or shared memory
+// (integer addition is associative: the result does not depend on the order, and is bit
+// for bit the atomic splat's).
 #ifndef REFRAKT_LIGHT_GATHER_GLSL
 #define REFRAKT_LIGHT_GATHER_GLSL
 

@@ -1,5 +1,5 @@
 #version 460
-// The compute sweep's splat, third of four dispatches (light_gather.glsl): each light ray
+// The compute sweep's splat, third of its dispatches (light_gather.glsl): each light ray
 // lists itself in the bins sweep_deposit.comp counted it in, at its bin's offset plus a
 // cursor, claimed once per bin and workgroup (slot_add). The order within a bin varies
 // from run to run; the gather's integer sums do not depend on it.

@@ -1,5 +1,5 @@
 #version 460
-// The compute sweep's splat, second of four dispatches (light_gather.glsl): the bins'
+// The compute sweep's splat, second of its dispatches (light_gather.glsl): the bins'
 // counts become the offsets of their lists in `bin_list` (an exclusive prefix sum), the
 // counts are zeroed for the next plane's deposits and the fill cursors for this plane's
 // fill. One workgroup: each invocation sums a run of consecutive bins, invocation 0 scans

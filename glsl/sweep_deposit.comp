@@ -1,5 +1,5 @@
 #version 460
-// The compute sweep's splat, first of four dispatches (light_gather.glsl): each light
+// The compute sweep's splat, first of its dispatches (light_gather.glsl): each light
 // ray's deposit on this plane, and its count in the bins of the screen tiles its deposit
 // overlaps. One invocation per ray; the counts are added once per bin and workgroup
 // (slot_add).

@@ -1,7 +1,7 @@
 #version 460
-// The compute sweep's splat, last of four dispatches (light_gather.glsl), as the
-// `gather=pixels` lever has it (sweep_gather.comp is the default, `gather=pairs`): each 8 x 8 tile
-// of pixels reads the rays listed in its bin, its coarse tile's bin and the global bin,
+// The compute sweep's splat, last of four dispatches with this gather (light_gather.glsl),
+// the `gather=pixels` lever (sweep_gather.comp is the default, `gather=pairs`): each 8 x 8
+// tile of pixels reads the rays listed in its bin, its coarse tile's bin and the global bin,
 // and each pixel sums the deposits of those rays over its own area, in 32.32 fixed point
 // in registers (the atomic splat's integer sums, bit for bit), into this plane's
 // irradiance and light direction (layer `read_layer`, the layer the rays were written
