@@ -163,6 +163,37 @@ uint tile_candidates(uint tile, uint array) {
            + bins[a + bin_of(BIN_GLOBAL, ivec2(0))];
 }
 
+// A fine tile's candidate list as the gathers read it (after sweep_bin_fill.comp): the
+// three bins it reads, and their lengths.
+struct TileList {
+    uint fine, coarse, wide;
+    uint n_fine, n_coarse, n_wide;
+};
+
+TileList tile_list(ivec2 tile) {
+    uint n = bin_count();
+    TileList l;
+    l.fine = bin_of(BIN_FINE, tile);
+    l.coarse = bin_of(BIN_COARSE, tile / FINE_PER_COARSE);
+    l.wide = bin_of(BIN_GLOBAL, ivec2(0));
+    l.n_fine = bins[2u * n + l.fine];
+    l.n_coarse = bins[2u * n + l.coarse];
+    l.n_wide = bins[2u * n + l.wide];
+    return l;
+}
+
+uint list_length(TileList l) { return l.n_fine + l.n_coarse + l.n_wide; }
+
+// The ray of candidate k (< list_length) of the list: its bin's, then its coarse tile's,
+// then the global bin's.
+int list_ray(TileList l, uint k) {
+    uint n = bin_count();
+    uint slot = k < l.n_fine ? bins[n + l.fine] + k
+              : k < l.n_fine + l.n_coarse ? bins[n + l.coarse] + (k - l.n_fine)
+              : bins[n + l.wide] + (k - l.n_fine - l.n_coarse);
+    return int(bin_list[slot]);
+}
+
 // The bins' atomics aggregated per workgroup (sweep_deposit.comp, sweep_bin_fill.comp):
 // the 64 rays of a workgroup are neighbours, and where a caustic focuses they all fall into
 // the same one or two bins, so one atomic per bin and workgroup replaces one per ray (on

@@ -96,7 +96,10 @@ void gather_chunk(uint chunk, ivec2 size) {
     uint tiles = fine_bins();
     // The last tile whose first chunk is at or before `chunk` (first chunks ascend; the
     // loop runs for any number of tiles up to 2^24, the same for every invocation).
-    uint lo = 0u, hi = tiles - 1u;
+    // Where every tile up to `chunk` is one chunk (the common case), chunk c is tile c's
+    // only one (first chunks are at least their tile's index) and the search is skipped.
+    bool direct = chunk < tiles && bins[chunk_start_word() + chunk] == chunk;
+    uint lo = direct ? chunk : 0u, hi = direct ? chunk : tiles - 1u;
     for (int s = 0; s < 24; ++s) {
         uint mid = (lo + hi + 1u) / 2u;
         bool left = bins[chunk_start_word() + mid] <= chunk;
@@ -109,13 +112,8 @@ void gather_chunk(uint chunk, ivec2 size) {
     ivec2 tile = ivec2(int(tile_index) % fine_tiles().x, int(tile_index) / fine_tiles().x);
     ivec2 tile_lo = tile * int(GATHER_TILE);
     ivec2 tile_size = min(ivec2(GATHER_TILE), size - tile_lo);
-    uint n = bin_count();
-    uint fine = bin_of(BIN_FINE, tile);
-    uint coarse = bin_of(BIN_COARSE, tile / FINE_PER_COARSE);
-    uint wide = bin_of(BIN_GLOBAL, ivec2(0));
-    uint n_fine = bins[2u * n + fine], n_coarse = bins[2u * n + coarse];
-    uint n_wide = bins[2u * n + wide];
-    uint total = n_fine + n_coarse + n_wide;
+    TileList list = tile_list(tile);
+    uint total = list_length(list);
     uint begin = (chunk - first_chunk) * GATHER_CHUNK;
     uint end = min(total, begin + GATHER_CHUNK);
 
@@ -129,10 +127,7 @@ void gather_chunk(uint chunk, ivec2 size) {
         int r = -1;
         ivec4 rect = ivec4(0);
         if (k < end) {
-            uint slot = k < n_fine ? bins[n + fine] + k
-                      : k < n_fine + n_coarse ? bins[n + coarse] + (k - n_fine)
-                      : bins[n + wide] + (k - n_fine - n_coarse);
-            r = int(bin_list[slot]);
+            r = list_ray(list, k);
             rect = tile_rect(stored_footprint(r), tile_lo, tile_size);
         }
         ivec2 extent = rect.zw - rect.xy;

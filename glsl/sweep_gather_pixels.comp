@@ -43,14 +43,8 @@ void main() {
     uint t = gl_LocalInvocationIndex;
     vec2 tile_lo = vec2(gl_WorkGroupID.xy * GATHER_TILE);
     vec2 tile_hi = min(tile_lo + float(GATHER_TILE), vec2(size));
-    uint n = bin_count();
-    ivec2 tile = ivec2(gl_WorkGroupID.xy);
-    uint fine = bin_of(BIN_FINE, tile);
-    uint coarse = bin_of(BIN_COARSE, tile / FINE_PER_COARSE);
-    uint wide = bin_of(BIN_GLOBAL, ivec2(0));
-    uint n_fine = bins[2u * n + fine], n_coarse = bins[2u * n + coarse];
-    uint n_wide = bins[2u * n + wide];
-    uint total = n_fine + n_coarse + n_wide;
+    TileList list = tile_list(ivec2(gl_WorkGroupID.xy));
+    uint total = list_length(list);
 
     uvec2 sum[SPLAT_GATHER_CHANNELS];
     for (int k = 0; k < SPLAT_GATHER_CHANNELS; ++k) sum[k] = uvec2(0u);
@@ -59,10 +53,7 @@ void main() {
         int r = -1;
         vec4 footprint = vec4(0.0);
         if (k < total) {
-            uint slot = k < n_fine ? bins[n + fine] + k
-                      : k < n_fine + n_coarse ? bins[n + coarse] + (k - n_fine)
-                      : bins[n + wide] + (k - n_fine - n_coarse);
-            r = int(bin_list[slot]);
+            r = list_ray(list, k);
             footprint = stored_footprint(r);
             // Overlap of positive area with the tile, as deposit_overlap counts it.
             if (!(footprint.x < tile_hi.x && footprint.z > tile_lo.x && footprint.y < tile_hi.y
