@@ -18,15 +18,15 @@
 
 // Per ray r (of the grid, r = j * columns + i): its RayDeposit (light_splat_ray.glsl) in
 // DEPOSIT_VEC4S vec4s from DEPOSIT_VEC4S r: footprint (an empty one, zero width: no
-// deposit), direction (xyz), box amplitude, box, and with the cells deposit corner
-// fluxes A, B, C, D, corners A B, corners C D. The boxes deposit uses only the first
-// four: stored packed, 64 bytes a ray instead of 160 (each ray's deposit is written and
-// read once or more per plane: on the H100 the deposits' pass was a quarter of the
-// forward frame).
+// deposit), direction (xyz), box amplitude, and with the cells deposit the box, corner
+// fluxes A, B, C, D, corners A B, corners C D. The boxes deposit's footprint is its box
+// (box_of_ray), so it stores only the first three: 48 bytes a ray instead of 160 (each
+// ray's deposit is written and read once or more per plane: on the H100 the splat is
+// bound by these bytes, docs/NOTES.md "The splat is bound by bytes").
 layout(std430, set = 0, binding = 20) buffer Deposits {
     vec4 deposits[];
 };
-const int DEPOSIT_VEC4S = DEPOSIT_CELLS ? 10 : 4;
+const int DEPOSIT_VEC4S = DEPOSIT_CELLS ? 10 : 3;
 const int DEPOSIT_VEC4S_MAX = 10;
 
 void store_deposit(int r, RayDeposit d) {
@@ -34,8 +34,8 @@ void store_deposit(int r, RayDeposit d) {
     deposits[k] = d.footprint;
     deposits[k + 1] = vec4(d.direction, 0.0);
     deposits[k + 2] = d.box_amplitude;
-    deposits[k + 3] = d.box;
     if (DEPOSIT_CELLS) {
+        deposits[k + 3] = d.box;
         deposits[k + 4] = d.flux_a;
         deposits[k + 5] = d.flux_b;
         deposits[k + 6] = d.flux_c;
@@ -54,7 +54,7 @@ RayDeposit deposit_from(vec4 v[DEPOSIT_VEC4S_MAX]) {
     d.footprint = v[0];
     d.direction = v[1].xyz;
     d.box_amplitude = v[2];
-    d.box = v[3];
+    d.box = DEPOSIT_CELLS ? v[3] : v[0];
     d.flux_a = DEPOSIT_CELLS ? v[4] : vec4(0.0);
     d.flux_b = DEPOSIT_CELLS ? v[5] : vec4(0.0);
     d.flux_c = DEPOSIT_CELLS ? v[6] : vec4(0.0);

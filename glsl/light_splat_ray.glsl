@@ -1,5 +1,5 @@
 // One light ray's deposit on its plane, shared by the three ways to splat it: point
-// sprites with additive blending (light_splat.vert/.frag, the fragment path's `splat=raster`),
+// sprites with additive blending (light_splat_sprite.glsl, the fragment path's `splat=raster`),
 // a compute shader adding fixed-point values with integer atomics (light_splat.comp,
 // `splat=compute`) and the compute sweep's tile-binned gather (sweep_deposit.comp,
 // sweep_gather.comp). Two deposits, the `deposit` lever (specialization constant 9):
@@ -27,7 +27,13 @@
 #ifndef REFRAKT_LIGHT_SPLAT_RAY_GLSL
 #define REFRAKT_LIGHT_SPLAT_RAY_GLSL
 
+#ifdef DEPOSIT_BOXES_ONLY
+// A shader built for the boxes deposit alone (light_splat_boxes.*: fewer varyings); the
+// pipeline's constant 9 is then not in the module and changes nothing.
+const bool DEPOSIT_CELLS = false;
+#else
 layout(constant_id = 9) const bool DEPOSIT_CELLS = true;
+#endif
 
 struct RayDeposit {
     // Cells: the corners' fluxes (rgb, a = luminance) per pixel's world area, halved:
@@ -156,7 +162,7 @@ bool box_of_ray(int index, uint layer, float depth, out RayDeposit d) {
     vec2 centre = project(vec3(here, depth)) * P.camera.zw;
     ray_box(lc.rgb, centre, shorter(e[0], e[1]), shorter(e[2], e[3]),
             1.0 / (px_per_unit.x * px_per_unit.y), d);
-    d.footprint = d.box;
+    d.footprint = d.box;   // the gather's packed deposit and the boxes' sprite rely on it
     d.direction = normalize(lv.xyz);
     return true;
 }

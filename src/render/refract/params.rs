@@ -197,6 +197,7 @@ mod tests {
             shaders::SWEEP_LIGHT_FORWARD_FRAG,
             shaders::SWEEP_VIEW_FORWARD_FRAG,
             shaders::LIGHT_SPLAT_VERT,
+            shaders::LIGHT_SPLAT_BOXES_VERT,
         ] {
             check_block(spirv, "Push", &push, size, false).unwrap();
         }

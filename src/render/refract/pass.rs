@@ -193,12 +193,15 @@ pub(crate) struct PlanePipelines {
 }
 
 impl PlanePipelines {
-    /// `passes`: the backward sweep's, the light rays', the viewing rays', the splat's.
+    /// `passes`: the backward sweep's, the light rays', the viewing rays', the splat's;
+    /// `cells`: the `deposit` lever (the point sprites' shaders are built per deposit, the
+    /// boxes' with fewer varyings: glsl/light_splat_sprite.glsl).
     fn new(
         ctx: &Context,
         passes: [&RenderPass; 4],
         set: &DescriptorSet,
         constants: [u32; 10],
+        cells: bool,
         forward: bool,
     ) -> Result<Self> {
         let plane = |fragment, pass, name: &str| {
@@ -246,8 +249,16 @@ impl PlanePipelines {
                             primitives: Primitives::AdditivePoints,
                             constants: &constants,
                             ..GraphicsDesc::fullscreen(
-                                shaders::LIGHT_SPLAT_VERT,
-                                shaders::LIGHT_SPLAT_FRAG,
+                                if cells {
+                                    shaders::LIGHT_SPLAT_VERT
+                                } else {
+                                    shaders::LIGHT_SPLAT_BOXES_VERT
+                                },
+                                if cells {
+                                    shaders::LIGHT_SPLAT_FRAG
+                                } else {
+                                    shaders::LIGHT_SPLAT_BOXES_FRAG
+                                },
                                 splat_pass,
                                 set,
                                 std::mem::size_of::<PlanePush>() as u32,
@@ -669,6 +680,7 @@ impl SweepPass {
             [&render_pass, &light_pass, &view_pass, &splat_pass],
             &sweep_set,
             Features::ALL.constants(have_gradient),
+            Features::ALL.cells,
             forward_capable,
         )?;
         let planes = HashMap::from([(Features::ALL, all)]);
@@ -731,6 +743,7 @@ impl SweepPass {
                 ],
                 &self.sweep_set,
                 features.constants(self.have_gradient),
+                features.cells,
                 self.forward.is_some(),
             )?;
             self.planes.insert(features, planes);
