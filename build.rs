@@ -62,6 +62,11 @@ fn main() {
             "GATHER_COARSE_TILE",
             Some(&format!("{GATHER_COARSE_TILE}u")),
         );
+        options.add_macro_definition("SPLAT_GROUP_SPAN", Some(&format!("{SPLAT_GROUP_SPAN}")));
+        options.add_macro_definition(
+            "SPLAT_GROUP_WORKGROUP",
+            Some(&format!("{SPLAT_GROUP_WORKGROUP}u")),
+        );
         options.add_macro_definition("VALUE_BRICK", Some(&format!("{VALUE_BRICK}")));
         options.add_macro_definition("TF_SAMPLES", Some(&format!("{TF_SAMPLES}u")));
         options.add_macro_definition("PREINT_SIZE", Some(&format!("{PREINT_SIZE}u")));

@@ -23,12 +23,22 @@
 // (box_of_ray), so it stores only the first three: 48 bytes a ray instead of 160 (each
 // ray's deposit is written and read once or more per plane: on the H100 the splat is
 // bound by these bytes, docs/NOTES.md "The splat is bound by bytes").
+// DEPOSITS_READONLY 1: the point sprites' shaders, which only read them (a vertex shader
+// may not write a storage buffer without vertexPipelineStoresAndAtomics).
+#ifndef DEPOSITS_READONLY
+#define DEPOSITS_READONLY 0
+#endif
+#if DEPOSITS_READONLY
+layout(std430, set = 0, binding = 20) readonly buffer Deposits {
+#else
 layout(std430, set = 0, binding = 20) buffer Deposits {
+#endif
     vec4 deposits[];
 };
 const int DEPOSIT_VEC4S = DEPOSIT_CELLS ? 10 : 3;
 const int DEPOSIT_VEC4S_MAX = 10;
 
+#if !DEPOSITS_READONLY
 void store_deposit(int r, RayDeposit d) {
     int k = DEPOSIT_VEC4S * r;
     deposits[k] = d.footprint;
@@ -44,6 +54,7 @@ void store_deposit(int r, RayDeposit d) {
         deposits[k + 9] = d.corners_cd;
     }
 }
+#endif
 
 vec4 stored_footprint(int r) { return deposits[DEPOSIT_VEC4S * r]; }
 
@@ -83,10 +94,15 @@ RayDeposit load_deposit(int r) {
 // one per listed ray), the offset of each bin's list in `bin_list` (sweep_bin_scan.comp,
 // an exclusive prefix sum, which also zeroes the counts for the next plane and the fill
 // cursors), and the fill cursor (sweep_bin_fill.comp; afterwards the bin's length).
-layout(std430, set = 0, binding = 21) buffer Bins {
+#if DEPOSITS_READONLY
+#define GATHER_BUFFER readonly buffer
+#else
+#define GATHER_BUFFER buffer
+#endif
+layout(std430, set = 0, binding = 21) GATHER_BUFFER Bins {
     uint bins[];
 };
-layout(std430, set = 0, binding = 22) buffer BinList {
+layout(std430, set = 0, binding = 22) GATHER_BUFFER BinList {
     uint bin_list[];
 };
 
@@ -202,6 +218,9 @@ int list_ray(TileList l, uint k) {
 // BIN_SLOTS bins in shared memory (open addressing, keys bin + 1, 0 empty): each entry
 // claims its bin's slot and takes its rank among the slot's entries; a bin that finds the
 // table full falls back to its own global atomic.
+// (Compute shaders only: not in the point sprites' stages, which include this file for
+// the deposits.)
+#if !DEPOSITS_READONLY
 #define BIN_SLOTS 64u
 shared uint slot_bin[BIN_SLOTS];
 shared uint slot_count[BIN_SLOTS];
@@ -228,6 +247,7 @@ int slot_add(uint b, out uint rank) {
     rank = 0u;
     return -1;
 }
+#endif
 
 // v truncated to 32.32 fixed point, as (lo, hi) words of a 64-bit two's complement
 // number (light_splat_fixed.glsl). Branch-free (llvmpipe runs both sides of a branch): 0

@@ -6,10 +6,15 @@
 //
 // Both stages in one file, so their interface cannot drift apart. The includer defines
 // SPRITE_VERTEX (1: the vertex shader, 0: the fragment shader) and SPRITE_CELLS (1: the
-// cells deposit, light_splat.*; 0: the boxes deposit, light_splat_boxes.*). The boxes
-// deposit passes only what it uses, 3 varyings instead of 10: llvmpipe sets up every
-// varying of every point, and the demo's splat at 256² took 15.0 and 14.3 s with all ten
-// against 9.3 and 9.7 s with three (A B A B, the same image to the bit).
+// cells deposit, light_splat.*; 0: the boxes deposit, light_splat_boxes.*), or
+// SPRITE_GROUPS 1 (light_splat_groups.*: a sprite per group of 2 x 2 rays, either
+// deposit, read from the deposits light_splat_groups.comp stored). The boxes deposit
+// passes only what it uses, 3 varyings instead of 10: llvmpipe sets up every varying of
+// every point, and the demo's splat at 256² took 15.0 and 14.3 s with all ten against 9.3
+// and 9.7 s with three (A B A B, the same image to the bit).
+#ifndef SPRITE_GROUPS
+#define SPRITE_GROUPS 0
+#endif
 #if !SPRITE_CELLS
 #define DEPOSIT_BOXES_ONLY 1
 #endif
@@ -17,6 +22,11 @@
 #include "sweep_buffers.glsl"
 #include "sweep_rays.glsl"
 #include "light_splat_ray.glsl"
+#if SPRITE_GROUPS
+#define DEPOSITS_READONLY 1
+#include "light_gather.glsl"
+#include "light_splat_groups.glsl"
+#endif
 
 #if SPRITE_VERTEX
 #define SPRITE_VARYING flat out
@@ -24,6 +34,108 @@
 #define SPRITE_VARYING flat in
 #endif
 
+#if SPRITE_GROUPS
+#if SPRITE_CELLS
+// The group (or, in the indirect draws, the group of the ray) and which of its rays the
+// sprite carries (bit k: ray k of group_ray); the fragments read the cells' deposits.
+layout(location = 0) SPRITE_VARYING int sprite_group;
+layout(location = 1) SPRITE_VARYING uint sprite_rays;
+#else
+// The boxes of the sprite's rays, as varyings (zero for a ray it does not carry): at 512²
+// fragments that read them from the deposits buffer took 20.6 s of the demo's splat
+// against 14.7 s as varyings (measured).
+layout(location = 0) SPRITE_VARYING vec4 group_box[4];
+layout(location = 4) SPRITE_VARYING vec4 group_amplitude[4];
+layout(location = 8) SPRITE_VARYING vec4 group_direction[4];
+#endif
+
+#if SPRITE_VERTEX
+layout(push_constant) uniform Push {
+    uint plane;
+    uint read_layer;
+    float depth;
+    uint pad;   // 0: the draw of one point per group; 1: the indirect draws, one per ray
+} pc;
+
+void main() {
+    int g;
+    vec4 fp;
+#if !SPRITE_CELLS
+    uint sprite_rays;
+#endif
+    if (pc.pad == 0u) {
+        g = gl_VertexIndex;
+        fp = sprite_groups[g];
+        sprite_rays = 15u;
+    } else {
+        // The indirect draw of workgroup w starts at vertex 4 * SPLAT_GROUP_WORKGROUP * w.
+        int per = 4 * int(SPLAT_GROUP_WORKGROUP);
+        int w = gl_VertexIndex / per, v = gl_VertexIndex % per;
+        g = int(sprite_fallback[int(SPLAT_GROUP_WORKGROUP) * w + v / 4]);
+        ivec2 c = group_ray(g, v % 4);
+        fp = ray_exists(c) ? stored_footprint(ray_index(c)) : vec4(0.0);
+        sprite_rays = 1u << uint(v % 4);
+    }
+#if SPRITE_CELLS
+    sprite_group = g;
+#else
+    for (int k = 0; k < 4; ++k) {
+        ivec2 c = group_ray(g, k);
+        bool carried = (sprite_rays & (1u << uint(k))) != 0u && ray_exists(c);
+        RayDeposit d;
+        if (carried) {
+            d = load_deposit(ray_index(c));
+        } else {
+            clear_deposit(d);
+        }
+        group_box[k] = d.box;
+        group_amplitude[k] = d.box_amplitude;
+        group_direction[k] = vec4(d.direction, 0.0);
+    }
+#endif
+    gl_PointSize = 1.0;
+    if (!deposits_anything(fp)) {
+        gl_Position = vec4(-4.0, -4.0, 0.0, 1.0);   // nothing to deposit: clipped
+        return;
+    }
+    // As for one ray's sprite, below.
+    vec2 w = fp.zw - fp.xy;
+    gl_PointSize = ceil(max(w.x, w.y)) + 1.0;
+    vec2 centre = 0.5 * (fp.xy + fp.zw);
+    gl_Position = vec4(centre / P.camera.zw * 2.0 - 1.0, 0.0, 1.0);
+}
+#else
+layout(location = 0) out vec4 out_irradiance;
+layout(location = 1) out vec4 out_direction;
+
+void main() {
+    vec3 e = vec3(0.0);
+    vec4 dir = vec4(0.0);
+    for (int k = 0; k < 4; ++k) {
+#if SPRITE_CELLS
+        ivec2 c = group_ray(sprite_group, k);
+        if ((sprite_rays & (1u << uint(k))) == 0u || !ray_exists(c)) continue;
+        RayDeposit d = load_deposit(ray_index(c));
+#else
+        RayDeposit d;
+        clear_deposit(d);
+        d.box = group_box[k];
+        d.footprint = group_box[k];
+        d.box_amplitude = group_amplitude[k];
+        d.direction = group_direction[k].xyz;
+#endif
+        vec3 ek;
+        vec4 dk;
+        deposit_at(d, floor(gl_FragCoord.xy), 1.0, ek, dk);
+        e += ek;
+        dir += dk;
+    }
+    if (!(dir.w > 0.0) && !(max(e.r, max(e.g, e.b)) > 0.0)) discard;
+    out_irradiance = vec4(e, 0.0);
+    out_direction = dir;
+}
+#endif
+#else
 // The boxes deposit's footprint is its box (box_of_ray).
 layout(location = 0) SPRITE_VARYING vec4 box;
 layout(location = 1) SPRITE_VARYING vec4 box_amplitude;
@@ -103,4 +215,5 @@ void main() {
     out_irradiance = vec4(e, 0.0);
     out_direction = dir;
 }
+#endif
 #endif

@@ -538,6 +538,8 @@ mod tests {
                     specialize: bits & 4 != 0,
                     splat: if bits & 8 != 0 {
                         Splat::Compute
+                    } else if bits % 7 == 0 {
+                        Splat::Groups
                     } else {
                         Splat::Raster
                     },

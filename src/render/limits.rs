@@ -23,6 +23,14 @@ pub const GATHER_FINE_SPAN: u32 = 2;
 // many, one workgroup per chunk.
 pub const GATHER_CHUNK: u32 = 256;
 
+// The grouped point sprites (the `splat=groups` lever, glsl/light_splat_groups.glsl): one
+// sprite per 2 x 2 light rays whose deposits fit within SPLAT_GROUP_SPAN pixels a side
+// (its point then at most SPLAT_GROUP_SPAN + 1 wide, below the 64 every device draws);
+// the rays of any other group get a sprite each. SPLAT_GROUP_WORKGROUP groups per
+// workgroup of the pass that sorts them, each writing one indirect draw of its others.
+pub const SPLAT_GROUP_SPAN: u32 = 4;
+pub const SPLAT_GROUP_WORKGROUP: u32 = 64;
+
 // The light rays' empty-space test (render::value_ranges, glsl/value_range*.comp): the
 // volume in bricks of VALUE_BRICK^3 voxels, each with the range of values around it.
 pub const VALUE_BRICK: u32 = 4;

@@ -19,7 +19,7 @@ mod swapchain;
 
 pub use ash::vk::{Format, ImageUsageFlags, PhysicalDeviceType};
 pub use barriers::Access;
-pub use commands::{Area, Recorder, Timings, Use};
+pub use commands::{Area, BufferUse, Recorder, Timings, Use};
 pub use context::{
     device_type_name, version_string, Context, ContextDesc, DeviceInfo, ValidationLog, WindowSource,
 };
@@ -43,6 +43,7 @@ pub mod usage {
     pub const STORAGE_BUFFER: B = B::STORAGE_BUFFER;
     pub const BUFFER_TRANSFER_DST: B = B::TRANSFER_DST;
     pub const BUFFER_TRANSFER_SRC: B = B::TRANSFER_SRC;
+    pub const INDIRECT_BUFFER: B = B::INDIRECT_BUFFER;
 }
 
 /// Format features re-exported for capability checks.

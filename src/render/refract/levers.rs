@@ -28,6 +28,12 @@ pub enum Region {
 pub enum Splat {
     /// One point sprite per ray, blended additively into two RGBA32F attachments.
     Raster,
+    /// One point sprite per 2 x 2 rays whose deposits fit within
+    /// `limits::SPLAT_GROUP_SPAN` pixels, a sprite per ray for the others (listed in
+    /// order by a compute pass that also computes the deposits, and drawn indirectly):
+    /// the same deposits with a quarter of the points, summed in another order
+    /// (glsl/light_splat_groups.glsl). For lavapipe, whose vertex stage runs on one thread.
+    Groups,
     /// One compute invocation per ray adding 32.32 fixed-point values with integer
     /// atomics, then a resolve into the irradiance images: order-independent sums, so
     /// still bit-reproducible frame to frame.
@@ -146,7 +152,9 @@ impl SweepPath {
 /// specialize. The field texture is off by default: it is another discretisation of ∇η
 /// (render/field.rs) whose images differ visibly at some pixels of noisy media (measured
 /// up to 0.71 of display range at single pixels, mean 2e-3 to 1e-2) for 1-5 % of the
-/// frame on lavapipe (docs/BENCH.md). The compute splat is off by default: it renders the
+/// frame on lavapipe (docs/BENCH.md). The fragment path's sprites are grouped by default
+/// (`splat=groups`: the same deposits summed in another order, 0.61-0.85 x the splat's
+/// time on lavapipe, measured). The compute splat is off by default: it renders the
 /// raster splat's image within float rounding, but on lavapipe its integer atomics cost
 /// more than the sprites (1.0-1.55x the frame, measured); it was built for GPUs, where
 /// the sprites' blending into RGBA32F was 84 % of the forward sweep (H100, measured).
@@ -209,7 +217,7 @@ impl Default for Levers {
             field: false,
             arrays: true,
             specialize: true,
-            splat: Splat::Raster,
+            splat: Splat::Groups,
             sweep: SweepPath::Auto,
             clear: true,
             deposit: Deposit::Boxes,
@@ -234,7 +242,7 @@ impl Levers {
 
     /// The keys of [`Levers::parse`], with their values, for help texts.
     pub const SYNTAX: &'static str =
-        "region=full|rect, field=off|on, arrays=off|on, specialize=off|on, splat=raster|compute, \
+        "region=full|rect, field=off|on, arrays=off|on, specialize=off|on, splat=raster|groups|compute, \
          sweep=auto|fragment|compute, clear=off|on, deposit=cells|boxes, gather=pairs|pixels";
 
     /// `default`, `reference`, or comma-separated `key=value` pairs applied to the
@@ -288,8 +296,9 @@ impl Levers {
                 "splat" => {
                     levers.splat = match value {
                         "raster" => Splat::Raster,
+                        "groups" => Splat::Groups,
                         "compute" => Splat::Compute,
-                        _ => bail!("splat={value}: expected raster or compute"),
+                        _ => bail!("splat={value}: expected raster, groups or compute"),
                     }
                 }
                 "deposit" => {
@@ -340,7 +349,7 @@ impl Levers {
             |l: &mut Levers| l.clear = !l.clear,
             |l: &mut Levers| {
                 l.splat = match l.splat {
-                    Splat::Raster => Splat::Compute,
+                    Splat::Raster | Splat::Groups => Splat::Compute,
                     Splat::Compute => Splat::Raster,
                 }
             },
@@ -379,6 +388,7 @@ impl fmt::Display for Levers {
             on(self.specialize),
             match self.splat {
                 Splat::Raster => "raster",
+                Splat::Groups => "groups",
                 Splat::Compute => "compute",
             },
             self.sweep.name(),
@@ -418,6 +428,8 @@ mod tests {
                     specialize: bits & 4 != 0,
                     splat: if bits & 8 != 0 {
                         Splat::Compute
+                    } else if bits % 3 == 0 {
+                        Splat::Groups
                     } else {
                         Splat::Raster
                     },
@@ -427,7 +439,7 @@ mod tests {
         }
         let l = Levers::parse("region=full").unwrap();
         assert_eq!(l.region, Region::Full);
-        assert!(!l.field && l.arrays && l.specialize && l.splat == Splat::Raster);
+        assert!(!l.field && l.arrays && l.specialize && l.splat == Splat::Groups);
         assert_eq!(l.sweep, SweepPath::Auto);
         assert_eq!(
             Levers::parse("sweep=fragment").unwrap().sweep,
@@ -449,7 +461,7 @@ mod tests {
         for (spec, needle) in [
             ("", "empty"),
             ("region=polygon", "full or rect"),
-            ("splat=gather", "raster or compute"),
+            ("splat=gather", "raster, groups or compute"),
             ("sweep=vertex", "auto, fragment or compute"),
             ("deposit=points", "cells or boxes"),
             ("gather=rays", "pairs or pixels"),

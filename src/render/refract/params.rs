@@ -198,6 +198,8 @@ mod tests {
             shaders::SWEEP_VIEW_FORWARD_FRAG,
             shaders::LIGHT_SPLAT_VERT,
             shaders::LIGHT_SPLAT_BOXES_VERT,
+            shaders::LIGHT_SPLAT_GROUPS_VERT,
+            shaders::LIGHT_SPLAT_GROUPS_BOXES_VERT,
         ] {
             check_block(spirv, "Push", &push, size, false).unwrap();
         }

@@ -91,6 +91,10 @@ pub(crate) struct SweepPass {
     pub(crate) deposits: Buffer,
     pub(crate) bins: Buffer,
     pub(crate) bin_list: Buffer,
+    /// The grouped sprites' buffers (glsl/light_splat_groups.glsl, bindings 23-25).
+    pub(crate) sprite_groups: Buffer,
+    pub(crate) sprite_fallback: Buffer,
+    pub(crate) sprite_draws: Buffer,
     pub(crate) composite: ComputePipeline,
     pub(crate) output: FrameTarget,
     pub(crate) env_params: Buffer,
@@ -274,6 +278,37 @@ impl PlanePipelines {
                         &constants,
                         "light splat (compute)",
                     )?,
+                    group_deposits: ComputePipeline::with_constants(
+                        ctx,
+                        shaders::LIGHT_SPLAT_GROUPS_COMP,
+                        set,
+                        std::mem::size_of::<PlanePush>() as u32,
+                        &constants,
+                        "light splat groups (deposits)",
+                    )?,
+                    splat_groups: GraphicsPipeline::new(
+                        ctx,
+                        &GraphicsDesc {
+                            primitives: Primitives::AdditivePoints,
+                            constants: &constants,
+                            ..GraphicsDesc::fullscreen(
+                                if cells {
+                                    shaders::LIGHT_SPLAT_GROUPS_VERT
+                                } else {
+                                    shaders::LIGHT_SPLAT_GROUPS_BOXES_VERT
+                                },
+                                if cells {
+                                    shaders::LIGHT_SPLAT_GROUPS_FRAG
+                                } else {
+                                    shaders::LIGHT_SPLAT_GROUPS_BOXES_FRAG
+                                },
+                                splat_pass,
+                                set,
+                                std::mem::size_of::<PlanePush>() as u32,
+                            )
+                        },
+                        "light splat groups",
+                    )?,
                 })
             } else {
                 None
@@ -396,11 +431,15 @@ pub(crate) struct ForwardPlanes {
     pub(crate) light: GraphicsPipeline,
     pub(crate) light_soft: GraphicsPipeline,
     pub(crate) view: GraphicsPipeline,
-    /// The point sprites (`splat=raster`).
+    /// The point sprites, one per ray (`splat=raster`).
     pub(crate) splat: GraphicsPipeline,
     /// The `splat=compute` lever: deposits into [`SweepPass::splat_sums`], resolved by
     /// [`ForwardPipelines::splat_resolve`] (glsl/light_splat.comp, _resolve.comp).
     pub(crate) splat_compute: ComputePipeline,
+    /// The `splat=groups` lever: each plane's deposits, groups and indirect draws
+    /// (glsl/light_splat_groups.comp), then the grouped sprites (light_splat_groups.*).
+    pub(crate) group_deposits: ComputePipeline,
+    pub(crate) splat_groups: GraphicsPipeline,
 }
 
 /// The forward transport's pipelines that do not depend on the features, on the plane
@@ -586,20 +625,10 @@ impl SweepPass {
         let value_ranges = value_ranges
             .ok_or_else(|| anyhow::anyhow!("the refractive sweep needs the value ranges"))?;
         plane_bindings.push(Binding::Texture(value_ranges, sampler));
-        let sweep_set = DescriptorSet::new(ctx, &plane_bindings, "sweep")?;
-        // The compute sweep's set: the same bindings, with every image a plane writes
-        // (states 4-9, irradiance 10-11, rays 13-14) a storage image.
-        let mut compute_bindings = plane_bindings.clone();
-        for (k, s) in states.iter().enumerate() {
-            compute_bindings[4 + k] = Binding::StorageImage(&s.image);
-        }
-        compute_bindings[10] = Binding::StorageImage(&irradiance[0].image);
-        compute_bindings[11] = Binding::StorageImage(&irradiance[1].image);
-        compute_bindings[13] = Binding::StorageImage(&rays[0].image);
-        compute_bindings[14] = Binding::StorageImage(&rays[1].image);
         // 20-22: the gather splat's deposits, tile bins and bin lists (glsl/light_gather.glsl),
         // sized for the ray images' capacity C: C deposits; a ray is listed in at most four
         // bins, so 4 C list entries; the bins' words (gather_words).
+        use crate::render::limits::SPLAT_GROUP_WORKGROUP;
         let capacity = ray_size[0] as u64 * ray_size[1] as u64;
         let deposits = Buffer::new(
             ctx,
@@ -622,9 +651,50 @@ impl SweepPass {
             vk::Memory::Gpu,
             "light deposit bin lists",
         )?;
-        compute_bindings.push(Binding::Storage(&deposits));
-        compute_bindings.push(Binding::Storage(&bins));
-        compute_bindings.push(Binding::Storage(&bin_list));
+        plane_bindings.push(Binding::Storage(&deposits));
+        plane_bindings.push(Binding::Storage(&bins));
+        plane_bindings.push(Binding::Storage(&bin_list));
+        // 23-25: the grouped sprites (the `splat=groups` lever, glsl/light_splat_groups.glsl;
+        // the deposits above): per group of 2 x 2 rays its footprint, per workgroup of
+        // SPLAT_GROUP_WORKGROUP groups its listed groups and one indirect draw. A grid of
+        // C rays has at most C / 2 + 1 groups (ceil(c / 2) ceil(r / 2) with c r <= C).
+        let groups = capacity / 2 + 1;
+        let group_workgroups = groups.div_ceil(SPLAT_GROUP_WORKGROUP as u64);
+        let sprite_groups = Buffer::new(
+            ctx,
+            groups * 16,
+            vk::usage::STORAGE_BUFFER,
+            vk::Memory::Gpu,
+            "light splat groups",
+        )?;
+        let sprite_fallback = Buffer::new(
+            ctx,
+            group_workgroups * SPLAT_GROUP_WORKGROUP as u64 * 4,
+            vk::usage::STORAGE_BUFFER,
+            vk::Memory::Gpu,
+            "light splat groups' leftover rays",
+        )?;
+        let sprite_draws = Buffer::new(
+            ctx,
+            group_workgroups * 16,
+            vk::usage::STORAGE_BUFFER | vk::usage::INDIRECT_BUFFER,
+            vk::Memory::Gpu,
+            "light splat groups' indirect draws",
+        )?;
+        plane_bindings.push(Binding::Storage(&sprite_groups));
+        plane_bindings.push(Binding::Storage(&sprite_fallback));
+        plane_bindings.push(Binding::Storage(&sprite_draws));
+        let sweep_set = DescriptorSet::new(ctx, &plane_bindings, "sweep")?;
+        // The compute sweep's set: the same bindings, with every image a plane writes
+        // (states 4-9, irradiance 10-11, rays 13-14) a storage image.
+        let mut compute_bindings = plane_bindings.clone();
+        for (k, s) in states.iter().enumerate() {
+            compute_bindings[4 + k] = Binding::StorageImage(&s.image);
+        }
+        compute_bindings[10] = Binding::StorageImage(&irradiance[0].image);
+        compute_bindings[11] = Binding::StorageImage(&irradiance[1].image);
+        compute_bindings[13] = Binding::StorageImage(&rays[0].image);
+        compute_bindings[14] = Binding::StorageImage(&rays[1].image);
         let compute_set = DescriptorSet::new(ctx, &compute_bindings, "sweep (compute)")?;
         let output = FrameTarget::new(ctx, width, height, "sweep frame")?;
         let env_params = Buffer::uniform::<EnvParams>(ctx, "environment params")?;
@@ -723,6 +793,9 @@ impl SweepPass {
             deposits,
             bins,
             bin_list,
+            sprite_groups,
+            sprite_fallback,
+            sprite_draws,
             composite,
             output,
             env_params,

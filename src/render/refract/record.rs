@@ -7,7 +7,8 @@
 //! one pass (and `drop_barrier_before_plane` must be able to leave one out).
 
 use super::*;
-use crate::vk::{Area, Use};
+use crate::render::limits::SPLAT_GROUP_WORKGROUP;
+use crate::vk::{Area, BufferUse, Use};
 
 impl SweepPass {
     /// Record one frame into `rec`: setup, every plane, and the composite into
@@ -79,6 +80,7 @@ impl SweepPass {
                 ctx.info().name
             ),
         };
+        let groups_on = forward.is_some() && !compute && sweep.levers.splat == Splat::Groups;
         let tan_half = (camera.fov_y.to_radians() * 0.5).tan();
         let aspect = self.width as f32 / self.height as f32;
         let ray_image = [
@@ -383,7 +385,46 @@ impl SweepPass {
                             (light_images[1], write..write + 1, Access::SampledGeneral),
                         ]);
                         match sweep.levers.splat {
-                            Splat::Raster => {
+                            Splat::Raster | Splat::Groups => {
+                                let splat_push = PlanePush {
+                                    read_layer: write,
+                                    ..push
+                                };
+                                // splat=groups: the deposits and groups first, in a compute
+                                // pass (glsl/light_splat_groups.glsl), after the previous
+                                // plane's sprites read them.
+                                let groups = grid_dims[0].div_ceil(2) * grid_dims[1].div_ceil(2);
+                                let workgroups = groups.div_ceil(SPLAT_GROUP_WORKGROUP);
+                                let group_buffers = [
+                                    &self.deposits,
+                                    &self.sprite_groups,
+                                    &self.sprite_fallback,
+                                    &self.sprite_draws,
+                                ];
+                                if groups_on {
+                                    if timed {
+                                        rec.begin_scope("sweep: splat: deposits");
+                                    }
+                                    rec.buffer_handover(
+                                        &group_buffers,
+                                        BufferUse::Draws,
+                                        BufferUse::Compute,
+                                    );
+                                    rec.dispatch(
+                                        &fp.group_deposits,
+                                        &self.sweep_set,
+                                        bytemuck::bytes_of(&splat_push),
+                                        [workgroups, 1, 1],
+                                    )?;
+                                    rec.buffer_handover(
+                                        &group_buffers,
+                                        BufferUse::Compute,
+                                        BufferUse::Draws,
+                                    );
+                                    if timed {
+                                        rec.end_scope();
+                                    }
+                                }
                                 rec.begin_render_pass(
                                     &self.splat_pass,
                                     &self.splat_framebuffers[write as usize],
@@ -392,16 +433,33 @@ impl SweepPass {
                                         (&self.irradiance[1].image, write),
                                     ],
                                 )?;
-                                rec.bind_pipeline(&fp.splat);
-                                let splat_push = PlanePush {
-                                    read_layer: write,
-                                    ..push
-                                };
-                                rec.draw(
-                                    &fp.splat,
-                                    bytemuck::bytes_of(&splat_push),
-                                    grid_dims[0] * grid_dims[1],
-                                )?;
+                                if groups_on {
+                                    // One point per group, then the groups' indirect draws
+                                    // of one point per ray (push constant `pad` 0 and 1).
+                                    rec.bind_pipeline(&fp.splat_groups);
+                                    rec.draw(
+                                        &fp.splat_groups,
+                                        bytemuck::bytes_of(&splat_push),
+                                        groups,
+                                    )?;
+                                    let leftover_push = PlanePush {
+                                        pad: 1,
+                                        ..splat_push
+                                    };
+                                    rec.draw_indirect(
+                                        &fp.splat_groups,
+                                        bytemuck::bytes_of(&leftover_push),
+                                        &self.sprite_draws,
+                                        workgroups,
+                                    )?;
+                                } else {
+                                    rec.bind_pipeline(&fp.splat);
+                                    rec.draw(
+                                        &fp.splat,
+                                        bytemuck::bytes_of(&splat_push),
+                                        grid_dims[0] * grid_dims[1],
+                                    )?;
+                                }
                                 rec.end_render_pass();
                             }
                             Splat::Compute => {

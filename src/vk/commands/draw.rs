@@ -17,6 +17,32 @@ pub struct Area {
     pub height: u32,
 }
 
+/// Who uses a storage buffer on either side of [`Recorder::buffer_handover`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BufferUse {
+    /// Compute shaders read and write it.
+    Compute,
+    /// Draws read it: their vertex and fragment shaders, and as indirect draw commands.
+    Draws,
+}
+
+impl BufferUse {
+    fn stages(self) -> (vk::PipelineStageFlags2, vk::AccessFlags2) {
+        match self {
+            BufferUse::Compute => (
+                vk::PipelineStageFlags2::COMPUTE_SHADER,
+                vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE,
+            ),
+            BufferUse::Draws => (
+                vk::PipelineStageFlags2::VERTEX_SHADER
+                    | vk::PipelineStageFlags2::FRAGMENT_SHADER
+                    | vk::PipelineStageFlags2::DRAW_INDIRECT,
+                vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::INDIRECT_COMMAND_READ,
+            ),
+        }
+    }
+}
+
 impl Area {
     pub fn full(width: u32, height: u32) -> Self {
         Self {
@@ -185,6 +211,61 @@ impl Recorder<'_> {
         // SAFETY: recording inside a render pass compatible with the bound pipeline.
         unsafe { self.device().cmd_draw(self.cmd, vertices, 1, 0, 0) };
         Ok(())
+    }
+
+    /// Draw `draws` indirect draws whose VkDrawIndirectCommand (16 bytes each) a shader
+    /// wrote into `commands` from offset 0, in order, with `pipeline` (bound) and push
+    /// constants `push`: one call where the device has `multiDrawIndirect`, else one call
+    /// per draw. The buffer needs INDIRECT_BUFFER usage.
+    pub fn draw_indirect(
+        &mut self,
+        pipeline: &GraphicsPipeline,
+        push: &[u8],
+        commands: &Buffer,
+        draws: u32,
+    ) -> Result<()> {
+        let needed = draws as u64 * 16;
+        if needed > commands.size() {
+            bail!(
+                "{draws} indirect draws need {needed} bytes, the buffer has {}",
+                commands.size()
+            );
+        }
+        self.push_constants(&pipeline.core, push)?;
+        let info = self.ctx.info();
+        let per_call = if info.multi_draw_indirect {
+            info.limits.max_draw_indirect_count.max(1)
+        } else {
+            1
+        };
+        let mut first = 0;
+        while first < draws {
+            let n = per_call.min(draws - first);
+            // SAFETY: recording inside a render pass compatible with the bound pipeline;
+            // the commands lie within the buffer (checked above); n is 1 or within the
+            // device's maxDrawIndirectCount with multiDrawIndirect enabled.
+            unsafe {
+                self.device()
+                    .cmd_draw_indirect(self.cmd, commands.raw, first as u64 * 16, n, 16)
+            };
+            first += n;
+        }
+        Ok(())
+    }
+
+    /// Order every earlier `from` access to each of `buffers` before every later `to`
+    /// access, in one vkCmdPipelineBarrier2: storage buffers that one kind of pass writes
+    /// and another reads, plane after plane.
+    pub fn buffer_handover(&mut self, buffers: &[&Buffer], from: BufferUse, to: BufferUse) {
+        let (src_stage, src_access) = from.stages();
+        let (dst_stage, dst_access) = to.stages();
+        let barriers: Vec<_> = buffers
+            .iter()
+            .map(|b| buffer_barrier(b, src_stage, src_access, dst_stage, dst_access))
+            .collect();
+        let dep = vk::DependencyInfo::default().buffer_memory_barriers(&barriers);
+        // SAFETY: recording; the barriers reference live buffers.
+        unsafe { self.device().cmd_pipeline_barrier2(self.cmd, &dep) };
     }
 
     /// Zero a storage buffer that shaders accumulate into (counters), after every earlier

@@ -16,7 +16,7 @@ use super::resources::color_range;
 use super::{Access, Buffer, ComputePipeline, Context, DescriptorSet, Image};
 
 mod draw;
-pub use draw::Area;
+pub use draw::{Area, BufferUse};
 mod submit;
 mod timings;
 

@@ -90,9 +90,11 @@ impl Context {
         }
         info.large_points = core.large_points == vk::TRUE;
         info.fragment_atomics = core.fragment_stores_and_atomics == vk::TRUE;
+        info.multi_draw_indirect = core.multi_draw_indirect == vk::TRUE;
         let core_features = vk::PhysicalDeviceFeatures::default()
             .large_points(info.large_points)
-            .fragment_stores_and_atomics(info.fragment_atomics);
+            .fragment_stores_and_atomics(info.fragment_atomics)
+            .multi_draw_indirect(info.multi_draw_indirect);
         let priorities = [1.0f32];
         let queue_infos = [vk::DeviceQueueCreateInfo::default()
             .queue_family_index(family)

@@ -26,6 +26,10 @@ pub struct DeviceInfo {
     /// Storage-buffer atomics in fragment shaders (`fragmentStoresAndAtomics`), enabled
     /// when offered: the plane sweep counts its clamps with them.
     pub fragment_atomics: bool,
+    /// Several draws per indirect call (`multiDrawIndirect`), enabled when offered: the
+    /// forward transport's grouped point sprites draw each workgroup's leftover rays as one
+    /// draw of one call (without it, one call per draw).
+    pub multi_draw_indirect: bool,
 }
 
 pub fn version_string(v: u32) -> String {
@@ -134,6 +138,7 @@ pub(super) fn query_info(
         timestamps: props.limits.timestamp_compute_and_graphics == vk::TRUE,
         large_points: false,
         fragment_atomics: false,
+        multi_draw_indirect: false,
     }
 }
 

@@ -1,0 +1,63 @@
+#version 460
+// The `splat=groups` lever's pass before each plane's sprites (light_splat_groups.glsl):
+// every ray's deposit, each group's footprint, and the indirect draws of the rays of the
+// groups that do not fit one sprite. One invocation per group of 2 x 2 rays.
+#extension GL_GOOGLE_include_directive : require
+#include "sweep_common.glsl"
+#include "sweep_buffers.glsl"
+#include "sweep_rays.glsl"
+#include "light_splat_ray.glsl"
+#include "light_gather.glsl"
+#include "light_splat_groups.glsl"
+
+layout(local_size_x = SPLAT_GROUP_WORKGROUP) in;
+
+layout(push_constant) uniform Push {
+    uint plane;
+    uint read_layer;   // the layer the rays were just written to
+    float depth;       // this plane's depth
+    uint pad;
+} pc;
+
+shared bool listed[SPLAT_GROUP_WORKGROUP];
+
+void main() {
+    int g = int(gl_GlobalInvocationID.x);
+    bool list = false;
+    if (g < group_count()) {
+        vec2 lo = vec2(1e30), hi = vec2(-1e30);
+        bool any_deposit = false;
+        for (int k = 0; k < 4; ++k) {
+            ivec2 c = group_ray(g, k);
+            if (!ray_exists(c)) continue;
+            int r = ray_index(c);
+            RayDeposit d;
+            if (!ray_deposit(r, pc.read_layer, pc.depth, d)) clear_deposit(d);
+            store_deposit(r, d);
+            if (deposits_anything(d.footprint)) {
+                lo = min(lo, d.footprint.xy);
+                hi = max(hi, d.footprint.zw);
+                any_deposit = true;
+            }
+        }
+        vec2 w = hi - lo;
+        bool fits = any_deposit && max(w.x, w.y) <= float(SPLAT_GROUP_SPAN);
+        sprite_groups[g] = fits ? vec4(lo, hi) : vec4(0.0);
+        list = any_deposit && !fits;
+    }
+    uint t = gl_LocalInvocationID.x;
+    listed[t] = list;
+    barrier();
+    if (t == 0u) {
+        // In the groups' order, so the frame does not depend on which invocation ran first.
+        uint first = gl_WorkGroupID.x * SPLAT_GROUP_WORKGROUP;
+        uint n = 0u;
+        for (uint k = 0u; k < SPLAT_GROUP_WORKGROUP; ++k) {
+            if (listed[k]) {
+                sprite_fallback[first + n] = first + k;
+                n += 1u;
+            }
+        }
+        sprite_draws[gl_WorkGroupID.x] = uvec4(4u * n, 1u, 4u * first, 0u);
+    }
+}
