@@ -222,6 +222,32 @@ impl PlanePipelines {
             GraphicsPipeline::new(ctx, &desc, name)
         };
         let [sweep_pass, light_pass, view_pass, splat_pass] = passes;
+        // The splat's point sprites (vertex and fragment shader) and its compute passes
+        // over the rays, on the plane set with the plane's push constants.
+        let sprites = |[vertex, fragment]: [&[u8]; 2], name: &str| {
+            let desc = GraphicsDesc {
+                primitives: Primitives::AdditivePoints,
+                constants: &constants,
+                ..GraphicsDesc::fullscreen(
+                    vertex,
+                    fragment,
+                    splat_pass,
+                    set,
+                    std::mem::size_of::<PlanePush>() as u32,
+                )
+            };
+            GraphicsPipeline::new(ctx, &desc, name)
+        };
+        let per_ray = |shader, name: &str| {
+            ComputePipeline::with_constants(
+                ctx,
+                shader,
+                set,
+                std::mem::size_of::<PlanePush>() as u32,
+                &constants,
+                name,
+            )
+        };
         Ok(Self {
             sweep: plane(shaders::SWEEP_FRAG, sweep_pass, "sweep plane")?,
             floor: plane(shaders::SWEEP_FLOOR_FRAG, sweep_pass, "sweep floor plane")?,
@@ -247,65 +273,33 @@ impl PlanePipelines {
                         view_pass,
                         "sweep viewing rays",
                     )?,
-                    splat: GraphicsPipeline::new(
-                        ctx,
-                        &GraphicsDesc {
-                            primitives: Primitives::AdditivePoints,
-                            constants: &constants,
-                            ..GraphicsDesc::fullscreen(
-                                if cells {
-                                    shaders::LIGHT_SPLAT_VERT
-                                } else {
-                                    shaders::LIGHT_SPLAT_BOXES_VERT
-                                },
-                                if cells {
-                                    shaders::LIGHT_SPLAT_FRAG
-                                } else {
-                                    shaders::LIGHT_SPLAT_BOXES_FRAG
-                                },
-                                splat_pass,
-                                set,
-                                std::mem::size_of::<PlanePush>() as u32,
-                            )
+                    splat: sprites(
+                        if cells {
+                            [shaders::LIGHT_SPLAT_VERT, shaders::LIGHT_SPLAT_FRAG]
+                        } else {
+                            [
+                                shaders::LIGHT_SPLAT_BOXES_VERT,
+                                shaders::LIGHT_SPLAT_BOXES_FRAG,
+                            ]
                         },
                         "light splat",
                     )?,
-                    splat_compute: ComputePipeline::with_constants(
-                        ctx,
-                        shaders::LIGHT_SPLAT_COMP,
-                        set,
-                        std::mem::size_of::<PlanePush>() as u32,
-                        &constants,
-                        "light splat (compute)",
-                    )?,
-                    group_deposits: ComputePipeline::with_constants(
-                        ctx,
+                    splat_compute: per_ray(shaders::LIGHT_SPLAT_COMP, "light splat (compute)")?,
+                    group_deposits: per_ray(
                         shaders::LIGHT_SPLAT_GROUPS_COMP,
-                        set,
-                        std::mem::size_of::<PlanePush>() as u32,
-                        &constants,
                         "light splat groups (deposits)",
                     )?,
-                    splat_groups: GraphicsPipeline::new(
-                        ctx,
-                        &GraphicsDesc {
-                            primitives: Primitives::AdditivePoints,
-                            constants: &constants,
-                            ..GraphicsDesc::fullscreen(
-                                if cells {
-                                    shaders::LIGHT_SPLAT_GROUPS_VERT
-                                } else {
-                                    shaders::LIGHT_SPLAT_GROUPS_BOXES_VERT
-                                },
-                                if cells {
-                                    shaders::LIGHT_SPLAT_GROUPS_FRAG
-                                } else {
-                                    shaders::LIGHT_SPLAT_GROUPS_BOXES_FRAG
-                                },
-                                splat_pass,
-                                set,
-                                std::mem::size_of::<PlanePush>() as u32,
-                            )
+                    splat_groups: sprites(
+                        if cells {
+                            [
+                                shaders::LIGHT_SPLAT_GROUPS_VERT,
+                                shaders::LIGHT_SPLAT_GROUPS_FRAG,
+                            ]
+                        } else {
+                            [
+                                shaders::LIGHT_SPLAT_GROUPS_BOXES_VERT,
+                                shaders::LIGHT_SPLAT_GROUPS_BOXES_FRAG,
+                            ]
                         },
                         "light splat groups",
                     )?,
