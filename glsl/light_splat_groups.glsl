@@ -1,8 +1,9 @@
 // The grouped point sprites (the `splat=groups` lever, fragment path): the light rays'
-// deposits splatted with one point per 2 x 2 rays instead of one per ray. On lavapipe the
-// vertex stage runs on one thread at about 0.13 µs a point, whatever the point does, and
-// a sub-pixel deposit's sprite of 2 x 2 pixels shades 4 fragments where a group's shades
-// 9 for four rays (docs/NOTES.md, "Grouped sprites").
+// deposits splatted with one point per 2 x 2 rays instead of one per ray, the deposits
+// computed by a compute pass. On lavapipe the vertex stage runs on one thread, at about
+// 0.13 µs a point whatever the point does, and computing the deposits there cost more
+// than the compute pass on all cores (docs/NOTES.md, "Grouped sprites": 0.61-0.85 x the
+// splat's time). GPUs take the compute sweep; there this lever is untimed.
 //
 // Per plane: light_splat_groups.comp computes every ray's deposit into `deposits`
 // (light_gather.glsl, the compute sweep's layout), and for each group g of rays (2 gi +

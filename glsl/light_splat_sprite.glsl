@@ -6,12 +6,13 @@
 //
 // Both stages in one file, so their interface cannot drift apart. The includer defines
 // SPRITE_VERTEX (1: the vertex shader, 0: the fragment shader) and SPRITE_CELLS (1: the
-// cells deposit, light_splat.*; 0: the boxes deposit, light_splat_boxes.*), or
-// SPRITE_GROUPS 1 (light_splat_groups.*: a sprite per group of 2 x 2 rays, either
-// deposit, read from the deposits light_splat_groups.comp stored). The boxes deposit
-// passes only what it uses, 3 varyings instead of 10: llvmpipe sets up every varying of
-// every point, and the demo's splat at 256² took 15.0 and 14.3 s with all ten against 9.3
-// and 9.7 s with three (A B A B, the same image to the bit).
+// cells deposit, light_splat.*; 0: the boxes deposit, light_splat_boxes.*), and with
+// SPRITE_GROUPS 1 the grouped sprites of the `splat=groups` lever (light_splat_groups.*
+// for cells, light_splat_groups_boxes.* for boxes: a sprite per group of 2 x 2 rays, the
+// deposits read from what light_splat_groups.comp stored; light_splat_groups.glsl). The
+// boxes deposit passes only what it uses, 3 varyings instead of 10: llvmpipe sets up
+// every varying of every point, and the demo's splat at 256² took 15.0 and 14.3 s with
+// all ten against 9.3 and 9.7 s with three (A B A B, the same image to the bit).
 #ifndef SPRITE_GROUPS
 #define SPRITE_GROUPS 0
 #endif
