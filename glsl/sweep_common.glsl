@@ -94,8 +94,12 @@ layout(set = 0, binding = 17) uniform sampler3D field_texture;
 // Value and gradient of eta at view-space p (view-space units), by central differences
 // one voxel apart (eq. 3.16), eta_tf applied to the neighbours before differencing
 // (thesis sect. 5.2): from the field texture, which holds them per voxel, or from seven
-// volume fetches and six eta lookups.
-void sample_field(vec3 p, out float value, out vec3 grad_eta) {
+// volume fetches and six eta lookups. `eta_may_vary` false says eta is one value all
+// around p (the caller's empty-space test): the gradient is then zero, and the
+// differences are left out by the loop's trip count, not by a branch (llvmpipe runs both
+// sides of a branch but leaves a loop once all its lanes are done; equal etas difference
+// to exactly zero, so the result is the same).
+void sample_field_where(vec3 p, bool eta_may_vary, out float value, out vec3 grad_eta) {
     vec3 t = to_tex(p);
     vec3 ge;
     if (HAVE_FIELD) {
@@ -111,7 +115,9 @@ void sample_field(vec3 p, out float value, out vec3 grad_eta) {
     } else {
         vec3 h = 1.0 / P.volume_dims.xyz;
         value = value_at_tex(t);
-        for (int k = 0; k < 3; ++k) {
+        ge = vec3(0.0);
+        int axes = eta_may_vary ? 3 : 0;
+        for (int k = 0; k < axes; ++k) {
             vec3 e = vec3(0.0);
             e[k] = h[k];
             ge[k] = (eta_of(value_at_tex(t + e)) - eta_of(value_at_tex(t - e))) / (2.0 * h[k]);
@@ -119,6 +125,10 @@ void sample_field(vec3 p, out float value, out vec3 grad_eta) {
     }
     // d/d(view) = J^T d/d(tex), J = d(tex)/d(view).
     grad_eta = transpose(mat3(P.view_to_tex)) * ge;
+}
+
+void sample_field(vec3 p, out float value, out vec3 grad_eta) {
+    sample_field_where(p, true, value, grad_eta);
 }
 
 // The exact gradient of the trilinearly interpolated value at view-space p (view-space

@@ -151,6 +151,10 @@ vec2 box_span(vec3 a, vec3 b) {
 // Smallest change of eta treated as a face of glass (reflection, highlight): below it,
 // noise in a medium (see the viewing rays).
 const float MIN_FACE_STEP = 0.02;
+// A viewing ray turns by the face step (below) with the weight smoothstep(FACE_STEP_LO,
+// FACE_STEP_HI, the step of eta between the probes) and by the graded kick with the rest.
+const float FACE_STEP_LO = 0.06;
+const float FACE_STEP_HI = 0.1;
 
 // A film between two probes of value v_a and v_b, eta e_a and e_b: eta over the values
 // between them (layer 2 of the preintegration table) rises above both ends (or falls
@@ -184,10 +188,37 @@ bool chain_decode(float code, out float light, out float depth) {
     return code > 0.0;
 }
 
-#if PASS == 1
-// Empty space for the light rays (render::value_ranges): per brick of VALUE_BRICK^3
-// voxels, the least and greatest value a sample within one brick of it can read.
+// Empty space (render::value_ranges): per brick of VALUE_BRICK^3 voxels, the least and
+// greatest value a sample within one brick of it can read. The `clear` lever
+// (specialization constant 8) says whether the passes use it.
 layout(set = 0, binding = 19) uniform sampler3D value_ranges;
+layout(constant_id = 8) const bool CLEAR_SPACE = true;
+
+// The range of values a sample within one brick of volume texture coordinate t can read
+// (t may lie outside the box: its nearest brick's range).
+vec2 values_near(vec3 t) {
+    ivec3 grid = textureSize(value_ranges, 0);
+    ivec3 b = clamp(ivec3(floor(t * P.volume_dims.xyz / float(VALUE_BRICK))), ivec3(0), grid - 1);
+    return texelFetch(value_ranges, b, 0).xy;
+}
+
+// Whether eta may differ between the samples a voxel either side of view-space p (the
+// central differences of sample_field_where): false where every value they can read has
+// one eta (layer 2 of the preintegration table: the extremes of eta between two values;
+// a sample outside the box reads 0).
+bool eta_may_vary_near(vec3 p) {
+    if (!CLEAR_SPACE) return true;
+    vec3 t = to_tex(p);
+    vec2 r = values_near(t);
+    vec3 h = 1.0 / P.volume_dims.xyz;
+    bool inside = all(greaterThanEqual(t - h, vec3(0.0))) && all(lessThanEqual(t + h, vec3(1.0)));
+    if (!inside) r = vec2(min(r.x, 0.0), max(r.y, 0.0));
+    if (r.y <= r.x) return false;   // one value throughout
+    vec4 eta = textureLod(preint, vec3(preint_coord(r.x, r.y), 2.0), 0.0);  // max, -, min, -
+    return eta.x - eta.z > 0.0;
+}
+
+#if PASS == 1
 
 // Whether a light ray's straight step from p along unit direction d to the next plane
 // meets nothing that turns or dims it differently in one sub-step than in LIGHT_SUBSTEPS:
@@ -199,16 +230,13 @@ layout(set = 0, binding = 19) uniform sampler3D value_ranges;
 // |v| = eta), and the attenuation (none, or a homogeneous medium's) composes exactly over
 // the whole step (eq. 4.4). The table's bilinear filtering mixes neighbouring ranges in,
 // which can only make the test fail where it could have passed.
-layout(constant_id = 8) const bool CLEAR_SPACE = true;   // the `clear` lever
 bool straight_in_clear_space(vec3 p, vec3 d, float ds) {
     if (!CLEAR_SPACE || !(d.z >= MIN_FORWARD)) return false;
     vec3 dims = P.volume_dims.xyz;
     vec3 t0 = to_tex(p), t1 = to_tex(p + d * (ds / d.z));
     vec3 run = abs(t1 - t0) * dims;   // voxels per axis
     if (any(greaterThan(run, vec3(float(VALUE_BRICK))))) return false;
-    ivec3 grid = textureSize(value_ranges, 0);
-    ivec3 b = clamp(ivec3(floor(t0 * dims / float(VALUE_BRICK))), ivec3(0), grid - 1);
-    vec2 r = texelFetch(value_ranges, b, 0).xy;
+    vec2 r = values_near(t0);
     // The box is convex: a step with both ends inside stays inside; one with both ends
     // beyond the same face of it meets only the outside.
     vec3 lo = min(t0, t1), hi = max(t0, t1);
@@ -431,7 +459,7 @@ void PLANE_MAIN() {
 
     float f_p, f_lp;
     vec3 grad_eta_p;
-    sample_field(p, f_p, grad_eta_p);
+    sample_field_where(p, eta_may_vary_near(p), f_p, grad_eta_p);
     f_lp = value_at_tex(to_tex(lp));
     float light_len = length(p - lp);
     vec3 seg_c; float seg_a; vec3 seg_m;
@@ -504,7 +532,7 @@ void PLANE_MAIN() {
 
     float f_v;
     vec3 grad_eta;
-    sample_field(vp, f_v, grad_eta);
+    sample_field_where(vp, eta_may_vary_near(vp), f_v, grad_eta);
     float eta_here = eta_of(f_v);
     vec3 dir = normalize(vd);
     float seg_len = ds / dir.z;   // arc length from plane i-1 to this plane
@@ -821,20 +849,39 @@ void PLANE_MAIN() {
         if (e_plus < e_minus) nn = -nn;   // nn points to higher eta
         float eta_lo = min(e_plus, e_minus), eta_hi = max(e_plus, e_minus);
         float eta_mid = 0.5 * (eta_lo + eta_hi);
+        // The face step's turn counts only where the step is a face's (w_face > 0 below):
+        // elsewhere the bisection and the four probes after it are left out by their
+        // loops' trip counts, not by a branch (llvmpipe runs both sides of a branch but
+        // leaves a loop once all its lanes are done: 0.8-0.9x the viewing rays' time on
+        // the demo scene, where most rays cross no face; the image is the same).
+        bool face_used = face_step > FACE_STEP_LO;
         // The face's middle on the normal line through the centre.
         float s0 = -hs, s1 = hs;
-        for (int k = 0; k < FACE_BISECTIONS; ++k) {
+        int bisections = face_used ? FACE_BISECTIONS : 0;
+        for (int k = 0; k < bisections; ++k) {
             float s = 0.5 * (s0 + s1);
             if (eta_of(value_at_tex(to_tex(centre + s * nn))) >= eta_mid) s1 = s; else s0 = s;
         }
         vec3 face = centre + 0.5 * (s0 + s1) * nn;
-        float across = eta_of(value_at_tex(to_tex(face + 1.5 * ref_step * nn)))
-                     - eta_of(value_at_tex(to_tex(face - 1.5 * ref_step * nn)));
+        // Eta 1.5 reference steps either side of the middle (k = 0, 1: the step across
+        // the face) and 1.5 beyond either probe (k = 2, 3: further out).
+        float e_across_hi = 0.0, e_across_lo = 0.0, e_further_hi = 0.0, e_further_lo = 0.0;
+        int probes = face_used ? 4 : 0;
+        for (int k = 0; k < probes; ++k) {
+            float side = (k & 1) == 0 ? 1.0 : -1.0;
+            vec3 from = k < 2 ? face : centre;
+            float reach = k < 2 ? 1.5 * ref_step : hs + 1.5 * ref_step;
+            float e = eta_of(value_at_tex(to_tex(from + side * reach * nn)));
+            e_across_hi = k == 0 ? e : e_across_hi;
+            e_across_lo = k == 1 ? e : e_across_lo;
+            e_further_hi = k == 2 ? e : e_further_hi;
+            e_further_lo = k == 3 ? e : e_further_lo;
+        }
+        float across = e_across_hi - e_across_lo;
         // Sharp: most of the step within 1.5 reference steps of the middle, and plateaus
         // at the probes (eta 1.5 reference steps further out is the same; in the tails of
         // a wider ramp the probes' middle is no face, and the ramp goes on changing).
-        float further = abs(eta_of(value_at_tex(to_tex(centre + (hs + 1.5 * ref_step) * nn))) - eta_hi)
-                      + abs(eta_of(value_at_tex(to_tex(centre - (hs + 1.5 * ref_step) * nn))) - eta_lo);
+        float further = abs(e_further_hi - eta_hi) + abs(e_further_lo - eta_lo);
         float ratio = face_step > 0.0 ? across / face_step : 0.0;
         float flatness = face_step > 0.0 ? further / face_step : 1.0;
         float sharp = smoothstep(0.75, 0.85, ratio) * (1.0 - smoothstep(0.05, 0.15, flatness));
@@ -856,13 +903,13 @@ void PLANE_MAIN() {
         vec3 n = surface_gradient(x);
         v_face = refract_step(vd, mix(eta_b, eta_side, sharp), dot(n, n) > 1e-12 ? n : nn);
         if (v_face.z < MIN_FORWARD * length(v_face)) {
-            count_clamp(2u);
+            if (face_used) count_clamp(2u);
             v_face = limit_direction(v_face);
         }
         vec3 d2 = normalize(v_face);
         q_face = x + d2 * ((q_straight.z - x.z) / d2.z);
     }
-    float w_face = smoothstep(0.06, 0.1, face_step);
+    float w_face = smoothstep(FACE_STEP_LO, FACE_STEP_HI, face_step);
     vd = mix(in_film ? vd : v_kick, v_face, w_face);
     vec3 q = mix(q_straight, q_face, w_face);
     if (vd.z < MIN_FORWARD * length(vd)) {
