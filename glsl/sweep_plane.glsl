@@ -4,7 +4,21 @@
 // (FORWARD_LIGHT 0, PASS 0: the thesis' backward light step, light and viewing rays in
 // one draw) and by the forward transport's two draws, sweep_light_forward.frag (PASS 1:
 // the light rays) and sweep_view_forward.frag (PASS 2: the viewing rays), between which
-// light_splat.* deposits the rays' flux on the plane.
+// light_splat.* deposits the rays' flux on the plane. The compute sweep compiles the same
+// file with SWEEP_COMPUTE 1 (sweep_plane_io.glsl: what differs).
+//
+// By thesis step (chapter 4, Algorithm 1), the functions below and what main() does:
+// - light, forward (PASS 1): advance_light_ray, eqs. 4.2-4.4 in Snell sub-steps, with
+//   straight_in_clear_space choosing one sub-step where nothing can turn or dim the ray;
+//   softness as diffusion between neighbouring rays is in main();
+// - light, backward (PASS 0): backward_light_step, eqs. 4.4-4.8 (light_at: the bilinear,
+//   light-weighted read of the previous plane; the soft kernel of sect. 5.2);
+// - viewing rays (PASS 0, 2), in main(): the segment from the previous plane, integrated
+//   from the preintegration table (segment, eq. 3.19; the box's faces); its light,
+//   segment_light; the face or film it meets, face_met (Fresnel reflection, eq. 4.12) and
+//   face_highlight (eqs. 4.9-4.11); Oddy-Willis compositing (eq. 4.13); then
+//   advance_viewing_ray to the next plane (eq. 4.3: the face step, the graded Snell step,
+//   the thesis' kick).
 #if !defined(FORWARD_LIGHT) || !defined(PASS)
 #error "define FORWARD_LIGHT and PASS before including sweep_plane.glsl"
 #endif
@@ -251,82 +265,24 @@ bool straight_in_clear_space(vec3 p, vec3 d, float ds) {
     vec3 m = textureLod(preint, vec3(c, 1.0), 0.0).rgb;
     return opacity <= 0.0 && all(greaterThanEqual(m, vec3(1.0))) && eta.x - eta.z <= 0.0;
 }
-#endif
 
-#if SWEEP_COMPUTE && PASS == 0
-// Where the light reaching pixel `px` of this plane left the previous one: the backward
-// step's origin, computed as plane_main computes it for its own pixel (same arithmetic,
-// so a neighbour's value is bit for bit what that neighbour's invocation holds).
-vec3 light_origin(ivec2 px, uint R, float ds) {
-    vec3 p = plane_point((vec2(px) + 0.5) / P.camera.zw, pc.depth);
-    vec3 ld = READ_PIXEL(light_direction, R, px).xyz;
-    return p - ld * (ds / ld.z);
-}
-#endif
-
-void PLANE_MAIN() {
-    vec2 size = P.camera.zw;
-    vec2 uv = FRAG_XY / size;
-    uint R = pc.read_layer;
+// LIGHT_SUBSTEPS sub-steps to this plane, each advancing depth by ds / LIGHT_SUBSTEPS
+// along the ray's current direction: attenuated over its own length (eq. 4.4), then
+// turned by a Snell step with the interface normal at its midpoint. A curved interface
+// crossed within one plane spacing turns the ray by the normals along its way, and a
+// ray totally reflected mid-plane moves on in its reflected direction, staying in the
+// glass (advancing it along the old direction put it beyond the face, where the next
+// sub-step reflected it back: an even number of reflections let 10 % of the light
+// through a wedge past the critical angle, measured).
+//
+// Advances the light ray whose state on the previous plane is lc, lv (flux, view x; v,
+// view y), carrying `flux`, to this plane: its flux there, its v (zero: dropped) and its
+// point.
+void advance_light_ray(vec4 lc, vec4 lv, inout vec3 flux, out vec3 v_new, out vec3 p_new) {
     float ds = P.planes.y;
     float ref_step = P.planes.w;
-    ivec2 pixel = ivec2(FRAG_XY);
-
-#if PASS == 1
-    // ---- light propagation, forward (Lagrangian) --------------------------------------
-    // Each texel of the light state is one light ray: flux (rgb) and its position on the
-    // previous plane (.w of both buffers), direction v = eta dx/ds (eq. 4.2). The ray is
-    // advanced to this plane on its own; no neighbour's direction bends it, so rays cross
-    // through a focus as they do physically (thesis ch. 7's bright spots came from the
-    // backward step's one direction per pixel). Irradiance is made from the rays
-    // afterwards by light_splat.*, which conserves their flux.
-    // This draw covers the ray images; texels past the grid hold no ray.
-    int r = pixel.y * int(P.light_rays.z) + pixel.x;
-    ivec2 ray = ivec2(r % int(P.light_rays.x), r / int(P.light_rays.x));
-    if (!ray_exists(ray)) {
-        out_light_colour = vec4(0.0);
-        out_light_direction = vec4(0.0, 0.0, 1.0, 0.0);
-        return;
-    }
-    vec4 lc = READ_RAY(rays_flux, R, r);
-    vec4 lv = READ_RAY(rays_direction, R, r);
-    vec3 flux = lc.rgb;
-#if SOFT_LIGHT
-    // Softness as diffusion of flux between neighbouring rays: each ray hands the fraction
-    // w of its flux to each of its four neighbours `stride` rays away and receives theirs.
-    // The same w everywhere makes the exchange symmetric, so the total is conserved
-    // exactly; a missing neighbour (grid edge) or a dropped one (direction zero: it
-    // carries nothing on) hands the share back to the ray itself, and a dropped ray
-    // takes none (it kept diffused flux away from the live rays for good: 1.3 % of the
-    // power behind a ball lens, measured).
-    // Per plane this adds the variance of the thesis' soft-shadow kernel (sect. 5.2), so
-    // penumbrae widen with the distance behind an occluder.
-    {
-        float w = P.transport.y;
-        int stride = int(P.transport.z);
-        vec3 gathered = vec3(0.0);
-        for (int k = 0; k < 4; ++k) {
-            ivec2 o = (k < 2 ? ivec2(k == 0 ? stride : -stride, 0)
-                             : ivec2(0, k == 2 ? stride : -stride));
-            ivec2 c = ray + o;
-            int rc = ray_exists(c) ? ray_index(c) : r;
-            bool live = ray_exists(c) && dot(READ_RAY(rays_direction, R, rc).xyz,
-                                             READ_RAY(rays_direction, R, rc).xyz) > 0.0;
-            gathered += live ? READ_RAY(rays_flux, R, rc).rgb : flux;
-        }
-        flux = dot(lv.xyz, lv.xyz) > 0.0 ? (1.0 - 4.0 * w) * flux + w * gathered : vec3(0.0);
-    }
-#endif
-    // LIGHT_SUBSTEPS sub-steps to this plane, each advancing depth by ds / LIGHT_SUBSTEPS
-    // along the ray's current direction: attenuated over its own length (eq. 4.4), then
-    // turned by a Snell step with the interface normal at its midpoint. A curved interface
-    // crossed within one plane spacing turns the ray by the normals along its way, and a
-    // ray totally reflected mid-plane moves on in its reflected direction, staying in the
-    // glass (advancing it along the old direction put it beyond the face, where the next
-    // sub-step reflected it back: an even number of reflections let 10 % of the light
-    // through a wedge past the critical angle, measured).
     vec3 p_step = vec3(lc.w, lv.w, pc.depth - ds);
-    vec3 v_new = lv.xyz;
+    v_new = lv.xyz;
     float f_step = value_at_tex(to_tex(p_step));
     bool leaves = false;
     // A film on the ray's way (see "A film" in the viewing rays): the values 2.5
@@ -369,7 +325,7 @@ void PLANE_MAIN() {
         p_step = q;
         f_step = f_q;
     }
-    vec3 p_new = vec3(p_step.xy, pc.depth);
+    p_new = vec3(p_step.xy, pc.depth);
     if (leaves || !(v_new.z >= MIN_FORWARD * length(v_new))) {
         // Turned back or more than ~84° from the sweep direction (total internal
         // reflection, a grazing exit): this light leaves what the sweep can follow. It is
@@ -384,10 +340,388 @@ void PLANE_MAIN() {
         p_new = vec3(lc.w, lv.w, pc.depth);
     }
     if (any(isnan(flux)) || any(isinf(flux))) flux = vec3(0.0);
-    out_light_colour = vec4(flux, p_new.x);
-    out_light_direction = vec4(v_new, p_new.y);
-#elif PASS == 0
-    // ---- light propagation (sect. 4.2, 5.2) -------------------------------------------
+}
+#endif
+
+#if PASS != 1
+// The light of the matter inside the segment, not of the plane before it (the
+// cause of banding at the plane spacing on lit surfaces; docs/NOTES.md).
+//
+// (1) Within the segment the light crosses the same matter as the viewing ray
+// on its way to each point. Locally the matter is a layer across the value
+// gradient n, so the light's optical depth to a point is r times the viewing
+// ray's, r = |n.v| / |n.l| (in a homogeneous medium, the two path lengths back
+// to the plane: v_z / l_z). Integrating e^-t (view) e^-rt (light) over the
+// segment's optical depth weights its emission by (1 - (1-a)^(1+r)) / ((1+r) a):
+// 1 for clear matter, 1 / (1 + r) for an opaque one, however the planes cut it.
+//
+// For the segment from the previous plane (value v_prev there, chain code chain_prev) to
+// this plane (value f_v, smoothed normal n_here), dir the viewing ray's direction and ldir
+// the light's, opacity a and seg_len long: c, its colour (eq. 3.19), becomes the part the
+// light lights, c_ambient the part the ambient level lights, and i_d, the plane's light at
+// the segment's front, the light its matter receives. Returns the chain code for the next
+// plane.
+float segment_light(vec3 dir, vec3 ldir, float f_v, float v_prev, vec3 n_here, float a,
+                    float seg_len, float chain_prev, inout vec3 c, out vec3 c_ambient,
+                    inout vec3 i_d) {
+    float ref_step = P.planes.w;
+    float r = dir.z / max(ldir.z, 1e-3);
+    float across = 1.0;   // depth crossed per unit of path, along the gradient
+    // (The layer's normal is the Sobel-smoothed one: in a noisy medium the plain
+    // central difference points anywhere; on the lung CT without refraction the
+    // median residual fell from 8.1 to 8.0 of 255 with it.)
+    bool layered = abs(f_v - v_prev) > 1e-4 && dot(n_here, n_here) > 1e-12;
+    if (layered) {
+        vec3 n = normalize(n_here);
+        across = abs(dot(n, dir));
+        // Not for light grazing the layers: the ratio is a flat layer's, as wide as
+        // the light's path in it, which grows without bound as n.l -> 0. (Bounded
+        // at 1e-3, r reached 1000 where noise or a fog's curved layers put n.l
+        // near 0, and single pixels along a fog's terminator lost most of their
+        // light: speckle, and contour lines over the supernova's noisy shells;
+        // tests/baselines.rs.) Bounded as the sweep bounds directions, at
+        // MIN_FORWARD (84 degrees from the normal), so r <= 10: the weight stays
+        // continuous in n.l, and a surface lit at up to 84 degrees keeps its law.
+        r = across / max(abs(dot(n, ldir)), MIN_FORWARD);
+    }
+    float k = 1.0 + r;
+    // (The ambient level lights the whole segment, unoccluded: it keeps c.)
+    c_ambient = c;
+    c *= a > 1e-4 ? (1.0 - pow(1.0 - a, k)) / (k * a) : 1.0 - 0.5 * r * a;
+    // (2) Through a surface's skin the light at the segment's front is chained from
+    // the previous segment (its light times (1-a)^r, the same layer model), not
+    // read from this plane: the plane's light is resolved at its pixel pitch (and,
+    // forward, on the rays' boxes), so across a skin thinner than a pixel it mixes
+    // lit and shadowed matter. The chain starts at the plane light of the last
+    // segment before the matter and runs CHAIN_DEPTH reference steps deep into it
+    // (along the gradient, so a grazing view follows a skin as far as a steep one);
+    // deeper, in clear space and in homogeneous matter, the plane's light rules, so
+    // shadows cast by other matter are seen (within a skin they are not: the
+    // chain's limit). The chain lives in medium.w (chain_decode).
+    float chained_light, chained_depth;
+    bool matter = a > 1e-3;
+    bool have_chain = chain_decode(chain_prev, chained_light, chained_depth);
+    if (matter && have_chain && layered && chained_depth < CHAIN_DEPTH) {
+        float have = dot(i_d, vec3(0.2126, 0.7152, 0.0722));
+        i_d = have > 1e-6 ? i_d * (chained_light / have)
+                          : P.light_colour.rgb * chained_light;
+    }
+    float next = dot(i_d, vec3(0.2126, 0.7152, 0.0722)) * pow(1.0 - a, r);
+    float depth = matter ? chained_depth + seg_len * across / ref_step : 0.0;
+    return chain_encode(next, depth);
+}
+
+// The face or film of glass a viewing ray meets in this plane's segment (from its
+// previous point, value v_prev and eta eta_prev, to vp, value f_v and eta eta_here;
+// direction dir, v = vd, seg_len long, n_here the smoothed normal at vp): the fraction
+// it reflects (eq. 4.12) and the mirrored direction, and for the highlight the face's
+// orientation (zero where none is met) and eta ratio. Not only where eta changes between
+// the two samples: a film of glass may lie between samples of equal eta, or hold both.
+void face_met(vec3 vp, vec3 vd, vec3 dir, float seg_len, vec3 n_here, float v_prev,
+              float eta_prev, float f_v, float eta_here, bool reflections,
+              out float reflected, out vec3 reflected_dir, out vec3 highlight_n,
+              out float highlight_ratio) {
+    float ref_step = P.planes.w;
+    float d_eta = eta_here - eta_prev;
+    vec3 mid = vp - 0.5 * seg_len * dir;
+    vec3 g = n_here;   // the face's orientation (see below)
+    vec3 n = dot(g, g) > 1e-12 ? normalize(g) : dir;
+    if (dot(n, dir) * d_eta < 0.0) n = -n;   // n points to higher eta
+    float h = 0.5 * seg_len + 2.5 * ref_step;
+    float v_minus = value_at_tex(to_tex(mid - h * n));
+    float v_plus = value_at_tex(to_tex(mid + h * n));
+    float e_minus = eta_of(v_minus), e_plus = eta_of(v_plus);
+    // A film: where the value ramps between two matters through a band of eta
+    // that belongs to neither, eta rises (or falls) and returns between the
+    // probes. The demo floor's edge passes through the glass's band (0.45-0.6):
+    // a 1D transfer function dresses the floor in a skin of glass a fraction of a
+    // voxel thick. A plane sample lands in such a skin on some rows and not on
+    // others, so judged from the samples it reflected on every other row: the
+    // floor's shadow was striped +-20 % at the plane spacing. Such a skin is the
+    // classification's, not the scene's (a glass sphere over a white floor has
+    // no glass on the floor; wine touches its glass with no air between), and it
+    // is thinner than a face as the sweep knows faces, by their plateaus either
+    // side (the viewing ray's turn below sees only those). So a film is one face,
+    // between the probes' plateaus (none where both are alike, as on the floor),
+    // met in the one segment whose values pass the film's peak: found in value
+    // space (the extremes of eta between the probes' values, layer 2 of the
+    // preintegration table), it is the same whatever the planes. (Reflecting it as
+    // the two faces of a glass film, 1 - (1 - F1)(1 - F2), was tried: uniform on
+    // the floor, but where wine meets its glass the air the ramp passes through
+    // reflected up to total reflection, speckling the wine.)
+    vec3 film = film_between(v_minus, v_plus, e_minus, e_plus);
+    // The face or film met here, for its highlight (after both): its orientation
+    // and eta ratio.
+    highlight_n = vec3(0.0);
+    highlight_ratio = 1.0;
+    // Its reflection: the fraction reflected and the mirrored direction (looked up
+    // once, after both: llvmpipe would run a lookup in each branch).
+    reflected = 0.0;
+    reflected_dir = vec3(0.0, 0.0, -1.0);
+    if (film.x > 0.0) {
+        float s_film = film.y;
+        bool from_minus = (v_minus < s_film) == (v_prev < s_film);
+        float eta_1 = from_minus ? e_minus : e_plus;   // the side the ray comes from
+        float eta_2 = from_minus ? e_plus : e_minus;
+        if ((v_prev < s_film) != (f_v < s_film) && abs(eta_2 - eta_1) >= MIN_FACE_STEP) {
+            vec3 nf = dot(n, dir) < 0.0 ? -n : n;
+            float f = face_fresnel(length(vd - dot(vd, nf) * nf), eta_1, eta_2);
+            // Beyond the critical angle nothing is looked up, as for a face below.
+            if (reflections && f < 1.0) {
+                reflected = f;
+                reflected_dir = reflect(normalize(vd), nf);
+            }
+            highlight_n = nf;
+            highlight_ratio = eta_2 / eta_1;
+        }
+    } else if (abs(d_eta) > 1e-4) {
+        // A face: where eta steps (a one-voxel ramp between plateaus) the viewing ray
+        // meets a surface of glass once, whatever the sample distance and however the
+        // planes cut the ramp: in the segment where eta passes the middle of the step,
+        // whose plateaus are found a few voxels either side along the normal. There it
+        // reflects (Fresnel) and shows the highlight, both with the whole step's F. (Per
+        // plane from consecutive eta samples, the highlight's F depended on how much of
+        // the ramp a plane happened to straddle: rings on glass at the plane spacing; and
+        // the sum of each segment's own small F is a fraction of the face's, as for a
+        // graded face, which physically reflects little.)
+        float eta_lo = min(min(eta_here, eta_prev), e_minus);
+        float eta_hi = max(max(eta_here, eta_prev), e_plus);
+        float eta_mid = 0.5 * (eta_lo + eta_hi);
+        // A face is a step of at least MIN_FACE_STEP: in noise (a scanned or
+        // simulated medium) eta wobbles about its plateau and the smoothed gradient
+        // points anywhere, so a wobble seen at a grazing angle to that random normal
+        // reflected nearly everything (white speckles through red wine, measured).
+        if ((eta_prev < eta_mid) != (eta_here < eta_mid) && eta_hi - eta_lo >= MIN_FACE_STEP) {
+            // The angle of incidence on the face's low-eta side, from the tangential
+            // part of v = eta dx/ds, which crossing the face keeps (Snell); the ray's
+            // own direction is already partly turned inside the ramp. F is the same
+            // both ways through the face (reciprocity) short of total reflection.
+            vec3 vt = vd - dot(vd, n) * n;
+            bool entering = d_eta > 0.0;
+            float sin_lo = length(vt) / eta_lo;
+            // Fresnel reflection (the F of eq. 4.12, unpolarised): the reflected part
+            // sees the environment (or the background) in the mirrored direction,
+            // weighted by (1 - A) M like everything composited (eq. 4.13), and the ray
+            // goes on with the rest (folded into A, so what lies behind is seen through
+            // 1 - F). Not occluded: the mirrored direction is not traced through the
+            // volume (like the thesis' highlights, ch. 8). Beyond the critical angle
+            // the ray itself is the reflected light (its Snell step turns it back), so
+            // nothing is looked up. (Looking the environment up with F = 1 there and
+            // ending the ray was tried: no visible difference on the wine glass.)
+            if (reflections && sin_lo < 1.0) {
+                reflected = face_fresnel(length(vt), eta_lo, eta_hi);
+                // Mirror the direction the ray had on the side it came from.
+                float eta_in = entering ? eta_lo : eta_hi;
+                float vn = sqrt(max(eta_in * eta_in - dot(vt, vt), 0.0));
+                vec3 incident = (vt + (dot(vd, n) >= 0.0 ? vn : -vn) * n) / eta_in;
+                reflected_dir = reflect(incident, n);
+            }
+            highlight_n = n;
+            highlight_ratio = entering ? eta_hi / eta_lo : eta_lo / eta_hi;
+        }
+    }
+}
+
+// The highlight of the light on the face (eqs. 4.9-4.11), lit by the light
+// that meets the face: read on the segment's front plane, moved off the face
+// along that plane to the side the light comes from. (Near the line where the
+// plane cuts the face its light is a blur of the refracted and the
+// unrefracted, whose mix depended on how the planes fell: the highlight
+// banded at the plane spacing.)
+//
+// The face's orientation face_n and eta ratio come from face_met; the segment ends at vp,
+// seg_len long along dir; ldir is the light's direction where the segment starts.
+vec3 face_highlight(vec3 vp, vec3 dir, float seg_len, vec3 ldir, vec3 face_n, float ratio,
+                    uint R) {
+    float ref_step = P.planes.w;
+    vec3 n = face_n;
+    vec3 front = vp - dir * seg_len;
+    vec3 along = vec3(n.xy, 0.0);
+    float la = length(along);
+    float side = dot(ldir, n) > 0.0 ? -1.0 : 1.0;
+    vec3 off = la > 1e-3 ? along / la * side * (2.5 * ref_step / max(la, 0.3))
+                         : vec3(0.0);
+    vec2 uv_face = project(front + off);
+#if FORWARD_LIGHT
+    vec3 i_face = READ_BUFFER(irradiance, R, uv_face).rgb;
+    vec3 l_face = splatted_direction(READ_BUFFER(irradiance_direction, R, uv_face));
+#else
+    vec3 i_face = READ_BUFFER(light_colour, R, uv_face).rgb;
+    vec3 l_face = normalize(READ_BUFFER(light_direction, R, uv_face).xyz);
+#endif
+    vec3 v = -dir;
+    vec3 nv = dot(n, v) < 0.0 ? -n : n;
+    return P.specular.y * specular_term(nv, -l_face, v, ratio) * i_face;
+}
+
+// Advance to the next plane, turning on the way (eq. 4.3). v = eta dx/ds.
+//
+// A face of glass is the volume's picture of a sharp interface: eta steps between two
+// plateaus within a voxel or two (a segmented or antialiased surface). There the ray
+// turns once, by Snell's law between the plateaus, where it meets the face's middle,
+// about the smoothed normal there, and goes on to the next plane in its new
+// direction; |v| is the plateau's eta of the side it is on. The face is found along
+// the normal through the step's centre: its plateaus probed 2.5 reference steps
+// beyond the step either side, its middle by bisection between them, its width from
+// eta 1.5 reference steps either side of the middle (a face: most of the step within
+// them).
+// Turning at the plane after the crossing instead delayed every turn by half a plane
+// spacing on average: a ball's exit directions were off by 0.2° at its centre to 4°
+// at its rim at sample distance 1 (docs/NOTES.md). The side is judged by |v|, not by
+// the eta sampled at this plane, so no crossing is missed between two planes.
+//
+// A graded change of eta (wider than the face test, or too weak for it) is integrated
+// as such, by a Snell step from eta here to eta at the next plane taken at the step's
+// middle (the stratified medium's invariant, second order in the step). Weaker still
+// (below 0.06 across the probes: noise, thin skins) the thesis' kick, v += ds grad(eta):
+// a skin of eta thinner than the probes (the demo floor's: its value ramp crosses the
+// glass's eta band) was turned twice by Snell steps about normals from different
+// planes, and the floor behind it striped (row to row 1.6 % against 0.7 % with the
+// kick); in noise the normal points anywhere and a Snell step at a grazing angle to it
+// turns a ray far for a tiny change of eta. Within a film (a skin the classification
+// made, see the faces above: eta between the probes' values peaks past both) not even
+// the kick: its central differences one voxel apart catch a skin thinner than a voxel
+// from some planes only, and the floor under the demo's skin striped (6.6-15 % row to
+// row in tests/image_quality.rs); the ray turns as between the plateaus, by the face
+// step where they differ, not at all where they are alike.
+//
+// Moves the viewing ray at vp (view space, on this plane; v = vd, eta there eta_here,
+// grad eta there grad_eta, the smoothed surface normal at the box's nearest point n_box)
+// to the next plane: vd becomes its new v, the return value its point there.
+vec3 advance_viewing_ray(vec3 vp, inout vec3 vd, float eta_here, vec3 grad_eta, vec3 n_box,
+                         bool in_box) {
+    float ds = P.planes.y;
+    float ref_step = P.planes.w;
+    if (vd.z < MIN_FORWARD * length(vd)) {
+        count_clamp(2u);
+        vd = limit_direction(vd);
+    }
+    vec3 d = normalize(vd);
+    vec3 q_straight = vp + d * (ds / d.z);
+    float eta_b = eta_of(value_at_tex(to_tex(q_straight)));
+    // Outside the volume box eta is constant: nothing there turns a ray. (grad_eta's
+    // central differences a voxel wide reach back into the box from just outside it; as
+    // a kick they turned rays the face step had already turned at the box's face, once or
+    // twice as the planes fell: single-pixel diagonal lines across the water stand-in's
+    // tank, seen through its back face.)
+    vec3 v_kick = vd + (in_box ? length(q_straight - vp) : 0.0) * grad_eta;
+    vec3 v_face = vd;
+    vec3 q_face = q_straight;
+    float face_step = 0.0;
+    bool in_film = false;
+    // A ray that left the box with its face's turn still pending (|v| still the eta
+    // inside: the face step placed the face a hair beyond the step's end, and the ray
+    // stepped out) is turned at its first plane outside, about the normal at the box's
+    // edge: outside the box the gradient volume is not read, and nothing else would turn
+    // it (it left 8° off Snell's direction, tests/refraction_geometry.rs).
+    bool pending = abs(length(vd) - eta_here) > 1e-3 * eta_here;
+    vec3 n_face = in_box || pending ? n_box : vec3(0.0);
+    if (dot(n_face, n_face) > 1e-12) {
+        vec3 nn = normalize(n_face);
+        vec3 centre = 0.5 * (vp + q_straight);
+        float hs = 0.5 * abs(dot(q_straight - vp, nn)) + 2.5 * ref_step;
+        float v_plus = value_at_tex(to_tex(centre + hs * nn));
+        float v_minus = value_at_tex(to_tex(centre - hs * nn));
+        float e_plus = eta_of(v_plus), e_minus = eta_of(v_minus);
+        face_step = abs(e_plus - e_minus);
+        in_film = film_between(v_minus, v_plus, e_minus, e_plus).x > 0.0;
+        if (e_plus < e_minus) nn = -nn;   // nn points to higher eta
+        float eta_lo = min(e_plus, e_minus), eta_hi = max(e_plus, e_minus);
+        float eta_mid = 0.5 * (eta_lo + eta_hi);
+        // The face step's turn counts only where the step is a face's (w_face > 0 below):
+        // elsewhere the bisection and the four probes after it are left out by their
+        // loops' trip counts, not by a branch (llvmpipe runs both sides of a branch but
+        // leaves a loop once all its lanes are done: 0.8-0.9x the viewing rays' time on
+        // the demo scene, where most rays cross no face; the image is the same).
+        bool face_used = face_step > FACE_STEP_LO;
+        // The face's middle on the normal line through the centre.
+        float s0 = -hs, s1 = hs;
+        int bisections = face_used ? FACE_BISECTIONS : 0;
+        for (int k = 0; k < bisections; ++k) {
+            float s = 0.5 * (s0 + s1);
+            if (eta_of(value_at_tex(to_tex(centre + s * nn))) >= eta_mid) s1 = s; else s0 = s;
+        }
+        vec3 face = centre + 0.5 * (s0 + s1) * nn;
+        // Eta 1.5 reference steps either side of the middle (k = 0, 1: the step across
+        // the face) and 1.5 beyond either probe (k = 2, 3: further out).
+        float e_across_hi = 0.0, e_across_lo = 0.0, e_further_hi = 0.0, e_further_lo = 0.0;
+        int probes = face_used ? 4 : 0;
+        for (int k = 0; k < probes; ++k) {
+            float side = (k & 1) == 0 ? 1.0 : -1.0;
+            vec3 from = k < 2 ? face : centre;
+            float reach = k < 2 ? 1.5 * ref_step : hs + 1.5 * ref_step;
+            float e = eta_of(value_at_tex(to_tex(from + side * reach * nn)));
+            e_across_hi = k == 0 ? e : e_across_hi;
+            e_across_lo = k == 1 ? e : e_across_lo;
+            e_further_hi = k == 2 ? e : e_further_hi;
+            e_further_lo = k == 3 ? e : e_further_lo;
+        }
+        float across = e_across_hi - e_across_lo;
+        // Sharp: most of the step within 1.5 reference steps of the middle, and plateaus
+        // at the probes (eta 1.5 reference steps further out is the same; in the tails of
+        // a wider ramp the probes' middle is no face, and the ramp goes on changing).
+        float further = abs(e_further_hi - eta_hi) + abs(e_further_lo - eta_lo);
+        float ratio = face_step > 0.0 ? across / face_step : 0.0;
+        float flatness = face_step > 0.0 ? further / face_step : 1.0;
+        float sharp = smoothstep(0.75, 0.85, ratio) * (1.0 - smoothstep(0.05, 0.15, flatness));
+        // One Snell step from the ray's eta (|v|) to a target: graded, eta at the next
+        // plane, at the step's middle; sharp, the plateau of the side the step ends on,
+        // where the ray meets the face (or at the middle if it does not cross it here: a
+        // no-op on a plateau). Every turn is a Snell step from the ray's own eta about the
+        // local normal, so a ray that mixes the two along a face (tails graded, middle
+        // sharp) still leaves it in Snell's direction.
+        bool beyond = dot(q_straight - face, nn) >= 0.0;
+        float eta_side = beyond ? eta_hi : eta_lo;
+        vec3 x_sharp = centre;
+        if ((length(vd) >= eta_mid) != beyond) {
+            float run = dot(q_straight - vp, nn);
+            float t = abs(run) > 1e-9 ? clamp(dot(face - vp, nn) / run, 0.0, 1.0) : 0.0;
+            x_sharp = mix(vp, q_straight, t);
+        }
+        vec3 x = mix(centre, x_sharp, sharp);
+        vec3 n = surface_gradient(x);
+        v_face = refract_step(vd, mix(eta_b, eta_side, sharp), dot(n, n) > 1e-12 ? n : nn);
+        if (v_face.z < MIN_FORWARD * length(v_face)) {
+            if (face_used) count_clamp(2u);
+            v_face = limit_direction(v_face);
+        }
+        vec3 d2 = normalize(v_face);
+        q_face = x + d2 * ((q_straight.z - x.z) / d2.z);
+    }
+    float w_face = smoothstep(FACE_STEP_LO, FACE_STEP_HI, face_step);
+    vd = mix(in_film ? vd : v_kick, v_face, w_face);
+    vec3 q = mix(q_straight, q_face, w_face);
+    if (vd.z < MIN_FORWARD * length(vd)) {
+        count_clamp(2u);
+        vd = limit_direction(vd);
+    }
+    return q;
+}
+
+#endif
+
+#if SWEEP_COMPUTE && PASS == 0
+// Where the light reaching pixel `px` of this plane left the previous one: the backward
+// step's origin, computed as plane_main computes it for its own pixel (same arithmetic,
+// so a neighbour's value is bit for bit what that neighbour's invocation holds).
+vec3 light_origin(ivec2 px, uint R, float ds) {
+    vec3 p = plane_point((vec2(px) + 0.5) / P.camera.zw, pc.depth);
+    vec3 ld = READ_PIXEL(light_direction, R, px).xyz;
+    return p - ld * (ds / ld.z);
+}
+#endif
+
+#if PASS == 0
+// The backward (semi-Lagrangian) light step of Algorithm 1 (sect. 4.2, 5.2): the light
+// reaching this plane's pixel (uv, pixel) from the previous plane, attenuated over the
+// step (eq. 4.4) and scaled by the intensity law (eqs. 4.6-4.8), and its direction
+// turned by grad eta (eq. 4.5). Called from main's uniform control flow: the fragment
+// path's derivatives (dFdxFine) need every lane of the quad.
+void backward_light_step(vec2 uv, ivec2 pixel, out vec3 light, out vec3 light_dir) {
+    vec2 size = P.camera.zw;
+    uint R = pc.read_layer;
+    float ds = P.planes.y;
+    float ref_step = P.planes.w;
     vec3 p = plane_point(uv, pc.depth);
     vec3 ld_here = READ_PIXEL(light_direction, R, pixel).xyz;
     // Backward (semi-Lagrangian) step: follow the light direction back to plane i-1.
@@ -464,7 +798,7 @@ void PLANE_MAIN() {
     float light_len = length(p - lp);
     vec3 seg_c; float seg_a; vec3 seg_m;
     segment(f_lp, f_p, light_len / ref_step, clipped(p), seg_c, seg_a, seg_m);
-    vec3 light = light_prev * gain * (1.0 - seg_a) * seg_m;               // eq. 4.4
+    light = light_prev * gain * (1.0 - seg_a) * seg_m;               // eq. 4.4
     // Not turned by a film the light crosses (see the forward rays above): the plateaus
     // 2.5 reference steps before and beyond the step, along the light.
     vec3 l_unit = normalize(ld_here);
@@ -472,11 +806,75 @@ void PLANE_MAIN() {
     float v_after = value_at_tex(to_tex(p + 2.5 * ref_step * l_unit));
     bool light_in_film =
         film_between(v_before, v_after, eta_of(v_before), eta_of(v_after)).x > 0.0;
-    vec3 light_dir = dir_prev + (light_in_film ? 0.0 : light_len) * grad_eta_p;   // eq. 4.5
+    light_dir = dir_prev + (light_in_film ? 0.0 : light_len) * grad_eta_p;   // eq. 4.5
     if (light_dir.z < MIN_FORWARD * length(light_dir)) count_clamp(0u);
     light_dir = limit_direction(light_dir);
     if (any(isnan(light)) || any(isinf(light))) light = vec3(0.0);
+}
+#endif
 
+void PLANE_MAIN() {
+    vec2 size = P.camera.zw;
+    vec2 uv = FRAG_XY / size;
+    uint R = pc.read_layer;
+    float ds = P.planes.y;
+    float ref_step = P.planes.w;
+    ivec2 pixel = ivec2(FRAG_XY);
+
+#if PASS == 1
+    // ---- light propagation, forward (Lagrangian) --------------------------------------
+    // Each texel of the light state is one light ray: flux (rgb) and its position on the
+    // previous plane (.w of both buffers), direction v = eta dx/ds (eq. 4.2). The ray is
+    // advanced to this plane on its own; no neighbour's direction bends it, so rays cross
+    // through a focus as they do physically (thesis ch. 7's bright spots came from the
+    // backward step's one direction per pixel). Irradiance is made from the rays
+    // afterwards by light_splat.*, which conserves their flux.
+    // This draw covers the ray images; texels past the grid hold no ray.
+    int r = pixel.y * int(P.light_rays.z) + pixel.x;
+    ivec2 ray = ivec2(r % int(P.light_rays.x), r / int(P.light_rays.x));
+    if (!ray_exists(ray)) {
+        out_light_colour = vec4(0.0);
+        out_light_direction = vec4(0.0, 0.0, 1.0, 0.0);
+        return;
+    }
+    vec4 lc = READ_RAY(rays_flux, R, r);
+    vec4 lv = READ_RAY(rays_direction, R, r);
+    vec3 flux = lc.rgb;
+#if SOFT_LIGHT
+    // Softness as diffusion of flux between neighbouring rays: each ray hands the fraction
+    // w of its flux to each of its four neighbours `stride` rays away and receives theirs.
+    // The same w everywhere makes the exchange symmetric, so the total is conserved
+    // exactly; a missing neighbour (grid edge) or a dropped one (direction zero: it
+    // carries nothing on) hands the share back to the ray itself, and a dropped ray
+    // takes none (it kept diffused flux away from the live rays for good: 1.3 % of the
+    // power behind a ball lens, measured).
+    // Per plane this adds the variance of the thesis' soft-shadow kernel (sect. 5.2), so
+    // penumbrae widen with the distance behind an occluder.
+    {
+        float w = P.transport.y;
+        int stride = int(P.transport.z);
+        vec3 gathered = vec3(0.0);
+        for (int k = 0; k < 4; ++k) {
+            ivec2 o = (k < 2 ? ivec2(k == 0 ? stride : -stride, 0)
+                             : ivec2(0, k == 2 ? stride : -stride));
+            ivec2 c = ray + o;
+            int rc = ray_exists(c) ? ray_index(c) : r;
+            bool live = ray_exists(c) && dot(READ_RAY(rays_direction, R, rc).xyz,
+                                             READ_RAY(rays_direction, R, rc).xyz) > 0.0;
+            gathered += live ? READ_RAY(rays_flux, R, rc).rgb : flux;
+        }
+        flux = dot(lv.xyz, lv.xyz) > 0.0 ? (1.0 - 4.0 * w) * flux + w * gathered : vec3(0.0);
+    }
+#endif
+    // To this plane (eqs. 4.2-4.4, advance_light_ray).
+    vec3 v_new, p_new;
+    advance_light_ray(lc, lv, flux, v_new, p_new);
+    out_light_colour = vec4(flux, p_new.x);
+    out_light_direction = vec4(v_new, p_new.y);
+#elif PASS == 0
+    // ---- light propagation (sect. 4.2, 5.2) -------------------------------------------
+    vec3 light, light_dir;
+    backward_light_step(uv, pixel, light, light_dir);
 #endif
 #if PASS != 1
     // ---- viewing rays (sect. 4.3, 5.2) ------------------------------------------------
@@ -588,193 +986,22 @@ void PLANE_MAIN() {
         if (unlit) {
             i_d = vec3(1.0);
         } else {
-            // The light of the matter inside the segment, not of the plane before it (the
-            // cause of banding at the plane spacing on lit surfaces; docs/NOTES.md).
-            //
-            // (1) Within the segment the light crosses the same matter as the viewing ray
-            // on its way to each point. Locally the matter is a layer across the value
-            // gradient n, so the light's optical depth to a point is r times the viewing
-            // ray's, r = |n.v| / |n.l| (in a homogeneous medium, the two path lengths back
-            // to the plane: v_z / l_z). Integrating e^-t (view) e^-rt (light) over the
-            // segment's optical depth weights its emission by (1 - (1-a)^(1+r)) / ((1+r) a):
-            // 1 for clear matter, 1 / (1 + r) for an opaque one, however the planes cut it.
-            float r = dir.z / max(ldir.z, 1e-3);
-            float across = 1.0;   // depth crossed per unit of path, along the gradient
-            // (The layer's normal is the Sobel-smoothed one: in a noisy medium the plain
-            // central difference points anywhere; on the lung CT without refraction the
-            // median residual fell from 8.1 to 8.0 of 255 with it.)
-            bool layered = abs(f_v - vp4.w) > 1e-4 && dot(n_here, n_here) > 1e-12;
-            if (layered) {
-                vec3 n = normalize(n_here);
-                across = abs(dot(n, dir));
-                // Not for light grazing the layers: the ratio is a flat layer's, as wide as
-                // the light's path in it, which grows without bound as n.l -> 0. (Bounded
-                // at 1e-3, r reached 1000 where noise or a fog's curved layers put n.l
-                // near 0, and single pixels along a fog's terminator lost most of their
-                // light: speckle, and contour lines over the supernova's noisy shells;
-                // tests/baselines.rs.) Bounded as the sweep bounds directions, at
-                // MIN_FORWARD (84 degrees from the normal), so r <= 10: the weight stays
-                // continuous in n.l, and a surface lit at up to 84 degrees keeps its law.
-                r = across / max(abs(dot(n, ldir)), MIN_FORWARD);
-            }
-            float k = 1.0 + r;
-            // (The ambient level lights the whole segment, unoccluded: it keeps c.)
-            c_ambient = c;
-            c *= a > 1e-4 ? (1.0 - pow(1.0 - a, k)) / (k * a) : 1.0 - 0.5 * r * a;
-            // (2) Through a surface's skin the light at the segment's front is chained from
-            // the previous segment (its light times (1-a)^r, the same layer model), not
-            // read from this plane: the plane's light is resolved at its pixel pitch (and,
-            // forward, on the rays' boxes), so across a skin thinner than a pixel it mixes
-            // lit and shadowed matter. The chain starts at the plane light of the last
-            // segment before the matter and runs CHAIN_DEPTH reference steps deep into it
-            // (along the gradient, so a grazing view follows a skin as far as a steep one);
-            // deeper, in clear space and in homogeneous matter, the plane's light rules, so
-            // shadows cast by other matter are seen (within a skin they are not: the
-            // chain's limit). The chain lives in medium.w (chain_decode).
-            float chained_light, chained_depth;
-            bool matter = a > 1e-3;
-            bool have_chain = chain_decode(M4.w, chained_light, chained_depth);
-            if (matter && have_chain && layered && chained_depth < CHAIN_DEPTH) {
-                float have = dot(i_d, vec3(0.2126, 0.7152, 0.0722));
-                i_d = have > 1e-6 ? i_d * (chained_light / have)
-                                  : P.light_colour.rgb * chained_light;
-            }
-            float next = dot(i_d, vec3(0.2126, 0.7152, 0.0722)) * pow(1.0 - a, r);
-            float depth = matter ? chained_depth + seg_len * across / ref_step : 0.0;
-            chain_code = chain_encode(next, depth);
+            chain_code = segment_light(dir, ldir, f_v, vp4.w, n_here, a, seg_len, M4.w, c,
+                                       c_ambient, i_d);
         }
-        float d_eta = eta_here - vd4.w;
         bool reflections = HAVE_REFLECTIONS && P.refraction.y > 0.5;
         bool specular = HAVE_SPECULAR && P.specular.y > 0.0 && !unlit;
-        // Not only where eta changes between the two samples: a film of glass may lie
-        // between samples of equal eta, or hold both (below).
         if (reflections || specular) {
-            vec3 mid = vp - 0.5 * seg_len * dir;
-            vec3 g = n_here;   // the face's orientation (see below)
-            vec3 n = dot(g, g) > 1e-12 ? normalize(g) : dir;
-            if (dot(n, dir) * d_eta < 0.0) n = -n;   // n points to higher eta
-            float h = 0.5 * seg_len + 2.5 * ref_step;
-            float v_minus = value_at_tex(to_tex(mid - h * n));
-            float v_plus = value_at_tex(to_tex(mid + h * n));
-            float e_minus = eta_of(v_minus), e_plus = eta_of(v_plus);
-            // A film: where the value ramps between two matters through a band of eta
-            // that belongs to neither, eta rises (or falls) and returns between the
-            // probes. The demo floor's edge passes through the glass's band (0.45-0.6):
-            // a 1D transfer function dresses the floor in a skin of glass a fraction of a
-            // voxel thick. A plane sample lands in such a skin on some rows and not on
-            // others, so judged from the samples it reflected on every other row: the
-            // floor's shadow was striped +-20 % at the plane spacing. Such a skin is the
-            // classification's, not the scene's (a glass sphere over a white floor has
-            // no glass on the floor; wine touches its glass with no air between), and it
-            // is thinner than a face as the sweep knows faces, by their plateaus either
-            // side (the viewing ray's turn below sees only those). So a film is one face,
-            // between the probes' plateaus (none where both are alike, as on the floor),
-            // met in the one segment whose values pass the film's peak: found in value
-            // space (the extremes of eta between the probes' values, layer 2 of the
-            // preintegration table), it is the same whatever the planes. (Reflecting it as
-            // the two faces of a glass film, 1 - (1 - F1)(1 - F2), was tried: uniform on
-            // the floor, but where wine meets its glass the air the ramp passes through
-            // reflected up to total reflection, speckling the wine.)
-            vec3 film = film_between(v_minus, v_plus, e_minus, e_plus);
-            // The face or film met here, for its highlight (after both): its orientation
-            // and eta ratio.
-            vec3 highlight_n = vec3(0.0);
-            float highlight_ratio = 1.0;
-            // Its reflection: the fraction reflected and the mirrored direction (looked up
-            // once, after both: llvmpipe would run a lookup in each branch).
-            float reflected = 0.0;
-            vec3 reflected_dir = vec3(0.0, 0.0, -1.0);
-            if (film.x > 0.0) {
-                float s_film = film.y;
-                bool from_minus = (v_minus < s_film) == (vp4.w < s_film);
-                float eta_1 = from_minus ? e_minus : e_plus;   // the side the ray comes from
-                float eta_2 = from_minus ? e_plus : e_minus;
-                if ((vp4.w < s_film) != (f_v < s_film) && abs(eta_2 - eta_1) >= MIN_FACE_STEP) {
-                    vec3 nf = dot(n, dir) < 0.0 ? -n : n;
-                    float f = face_fresnel(length(vd - dot(vd, nf) * nf), eta_1, eta_2);
-                    // Beyond the critical angle nothing is looked up, as for a face below.
-                    if (reflections && f < 1.0) {
-                        reflected = f;
-                        reflected_dir = reflect(normalize(vd), nf);
-                    }
-                    highlight_n = nf;
-                    highlight_ratio = eta_2 / eta_1;
-                }
-            } else if (abs(d_eta) > 1e-4) {
-                // A face: where eta steps (a one-voxel ramp between plateaus) the viewing ray
-                // meets a surface of glass once, whatever the sample distance and however the
-                // planes cut the ramp: in the segment where eta passes the middle of the step,
-                // whose plateaus are found a few voxels either side along the normal. There it
-                // reflects (Fresnel) and shows the highlight, both with the whole step's F. (Per
-                // plane from consecutive eta samples, the highlight's F depended on how much of
-                // the ramp a plane happened to straddle: rings on glass at the plane spacing; and
-                // the sum of each segment's own small F is a fraction of the face's, as for a
-                // graded face, which physically reflects little.)
-                float eta_lo = min(min(eta_here, vd4.w), e_minus);
-                float eta_hi = max(max(eta_here, vd4.w), e_plus);
-                float eta_mid = 0.5 * (eta_lo + eta_hi);
-                // A face is a step of at least MIN_FACE_STEP: in noise (a scanned or
-                // simulated medium) eta wobbles about its plateau and the smoothed gradient
-                // points anywhere, so a wobble seen at a grazing angle to that random normal
-                // reflected nearly everything (white speckles through red wine, measured).
-                if ((vd4.w < eta_mid) != (eta_here < eta_mid) && eta_hi - eta_lo >= MIN_FACE_STEP) {
-                    // The angle of incidence on the face's low-eta side, from the tangential
-                    // part of v = eta dx/ds, which crossing the face keeps (Snell); the ray's
-                    // own direction is already partly turned inside the ramp. F is the same
-                    // both ways through the face (reciprocity) short of total reflection.
-                    vec3 vt = vd - dot(vd, n) * n;
-                    bool entering = d_eta > 0.0;
-                    float sin_lo = length(vt) / eta_lo;
-                    // Fresnel reflection (the F of eq. 4.12, unpolarised): the reflected part
-                    // sees the environment (or the background) in the mirrored direction,
-                    // weighted by (1 - A) M like everything composited (eq. 4.13), and the ray
-                    // goes on with the rest (folded into A, so what lies behind is seen through
-                    // 1 - F). Not occluded: the mirrored direction is not traced through the
-                    // volume (like the thesis' highlights, ch. 8). Beyond the critical angle
-                    // the ray itself is the reflected light (its Snell step turns it back), so
-                    // nothing is looked up. (Looking the environment up with F = 1 there and
-                    // ending the ray was tried: no visible difference on the wine glass.)
-                    if (reflections && sin_lo < 1.0) {
-                        reflected = face_fresnel(length(vt), eta_lo, eta_hi);
-                        // Mirror the direction the ray had on the side it came from.
-                        float eta_in = entering ? eta_lo : eta_hi;
-                        float vn = sqrt(max(eta_in * eta_in - dot(vt, vt), 0.0));
-                        vec3 incident = (vt + (dot(vd, n) >= 0.0 ? vn : -vn) * n) / eta_in;
-                        reflected_dir = reflect(incident, n);
-                    }
-                    highlight_n = n;
-                    highlight_ratio = entering ? eta_hi / eta_lo : eta_lo / eta_hi;
-                }
-            }
+            float reflected, highlight_ratio;
+            vec3 reflected_dir, highlight_n;
+            face_met(vp, vd, dir, seg_len, n_here, vp4.w, vd4.w, f_v, eta_here, reflections,
+                     reflected, reflected_dir, highlight_n, highlight_ratio);
             if (reflected > 0.0) {
                 C += (1.0 - A) * M * reflected * environment_radiance(reflected_dir);
                 A += (1.0 - A) * reflected;
             }
-            // The highlight of the light on the face (eqs. 4.9-4.11), lit by the light
-            // that meets the face: read on the segment's front plane, moved off the face
-            // along that plane to the side the light comes from. (Near the line where the
-            // plane cuts the face its light is a blur of the refracted and the
-            // unrefracted, whose mix depended on how the planes fell: the highlight
-            // banded at the plane spacing.)
             if (specular && dot(highlight_n, highlight_n) > 0.0) {
-                vec3 n = highlight_n;
-                vec3 front = vp - dir * seg_len;
-                vec3 along = vec3(n.xy, 0.0);
-                float la = length(along);
-                float side = dot(ldir, n) > 0.0 ? -1.0 : 1.0;
-                vec3 off = la > 1e-3 ? along / la * side * (2.5 * ref_step / max(la, 0.3))
-                                     : vec3(0.0);
-                vec2 uv_face = project(front + off);
-#if FORWARD_LIGHT
-                vec3 i_face = READ_BUFFER(irradiance, R, uv_face).rgb;
-                vec3 l_face = splatted_direction(READ_BUFFER(irradiance_direction, R, uv_face));
-#else
-                vec3 i_face = READ_BUFFER(light_colour, R, uv_face).rgb;
-                vec3 l_face = normalize(READ_BUFFER(light_direction, R, uv_face).xyz);
-#endif
-                vec3 v = -dir;
-                vec3 nv = dot(n, v) < 0.0 ? -n : n;
-                i_s = P.specular.y * specular_term(nv, -l_face, v, highlight_ratio) * i_face;
+                i_s = face_highlight(vp, dir, seg_len, ldir, highlight_n, highlight_ratio, R);
             }
         }
         // Oddy-Willis compositing (eq. 4.13): the medium factor once, specular not
@@ -783,140 +1010,8 @@ void PLANE_MAIN() {
         A += (1.0 - A) * a;
         M *= m;
     }
-    // Advance to the next plane, turning on the way (eq. 4.3). v = eta dx/ds.
-    //
-    // A face of glass is the volume's picture of a sharp interface: eta steps between two
-    // plateaus within a voxel or two (a segmented or antialiased surface). There the ray
-    // turns once, by Snell's law between the plateaus, where it meets the face's middle,
-    // about the smoothed normal there, and goes on to the next plane in its new
-    // direction; |v| is the plateau's eta of the side it is on. The face is found along
-    // the normal through the step's centre: its plateaus probed 2.5 reference steps
-    // beyond the step either side, its middle by bisection between them, its width from
-    // eta 1.5 reference steps either side of the middle (a face: most of the step within
-    // them).
-    // Turning at the plane after the crossing instead delayed every turn by half a plane
-    // spacing on average: a ball's exit directions were off by 0.2° at its centre to 4°
-    // at its rim at sample distance 1 (docs/NOTES.md). The side is judged by |v|, not by
-    // the eta sampled at this plane, so no crossing is missed between two planes.
-    //
-    // A graded change of eta (wider than the face test, or too weak for it) is integrated
-    // as such, by a Snell step from eta here to eta at the next plane taken at the step's
-    // middle (the stratified medium's invariant, second order in the step). Weaker still
-    // (below 0.06 across the probes: noise, thin skins) the thesis' kick, v += ds grad(eta):
-    // a skin of eta thinner than the probes (the demo floor's: its value ramp crosses the
-    // glass's eta band) was turned twice by Snell steps about normals from different
-    // planes, and the floor behind it striped (row to row 1.6 % against 0.7 % with the
-    // kick); in noise the normal points anywhere and a Snell step at a grazing angle to it
-    // turns a ray far for a tiny change of eta. Within a film (a skin the classification
-    // made, see the faces above: eta between the probes' values peaks past both) not even
-    // the kick: its central differences one voxel apart catch a skin thinner than a voxel
-    // from some planes only, and the floor under the demo's skin striped (6.6-15 % row to
-    // row in tests/image_quality.rs); the ray turns as between the plateaus, by the face
-    // step where they differ, not at all where they are alike.
-    if (vd.z < MIN_FORWARD * length(vd)) {
-        count_clamp(2u);
-        vd = limit_direction(vd);
-    }
-    vec3 d = normalize(vd);
-    vec3 q_straight = vp + d * (ds / d.z);
-    float eta_b = eta_of(value_at_tex(to_tex(q_straight)));
-    // Outside the volume box eta is constant: nothing there turns a ray. (grad_eta's
-    // central differences a voxel wide reach back into the box from just outside it; as
-    // a kick they turned rays the face step had already turned at the box's face, once or
-    // twice as the planes fell: single-pixel diagonal lines across the water stand-in's
-    // tank, seen through its back face.)
-    vec3 v_kick = vd + (in_box ? length(q_straight - vp) : 0.0) * grad_eta;
-    vec3 v_face = vd;
-    vec3 q_face = q_straight;
-    float face_step = 0.0;
-    bool in_film = false;
-    // A ray that left the box with its face's turn still pending (|v| still the eta
-    // inside: the face step placed the face a hair beyond the step's end, and the ray
-    // stepped out) is turned at its first plane outside, about the normal at the box's
-    // edge: outside the box the gradient volume is not read, and nothing else would turn
-    // it (it left 8° off Snell's direction, tests/refraction_geometry.rs).
-    bool pending = abs(length(vd) - eta_here) > 1e-3 * eta_here;
-    vec3 n_face = in_box || pending ? n_box : vec3(0.0);
-    if (dot(n_face, n_face) > 1e-12) {
-        vec3 nn = normalize(n_face);
-        vec3 centre = 0.5 * (vp + q_straight);
-        float hs = 0.5 * abs(dot(q_straight - vp, nn)) + 2.5 * ref_step;
-        float v_plus = value_at_tex(to_tex(centre + hs * nn));
-        float v_minus = value_at_tex(to_tex(centre - hs * nn));
-        float e_plus = eta_of(v_plus), e_minus = eta_of(v_minus);
-        face_step = abs(e_plus - e_minus);
-        in_film = film_between(v_minus, v_plus, e_minus, e_plus).x > 0.0;
-        if (e_plus < e_minus) nn = -nn;   // nn points to higher eta
-        float eta_lo = min(e_plus, e_minus), eta_hi = max(e_plus, e_minus);
-        float eta_mid = 0.5 * (eta_lo + eta_hi);
-        // The face step's turn counts only where the step is a face's (w_face > 0 below):
-        // elsewhere the bisection and the four probes after it are left out by their
-        // loops' trip counts, not by a branch (llvmpipe runs both sides of a branch but
-        // leaves a loop once all its lanes are done: 0.8-0.9x the viewing rays' time on
-        // the demo scene, where most rays cross no face; the image is the same).
-        bool face_used = face_step > FACE_STEP_LO;
-        // The face's middle on the normal line through the centre.
-        float s0 = -hs, s1 = hs;
-        int bisections = face_used ? FACE_BISECTIONS : 0;
-        for (int k = 0; k < bisections; ++k) {
-            float s = 0.5 * (s0 + s1);
-            if (eta_of(value_at_tex(to_tex(centre + s * nn))) >= eta_mid) s1 = s; else s0 = s;
-        }
-        vec3 face = centre + 0.5 * (s0 + s1) * nn;
-        // Eta 1.5 reference steps either side of the middle (k = 0, 1: the step across
-        // the face) and 1.5 beyond either probe (k = 2, 3: further out).
-        float e_across_hi = 0.0, e_across_lo = 0.0, e_further_hi = 0.0, e_further_lo = 0.0;
-        int probes = face_used ? 4 : 0;
-        for (int k = 0; k < probes; ++k) {
-            float side = (k & 1) == 0 ? 1.0 : -1.0;
-            vec3 from = k < 2 ? face : centre;
-            float reach = k < 2 ? 1.5 * ref_step : hs + 1.5 * ref_step;
-            float e = eta_of(value_at_tex(to_tex(from + side * reach * nn)));
-            e_across_hi = k == 0 ? e : e_across_hi;
-            e_across_lo = k == 1 ? e : e_across_lo;
-            e_further_hi = k == 2 ? e : e_further_hi;
-            e_further_lo = k == 3 ? e : e_further_lo;
-        }
-        float across = e_across_hi - e_across_lo;
-        // Sharp: most of the step within 1.5 reference steps of the middle, and plateaus
-        // at the probes (eta 1.5 reference steps further out is the same; in the tails of
-        // a wider ramp the probes' middle is no face, and the ramp goes on changing).
-        float further = abs(e_further_hi - eta_hi) + abs(e_further_lo - eta_lo);
-        float ratio = face_step > 0.0 ? across / face_step : 0.0;
-        float flatness = face_step > 0.0 ? further / face_step : 1.0;
-        float sharp = smoothstep(0.75, 0.85, ratio) * (1.0 - smoothstep(0.05, 0.15, flatness));
-        // One Snell step from the ray's eta (|v|) to a target: graded, eta at the next
-        // plane, at the step's middle; sharp, the plateau of the side the step ends on,
-        // where the ray meets the face (or at the middle if it does not cross it here: a
-        // no-op on a plateau). Every turn is a Snell step from the ray's own eta about the
-        // local normal, so a ray that mixes the two along a face (tails graded, middle
-        // sharp) still leaves it in Snell's direction.
-        bool beyond = dot(q_straight - face, nn) >= 0.0;
-        float eta_side = beyond ? eta_hi : eta_lo;
-        vec3 x_sharp = centre;
-        if ((length(vd) >= eta_mid) != beyond) {
-            float run = dot(q_straight - vp, nn);
-            float t = abs(run) > 1e-9 ? clamp(dot(face - vp, nn) / run, 0.0, 1.0) : 0.0;
-            x_sharp = mix(vp, q_straight, t);
-        }
-        vec3 x = mix(centre, x_sharp, sharp);
-        vec3 n = surface_gradient(x);
-        v_face = refract_step(vd, mix(eta_b, eta_side, sharp), dot(n, n) > 1e-12 ? n : nn);
-        if (v_face.z < MIN_FORWARD * length(v_face)) {
-            if (face_used) count_clamp(2u);
-            v_face = limit_direction(v_face);
-        }
-        vec3 d2 = normalize(v_face);
-        q_face = x + d2 * ((q_straight.z - x.z) / d2.z);
-    }
-    float w_face = smoothstep(FACE_STEP_LO, FACE_STEP_HI, face_step);
-    vd = mix(in_film ? vd : v_kick, v_face, w_face);
-    vec3 q = mix(q_straight, q_face, w_face);
-    if (vd.z < MIN_FORWARD * length(vd)) {
-        count_clamp(2u);
-        vd = limit_direction(vd);
-    }
-    vec3 vp_next = q;
+    // Advance to the next plane, turning on the way (eq. 4.3; advance_viewing_ray).
+    vec3 vp_next = advance_viewing_ray(vp, vd, eta_here, grad_eta, n_box, in_box);
 
 #if PASS == 0
     out_light_colour = vec4(light, 0.0);
