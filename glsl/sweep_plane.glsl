@@ -10,11 +10,12 @@
 // By thesis step (chapter 4, Algorithm 1), the functions below and what main() does:
 // - light, forward (PASS 1): advance_light_ray, eqs. 4.2-4.4 in Snell sub-steps, with
 //   straight_in_clear_space choosing one sub-step where nothing can turn or dim the ray;
-//   softness as diffusion between neighbouring rays is in main();
+//   softness as diffusion of flux between neighbouring rays, diffuse_flux;
 // - light, backward (PASS 0): backward_light_step, eqs. 4.4-4.8 (light_at: the bilinear,
 //   light-weighted read of the previous plane; the soft kernel of sect. 5.2);
-// - viewing rays (PASS 0, 2), in main(): the segment from the previous plane, integrated
-//   from the preintegration table (segment, eq. 3.19; the box's faces); its light,
+// - viewing rays (PASS 0, 2), in main(): a ray that enters the drawn region late,
+//   catch_up_to_plane; the segment from the previous plane, viewing_segment (the
+//   preintegration table, eq. 3.19, and the box's faces); its light,
 //   segment_light; the face or film it meets, face_met (Fresnel reflection, eq. 4.12) and
 //   face_highlight (eqs. 4.9-4.11); Oddy-Willis compositing (eq. 4.13); then
 //   advance_viewing_ray to the next plane (eq. 4.3: the face step, the graded Snell step,
@@ -266,6 +267,36 @@ bool straight_in_clear_space(vec3 p, vec3 d, float ds) {
     return opacity <= 0.0 && all(greaterThanEqual(m, vec3(1.0))) && eta.x - eta.z <= 0.0;
 }
 
+#if SOFT_LIGHT
+// Softness as diffusion of flux between neighbouring rays: each ray hands the fraction
+// w of its flux to each of its four neighbours `stride` rays away and receives theirs.
+// The same w everywhere makes the exchange symmetric, so the total is conserved
+// exactly; a missing neighbour (grid edge) or a dropped one (direction zero: it
+// carries nothing on) hands the share back to the ray itself, and a dropped ray
+// takes none (it kept diffused flux away from the live rays for good: 1.3 % of the
+// power behind a ball lens, measured).
+// Per plane this adds the variance of the thesis' soft-shadow kernel (sect. 5.2), so
+// penumbrae widen with the distance behind an occluder.
+// `flux` is ray r's (grid cell `ray`, v = lv.xyz) on the previous plane; returns what it
+// carries on after the exchange.
+vec3 diffuse_flux(ivec2 ray, int r, vec4 lv, vec3 flux) {
+    uint R = pc.read_layer;
+    float w = P.transport.y;
+    int stride = int(P.transport.z);
+    vec3 gathered = vec3(0.0);
+    for (int k = 0; k < 4; ++k) {
+        ivec2 o = (k < 2 ? ivec2(k == 0 ? stride : -stride, 0)
+                         : ivec2(0, k == 2 ? stride : -stride));
+        ivec2 c = ray + o;
+        int rc = ray_exists(c) ? ray_index(c) : r;
+        bool live = ray_exists(c) && dot(READ_RAY(rays_direction, R, rc).xyz,
+                                         READ_RAY(rays_direction, R, rc).xyz) > 0.0;
+        gathered += live ? READ_RAY(rays_flux, R, rc).rgb : flux;
+    }
+    return dot(lv.xyz, lv.xyz) > 0.0 ? (1.0 - 4.0 * w) * flux + w * gathered : vec3(0.0);
+}
+#endif
+
 // LIGHT_SUBSTEPS sub-steps to this plane, each advancing depth by ds / LIGHT_SUBSTEPS
 // along the ray's current direction: attenuated over its own length (eq. 4.4), then
 // turned by a Snell step with the interface normal at its midpoint. A curved interface
@@ -344,6 +375,58 @@ void advance_light_ray(vec4 lc, vec4 lv, inout vec3 flux, out vec3 v_new, out ve
 #endif
 
 #if PASS != 1
+// A pixel's first plane in the drawn region (render::refract::region): its ray is
+// still where the setup put it, on plane 0, and has crossed empty space since (the
+// region bounds the box up to beyond this plane). Straight on to this plane, as the
+// full-screen sweep would have moved it; the value behind it stays the empty space's.
+// Its skin chain (below) starts as the full-screen sweep's would have, at the light
+// before any matter: the light of the previous plane where the ray is now.
+//
+// Moves vp (the ray's point, direction vd) on to this plane where it is a plane or more
+// behind, and starts its skin chain there.
+void catch_up_to_plane(inout vec3 vp, vec3 vd, inout float chain) {
+    uint R = pc.read_layer;
+    float ds = P.planes.y;
+    if (vp.z < pc.depth - 0.5 * ds) {   // a whole plane or more behind
+        // Plane by plane, as the full-screen sweep steps it (the same arithmetic, so the
+        // same rounding: in a noisy medium a ray that lands a rounding error elsewhere
+        // may take another turn).
+        vec3 d0 = normalize(vd);
+        for (int k = 0; k < int(P.planes.z) && vp.z < pc.depth - 0.5 * ds; ++k) {
+            vp = vp + d0 * (ds / d0.z);
+        }
+#if FORWARD_LIGHT
+        vec3 l0 = READ_BUFFER(irradiance, R, project(vp)).rgb;
+#else
+        vec3 l0 = READ_BUFFER(light_colour, R, project(vp)).rgb;
+#endif
+        if (P.unlit == 0u) chain = chain_encode(dot(l0, vec3(0.2126, 0.7152, 0.0722)), 0.0);
+    }
+}
+
+// The viewing ray's segment from the previous plane (value v_prev) to vp on this plane
+// (value f_v), seg_len long along dir, integrated from the preintegration table (eq.
+// 3.19): its premultiplied colour c, opacity a and medium m.
+//
+// Where the volume's data ends (a floor cut by the box's side, a scan cut through
+// the body) the value steps at the box face, not along the segment: integrate
+// only the part inside, from the value on the face. (Preintegrated as a ramp from
+// the empty outside, the face's opacity depended on where the planes cut it: the
+// floors' cut sides were hatched at the plane spacing.)
+void viewing_segment(vec3 vp, vec3 dir, float seg_len, float v_prev, float f_v, out vec3 c,
+                     out float a, out vec3 m) {
+    float ref_step = P.planes.w;
+    vec2 span = box_span(vp - dir * seg_len, vp);
+    float v_front = v_prev, v_back = f_v, inside = max(span.y - span.x, 0.0);
+    if (inside > 0.0 && (span.x > 0.0 || span.y < 1.0)) {
+        float t_face = span.x > 0.0 ? span.x : span.y;
+        vec3 on_face = clamp(to_tex(vp - dir * (seg_len * (1.0 - t_face))), 0.0, 1.0);
+        float v_face = textureLod(volume, on_face, 0.0).r;
+        if (span.x > 0.0) v_front = v_face; else v_back = v_face;
+    }
+    segment(v_front, v_back, inside * seg_len / ref_step, clipped(vp), c, a, m);
+}
+
 // The light of the matter inside the segment, not of the plane before it (the
 // cause of banding at the plane spacing on lit surfaces; docs/NOTES.md).
 //
@@ -841,30 +924,7 @@ void PLANE_MAIN() {
     vec4 lv = READ_RAY(rays_direction, R, r);
     vec3 flux = lc.rgb;
 #if SOFT_LIGHT
-    // Softness as diffusion of flux between neighbouring rays: each ray hands the fraction
-    // w of its flux to each of its four neighbours `stride` rays away and receives theirs.
-    // The same w everywhere makes the exchange symmetric, so the total is conserved
-    // exactly; a missing neighbour (grid edge) or a dropped one (direction zero: it
-    // carries nothing on) hands the share back to the ray itself, and a dropped ray
-    // takes none (it kept diffused flux away from the live rays for good: 1.3 % of the
-    // power behind a ball lens, measured).
-    // Per plane this adds the variance of the thesis' soft-shadow kernel (sect. 5.2), so
-    // penumbrae widen with the distance behind an occluder.
-    {
-        float w = P.transport.y;
-        int stride = int(P.transport.z);
-        vec3 gathered = vec3(0.0);
-        for (int k = 0; k < 4; ++k) {
-            ivec2 o = (k < 2 ? ivec2(k == 0 ? stride : -stride, 0)
-                             : ivec2(0, k == 2 ? stride : -stride));
-            ivec2 c = ray + o;
-            int rc = ray_exists(c) ? ray_index(c) : r;
-            bool live = ray_exists(c) && dot(READ_RAY(rays_direction, R, rc).xyz,
-                                             READ_RAY(rays_direction, R, rc).xyz) > 0.0;
-            gathered += live ? READ_RAY(rays_flux, R, rc).rgb : flux;
-        }
-        flux = dot(lv.xyz, lv.xyz) > 0.0 ? (1.0 - 4.0 * w) * flux + w * gathered : vec3(0.0);
-    }
+    flux = diffuse_flux(ray, r, lv, flux);   // softness (sect. 5.2) as diffusion
 #endif
     // To this plane (eqs. 4.2-4.4, advance_light_ray).
     vec3 v_new, p_new;
@@ -903,27 +963,8 @@ void PLANE_MAIN() {
 #endif
     vec3 vp = vp4.xyz;
     vec3 vd = vd4.xyz;
-    // A pixel's first plane in the drawn region (render::refract::region): its ray is
-    // still where the setup put it, on plane 0, and has crossed empty space since (the
-    // region bounds the box up to beyond this plane). Straight on to this plane, as the
-    // full-screen sweep would have moved it; the value behind it stays the empty space's.
-    // Its skin chain (below) starts as the full-screen sweep's would have, at the light
-    // before any matter: the light of the previous plane where the ray is now.
-    if (vp.z < pc.depth - 0.5 * ds) {   // a whole plane or more behind
-        // Plane by plane, as the full-screen sweep steps it (the same arithmetic, so the
-        // same rounding: in a noisy medium a ray that lands a rounding error elsewhere
-        // may take another turn).
-        vec3 d0 = normalize(vd);
-        for (int k = 0; k < int(P.planes.z) && vp.z < pc.depth - 0.5 * ds; ++k) {
-            vp = vp + d0 * (ds / d0.z);
-        }
-#if FORWARD_LIGHT
-        vec3 l0 = READ_BUFFER(irradiance, R, project(vp)).rgb;
-#else
-        vec3 l0 = READ_BUFFER(light_colour, R, project(vp)).rgb;
-#endif
-        if (P.unlit == 0u) M4.w = chain_encode(dot(l0, vec3(0.2126, 0.7152, 0.0722)), 0.0);
-    }
+    // A pixel's first plane in the drawn region: on to this plane (catch_up_to_plane).
+    catch_up_to_plane(vp, vd, M4.w);
     vec3 C = CA.rgb;
     float A = CA.a;
     vec3 M = M4.rgb;
@@ -947,20 +988,7 @@ void PLANE_MAIN() {
     if (A < P.termination_alpha) {
         vec2 uv_v = project(vp);
         vec3 c; float a; vec3 m;
-        // Where the volume's data ends (a floor cut by the box's side, a scan cut through
-        // the body) the value steps at the box face, not along the segment: integrate
-        // only the part inside, from the value on the face. (Preintegrated as a ramp from
-        // the empty outside, the face's opacity depended on where the planes cut it: the
-        // floors' cut sides were hatched at the plane spacing.)
-        vec2 span = box_span(vp - dir * seg_len, vp);
-        float v_front = vp4.w, v_back = f_v, inside = max(span.y - span.x, 0.0);
-        if (inside > 0.0 && (span.x > 0.0 || span.y < 1.0)) {
-            float t_face = span.x > 0.0 ? span.x : span.y;
-            vec3 on_face = clamp(to_tex(vp - dir * (seg_len * (1.0 - t_face))), 0.0, 1.0);
-            float v_face = textureLod(volume, on_face, 0.0).r;
-            if (span.x > 0.0) v_front = v_face; else v_back = v_face;
-        }
-        segment(v_front, v_back, inside * seg_len / ref_step, clipped(vp), c, a, m);
+        viewing_segment(vp, dir, seg_len, vp4.w, f_v, c, a, m);
 #if FORWARD_LIGHT
         // The light of this plane's segment (i-1 -> i): the irradiance where the ray
         // enters it, on plane i-1 (the segment's front, as the backward step uses).
