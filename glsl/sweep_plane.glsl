@@ -222,7 +222,9 @@ vec2 values_near(vec3 t) {
 // one eta (layer 2 of the preintegration table: the extremes of eta between two values;
 // a sample outside the box reads 0).
 bool eta_may_vary_near(vec3 p) {
-    if (!CLEAR_SPACE) return true;
+    // (With the field texture, sample_field_where reads the gradient and ignores this:
+    // the constant folds the test's two fetches away.)
+    if (!CLEAR_SPACE || HAVE_FIELD) return true;
     vec3 t = to_tex(p);
     vec2 r = values_near(t);
     vec3 h = 1.0 / P.volume_dims.xyz;
