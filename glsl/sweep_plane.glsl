@@ -496,6 +496,86 @@ float segment_light(vec3 dir, vec3 ldir, float f_v, float v_prev, vec3 n_here, f
     return chain_encode(next, depth);
 }
 
+// The film of face_met (below) met in this segment, if the segment passes its peak: its
+// Fresnel reflection and its orientation and eta ratio for the highlight (left as they
+// are where no film is met). film = film_between(v_minus, v_plus, e_minus, e_plus) of the
+// probes either side; n points to higher eta.
+void film_reflection(vec3 film, float v_minus, float v_plus, float e_minus, float e_plus,
+                     float v_prev, float f_v, vec3 n, vec3 dir, vec3 vd, bool reflections,
+                     inout float reflected, inout vec3 reflected_dir, inout vec3 highlight_n,
+                     inout float highlight_ratio) {
+    float s_film = film.y;
+    bool from_minus = (v_minus < s_film) == (v_prev < s_film);
+    float eta_1 = from_minus ? e_minus : e_plus;   // the side the ray comes from
+    float eta_2 = from_minus ? e_plus : e_minus;
+    if ((v_prev < s_film) != (f_v < s_film) && abs(eta_2 - eta_1) >= MIN_FACE_STEP) {
+        vec3 nf = dot(n, dir) < 0.0 ? -n : n;
+        float f = face_fresnel(length(vd - dot(vd, nf) * nf), eta_1, eta_2);
+        // Beyond the critical angle nothing is looked up, as for a face (face_reflection).
+        if (reflections && f < 1.0) {
+            reflected = f;
+            reflected_dir = reflect(normalize(vd), nf);
+        }
+        highlight_n = nf;
+        highlight_ratio = eta_2 / eta_1;
+    }
+}
+
+// The face of face_met (below) met in this segment (eta from eta_prev to eta_here, the
+// probes' eta e_minus and e_plus; n points to higher eta): its Fresnel reflection (eq.
+// 4.12) and its orientation and eta ratio for the highlight (left as they are where the
+// segment does not cross the face's middle).
+void face_reflection(float eta_prev, float eta_here, float e_minus, float e_plus, vec3 n,
+                     vec3 vd, bool reflections, inout float reflected,
+                     inout vec3 reflected_dir, inout vec3 highlight_n,
+                     inout float highlight_ratio) {
+    float d_eta = eta_here - eta_prev;
+    // A face: where eta steps (a one-voxel ramp between plateaus) the viewing ray
+    // meets a surface of glass once, whatever the sample distance and however the
+    // planes cut the ramp: in the segment where eta passes the middle of the step,
+    // whose plateaus are found a few voxels either side along the normal. There it
+    // reflects (Fresnel) and shows the highlight, both with the whole step's F. (Per
+    // plane from consecutive eta samples, the highlight's F depended on how much of
+    // the ramp a plane happened to straddle: rings on glass at the plane spacing; and
+    // the sum of each segment's own small F is a fraction of the face's, as for a
+    // graded face, which physically reflects little.)
+    float eta_lo = min(min(eta_here, eta_prev), e_minus);
+    float eta_hi = max(max(eta_here, eta_prev), e_plus);
+    float eta_mid = 0.5 * (eta_lo + eta_hi);
+    // A face is a step of at least MIN_FACE_STEP: in noise (a scanned or
+    // simulated medium) eta wobbles about its plateau and the smoothed gradient
+    // points anywhere, so a wobble seen at a grazing angle to that random normal
+    // reflected nearly everything (white speckles through red wine, measured).
+    if ((eta_prev < eta_mid) != (eta_here < eta_mid) && eta_hi - eta_lo >= MIN_FACE_STEP) {
+        // The angle of incidence on the face's low-eta side, from the tangential
+        // part of v = eta dx/ds, which crossing the face keeps (Snell); the ray's
+        // own direction is already partly turned inside the ramp. F is the same
+        // both ways through the face (reciprocity) short of total reflection.
+        vec3 vt = vd - dot(vd, n) * n;
+        bool entering = d_eta > 0.0;
+        float sin_lo = length(vt) / eta_lo;
+        // Fresnel reflection (the F of eq. 4.12, unpolarised): the reflected part
+        // sees the environment (or the background) in the mirrored direction,
+        // weighted by (1 - A) M like everything composited (eq. 4.13), and the ray
+        // goes on with the rest (folded into A, so what lies behind is seen through
+        // 1 - F). Not occluded: the mirrored direction is not traced through the
+        // volume (like the thesis' highlights, ch. 8). Beyond the critical angle
+        // the ray itself is the reflected light (its Snell step turns it back), so
+        // nothing is looked up. (Looking the environment up with F = 1 there and
+        // ending the ray was tried: no visible difference on the wine glass.)
+        if (reflections && sin_lo < 1.0) {
+            reflected = face_fresnel(length(vt), eta_lo, eta_hi);
+            // Mirror the direction the ray had on the side it came from.
+            float eta_in = entering ? eta_lo : eta_hi;
+            float vn = sqrt(max(eta_in * eta_in - dot(vt, vt), 0.0));
+            vec3 incident = (vt + (dot(vd, n) >= 0.0 ? vn : -vn) * n) / eta_in;
+            reflected_dir = reflect(incident, n);
+        }
+        highlight_n = n;
+        highlight_ratio = entering ? eta_hi / eta_lo : eta_lo / eta_hi;
+    }
+}
+
 // The face or film of glass a viewing ray meets in this plane's segment (from its
 // previous point, value v_prev and eta eta_prev, to vp, value f_v and eta eta_here;
 // direction dir, v = vd, seg_len long, n_here the smoothed normal at vp): the fraction
@@ -544,66 +624,11 @@ void face_met(vec3 vp, vec3 vd, vec3 dir, float seg_len, vec3 n_here, float v_pr
     reflected = 0.0;
     reflected_dir = vec3(0.0, 0.0, -1.0);
     if (film.x > 0.0) {
-        float s_film = film.y;
-        bool from_minus = (v_minus < s_film) == (v_prev < s_film);
-        float eta_1 = from_minus ? e_minus : e_plus;   // the side the ray comes from
-        float eta_2 = from_minus ? e_plus : e_minus;
-        if ((v_prev < s_film) != (f_v < s_film) && abs(eta_2 - eta_1) >= MIN_FACE_STEP) {
-            vec3 nf = dot(n, dir) < 0.0 ? -n : n;
-            float f = face_fresnel(length(vd - dot(vd, nf) * nf), eta_1, eta_2);
-            // Beyond the critical angle nothing is looked up, as for a face below.
-            if (reflections && f < 1.0) {
-                reflected = f;
-                reflected_dir = reflect(normalize(vd), nf);
-            }
-            highlight_n = nf;
-            highlight_ratio = eta_2 / eta_1;
-        }
+        film_reflection(film, v_minus, v_plus, e_minus, e_plus, v_prev, f_v, n, dir, vd,
+                        reflections, reflected, reflected_dir, highlight_n, highlight_ratio);
     } else if (abs(d_eta) > 1e-4) {
-        // A face: where eta steps (a one-voxel ramp between plateaus) the viewing ray
-        // meets a surface of glass once, whatever the sample distance and however the
-        // planes cut the ramp: in the segment where eta passes the middle of the step,
-        // whose plateaus are found a few voxels either side along the normal. There it
-        // reflects (Fresnel) and shows the highlight, both with the whole step's F. (Per
-        // plane from consecutive eta samples, the highlight's F depended on how much of
-        // the ramp a plane happened to straddle: rings on glass at the plane spacing; and
-        // the sum of each segment's own small F is a fraction of the face's, as for a
-        // graded face, which physically reflects little.)
-        float eta_lo = min(min(eta_here, eta_prev), e_minus);
-        float eta_hi = max(max(eta_here, eta_prev), e_plus);
-        float eta_mid = 0.5 * (eta_lo + eta_hi);
-        // A face is a step of at least MIN_FACE_STEP: in noise (a scanned or
-        // simulated medium) eta wobbles about its plateau and the smoothed gradient
-        // points anywhere, so a wobble seen at a grazing angle to that random normal
-        // reflected nearly everything (white speckles through red wine, measured).
-        if ((eta_prev < eta_mid) != (eta_here < eta_mid) && eta_hi - eta_lo >= MIN_FACE_STEP) {
-            // The angle of incidence on the face's low-eta side, from the tangential
-            // part of v = eta dx/ds, which crossing the face keeps (Snell); the ray's
-            // own direction is already partly turned inside the ramp. F is the same
-            // both ways through the face (reciprocity) short of total reflection.
-            vec3 vt = vd - dot(vd, n) * n;
-            bool entering = d_eta > 0.0;
-            float sin_lo = length(vt) / eta_lo;
-            // Fresnel reflection (the F of eq. 4.12, unpolarised): the reflected part
-            // sees the environment (or the background) in the mirrored direction,
-            // weighted by (1 - A) M like everything composited (eq. 4.13), and the ray
-            // goes on with the rest (folded into A, so what lies behind is seen through
-            // 1 - F). Not occluded: the mirrored direction is not traced through the
-            // volume (like the thesis' highlights, ch. 8). Beyond the critical angle
-            // the ray itself is the reflected light (its Snell step turns it back), so
-            // nothing is looked up. (Looking the environment up with F = 1 there and
-            // ending the ray was tried: no visible difference on the wine glass.)
-            if (reflections && sin_lo < 1.0) {
-                reflected = face_fresnel(length(vt), eta_lo, eta_hi);
-                // Mirror the direction the ray had on the side it came from.
-                float eta_in = entering ? eta_lo : eta_hi;
-                float vn = sqrt(max(eta_in * eta_in - dot(vt, vt), 0.0));
-                vec3 incident = (vt + (dot(vd, n) >= 0.0 ? vn : -vn) * n) / eta_in;
-                reflected_dir = reflect(incident, n);
-            }
-            highlight_n = n;
-            highlight_ratio = entering ? eta_hi / eta_lo : eta_lo / eta_hi;
-        }
+        face_reflection(eta_prev, eta_here, e_minus, e_plus, n, vd, reflections, reflected,
+                        reflected_dir, highlight_n, highlight_ratio);
     }
 }
 
@@ -637,6 +662,47 @@ vec3 face_highlight(vec3 vp, vec3 dir, float seg_len, vec3 ldir, vec3 face_n, fl
     vec3 v = -dir;
     vec3 nv = dot(n, v) < 0.0 ? -n : n;
     return P.specular.y * specular_term(nv, -l_face, v, ratio) * i_face;
+}
+
+// The face advance_viewing_ray (below) steps through: its middle on the normal line
+// through `centre` (nn points to higher eta; the probes at +-hs read eta_hi and eta_lo),
+// found by bisection to eta_mid, and how sharp it is: 1 where most of the step lies
+// within 1.5 reference steps of the middle with plateaus at the probes, 0 for a graded
+// ramp. With face_used false the bisection and the probes run no trips (see the caller).
+float face_sharpness(vec3 centre, vec3 nn, float hs, float eta_lo, float eta_hi,
+                     float eta_mid, float face_step, bool face_used, out vec3 face) {
+    float ref_step = P.planes.w;
+    // The face's middle on the normal line through the centre.
+    float s0 = -hs, s1 = hs;
+    int bisections = face_used ? FACE_BISECTIONS : 0;
+    for (int k = 0; k < bisections; ++k) {
+        float s = 0.5 * (s0 + s1);
+        if (eta_of(value_at_tex(to_tex(centre + s * nn))) >= eta_mid) s1 = s; else s0 = s;
+    }
+    face = centre + 0.5 * (s0 + s1) * nn;
+    // Eta 1.5 reference steps either side of the middle (k = 0, 1: the step across
+    // the face) and 1.5 beyond either probe (k = 2, 3: further out).
+    float e_across_hi = 0.0, e_across_lo = 0.0, e_further_hi = 0.0, e_further_lo = 0.0;
+    int probes = face_used ? 4 : 0;
+    for (int k = 0; k < probes; ++k) {
+        float side = (k & 1) == 0 ? 1.0 : -1.0;
+        vec3 from = k < 2 ? face : centre;
+        float reach = k < 2 ? 1.5 * ref_step : hs + 1.5 * ref_step;
+        float e = eta_of(value_at_tex(to_tex(from + side * reach * nn)));
+        e_across_hi = k == 0 ? e : e_across_hi;
+        e_across_lo = k == 1 ? e : e_across_lo;
+        e_further_hi = k == 2 ? e : e_further_hi;
+        e_further_lo = k == 3 ? e : e_further_lo;
+    }
+    float across = e_across_hi - e_across_lo;
+    // Sharp: most of the step within 1.5 reference steps of the middle, and plateaus
+    // at the probes (eta 1.5 reference steps further out is the same; in the tails of
+    // a wider ramp the probes' middle is no face, and the ramp goes on changing).
+    float further = abs(e_further_hi - eta_hi) + abs(e_further_lo - eta_lo);
+    float ratio = face_step > 0.0 ? across / face_step : 0.0;
+    float flatness = face_step > 0.0 ? further / face_step : 1.0;
+    float sharp = smoothstep(0.75, 0.85, ratio) * (1.0 - smoothstep(0.05, 0.15, flatness));
+    return sharp;
 }
 
 // Advance to the next plane, turning on the way (eq. 4.3). v = eta dx/ds.
@@ -719,36 +785,9 @@ vec3 advance_viewing_ray(vec3 vp, inout vec3 vd, float eta_here, vec3 grad_eta, 
         // leaves a loop once all its lanes are done: 0.8-0.9x the viewing rays' time on
         // the demo scene, where most rays cross no face; the image is the same).
         bool face_used = face_step > FACE_STEP_LO;
-        // The face's middle on the normal line through the centre.
-        float s0 = -hs, s1 = hs;
-        int bisections = face_used ? FACE_BISECTIONS : 0;
-        for (int k = 0; k < bisections; ++k) {
-            float s = 0.5 * (s0 + s1);
-            if (eta_of(value_at_tex(to_tex(centre + s * nn))) >= eta_mid) s1 = s; else s0 = s;
-        }
-        vec3 face = centre + 0.5 * (s0 + s1) * nn;
-        // Eta 1.5 reference steps either side of the middle (k = 0, 1: the step across
-        // the face) and 1.5 beyond either probe (k = 2, 3: further out).
-        float e_across_hi = 0.0, e_across_lo = 0.0, e_further_hi = 0.0, e_further_lo = 0.0;
-        int probes = face_used ? 4 : 0;
-        for (int k = 0; k < probes; ++k) {
-            float side = (k & 1) == 0 ? 1.0 : -1.0;
-            vec3 from = k < 2 ? face : centre;
-            float reach = k < 2 ? 1.5 * ref_step : hs + 1.5 * ref_step;
-            float e = eta_of(value_at_tex(to_tex(from + side * reach * nn)));
-            e_across_hi = k == 0 ? e : e_across_hi;
-            e_across_lo = k == 1 ? e : e_across_lo;
-            e_further_hi = k == 2 ? e : e_further_hi;
-            e_further_lo = k == 3 ? e : e_further_lo;
-        }
-        float across = e_across_hi - e_across_lo;
-        // Sharp: most of the step within 1.5 reference steps of the middle, and plateaus
-        // at the probes (eta 1.5 reference steps further out is the same; in the tails of
-        // a wider ramp the probes' middle is no face, and the ramp goes on changing).
-        float further = abs(e_further_hi - eta_hi) + abs(e_further_lo - eta_lo);
-        float ratio = face_step > 0.0 ? across / face_step : 0.0;
-        float flatness = face_step > 0.0 ? further / face_step : 1.0;
-        float sharp = smoothstep(0.75, 0.85, ratio) * (1.0 - smoothstep(0.05, 0.15, flatness));
+        vec3 face;
+        float sharp = face_sharpness(centre, nn, hs, eta_lo, eta_hi, eta_mid, face_step,
+                                     face_used, face);
         // One Snell step from the ray's eta (|v|) to a target: graded, eta at the next
         // plane, at the step's middle; sharp, the plateau of the side the step ends on,
         // where the ray meets the face (or at the middle if it does not cross it here: a
@@ -797,6 +836,37 @@ vec3 light_origin(ivec2 px, uint R, float ds) {
 #endif
 
 #if PASS == 0
+// Elliptical 3-tap kernel (after Patel et al.; sect. 5.2): a disc of radius `softness`
+// reference steps perpendicular to the light (direction ld_here at this pixel), projected
+// onto the previous plane around uv_lp (stretched along the light's lateral direction),
+// with a per-pixel, per-plane random rotation. Applied at every plane, the blur
+// accumulates (incremental convolution): penumbrae widen with distance behind the
+// occluder and with softness.
+void soft_light_at(vec2 uv_lp, vec3 ld_here, float softness, uint R, out vec3 light_prev,
+                   out vec3 dir_prev) {
+    float ds = P.planes.y;
+    float ref_step = P.planes.w;
+    light_prev = vec3(0.0);
+    dir_prev = vec3(0.0);
+    vec3 dn = normalize(ld_here);
+    float radius = softness * ref_step;                          // world units
+    vec2 lateral = length(dn.xy) > 1e-6 ? normalize(dn.xy) : vec2(1.0, 0.0);
+    vec2 across = vec2(-lateral.y, lateral.x);
+    float world_per_uv_y = 2.0 * (pc.depth - ds) * P.camera.x;  // plane i-1 height
+    vec2 to_uv = vec2(1.0 / (world_per_uv_y * P.camera.y), -1.0 / world_per_uv_y);
+    float rot = 2.0 * PI * hash(uvec3(FRAG_XY, pc.plane));
+    for (int k = 0; k < 3; ++k) {
+        float phi = rot + float(k) * (2.0 * PI / 3.0);
+        vec2 offset = radius * (cos(phi) / dn.z * lateral + sin(phi) * across);
+        vec3 l, d;
+        light_at(uv_lp + offset * to_uv, R, l, d);
+        light_prev += l;
+        dir_prev += d;
+    }
+    light_prev /= 3.0;
+    dir_prev /= 3.0;
+}
+
 // The backward (semi-Lagrangian) light step of Algorithm 1 (sect. 4.2, 5.2): the light
 // reaching this plane's pixel (uv, pixel) from the previous plane, attenuated over the
 // step (eq. 4.4) and scaled by the intensity law (eqs. 4.6-4.8), and its direction
@@ -813,32 +883,13 @@ void backward_light_step(vec2 uv, ivec2 pixel, out vec3 light, out vec3 light_di
     vec3 lp = p - ld_here * (ds / ld_here.z);
     vec2 uv_lp = project(lp);
 
-    // Elliptical 3-tap kernel (after Patel et al.): a disc of radius `softness` reference
-    // steps perpendicular to the light, projected onto the previous plane (stretched along
-    // the light's lateral direction), with a per-pixel, per-plane random rotation. Applied
-    // at every plane, the blur accumulates (incremental convolution): penumbrae widen with
-    // distance behind the occluder and with softness.
+    // The light arriving at lp from the previous plane: through the soft kernel where
+    // the light is soft (soft_light_at), else one light-weighted bilinear read.
     vec3 light_prev = vec3(0.0);
     vec3 dir_prev = vec3(0.0);
     float softness = P.light_dir.w;
     if (HAVE_SOFT_LIGHT && softness > 0.0) {
-        vec3 dn = normalize(ld_here);
-        float radius = softness * ref_step;                          // world units
-        vec2 lateral = length(dn.xy) > 1e-6 ? normalize(dn.xy) : vec2(1.0, 0.0);
-        vec2 across = vec2(-lateral.y, lateral.x);
-        float world_per_uv_y = 2.0 * (pc.depth - ds) * P.camera.x;  // plane i-1 height
-        vec2 to_uv = vec2(1.0 / (world_per_uv_y * P.camera.y), -1.0 / world_per_uv_y);
-        float rot = 2.0 * PI * hash(uvec3(FRAG_XY, pc.plane));
-        for (int k = 0; k < 3; ++k) {
-            float phi = rot + float(k) * (2.0 * PI / 3.0);
-            vec2 offset = radius * (cos(phi) / dn.z * lateral + sin(phi) * across);
-            vec3 l, d;
-            light_at(uv_lp + offset * to_uv, R, l, d);
-            light_prev += l;
-            dir_prev += d;
-        }
-        light_prev /= 3.0;
-        dir_prev /= 3.0;
+        soft_light_at(uv_lp, ld_here, softness, R, light_prev, dir_prev);
     } else {
         light_at(uv_lp, R, light_prev, dir_prev);
     }
@@ -898,6 +949,114 @@ void backward_light_step(vec2 uv, ivec2 pixel, out vec3 light, out vec3 light_di
 }
 #endif
 
+#if PASS != 1
+// The smoothed surface normal (the gradient volume) at the box's point nearest to vp, and
+// whether vp lies in the box. One read: a ray just outside the box may still need its
+// face's normal (advance_viewing_ray's face step), though no segment outside has a face.
+vec3 normal_at_box(vec3 vp, out bool in_box) {
+    vec3 t_here = to_tex(vp);
+    in_box = all(greaterThanEqual(t_here, vec3(0.0))) && all(lessThanEqual(t_here, vec3(1.0)));
+    return surface_gradient_tex(clamp(t_here, vec3(0.0), vec3(1.0)));
+}
+
+// One segment of a viewing ray (sect. 4.3; from its previous point, value v_prev and eta
+// eta_prev, to vp on this plane, value f_v and eta eta_here; v = vd, dir its unit
+// direction, seg_len long, n_here the smoothed normal at vp) composited into its colour
+// C, opacity A and medium M (Oddy-Willis, eq. 4.13): the segment's own colour and
+// opacity (viewing_segment) lit by this plane's light (segment_light), the reflection
+// and highlight of a face it meets (face_met, face_highlight). Returns the ray's new
+// skin chain code (segment_light; 0 unlit), from chain_in, the code it carried.
+float composite_segment(vec3 vp, vec3 vd, vec3 dir, float seg_len, float v_prev,
+                        float eta_prev, float f_v, float eta_here, vec3 n_here,
+                        float chain_in, uint R, inout vec3 C, inout float A, inout vec3 M) {
+    float chain_code = 0.0;
+    vec2 uv_v = project(vp);
+    vec3 c; float a; vec3 m;
+    viewing_segment(vp, dir, seg_len, v_prev, f_v, c, a, m);
+#if FORWARD_LIGHT
+    // The light of this plane's segment (i-1 -> i): the irradiance where the ray
+    // enters it, on plane i-1 (the segment's front, as the backward step uses).
+    vec2 uv_front = project(vp - dir * seg_len);
+    vec3 i_d = READ_BUFFER(irradiance, R, uv_front).rgb;
+#else
+    vec3 i_d = READ_BUFFER(light_colour, R, uv_v).rgb;
+#endif
+    // Direction the light travels at the segment's front, where i_d is read: at a
+    // face, the side the light meets it from (read at the segment's back, a plane
+    // beyond a face, it was the refracted light's direction or not depending on how
+    // the planes fell: a highlight banded at the plane spacing).
+#if FORWARD_LIGHT
+    vec3 ldir = splatted_direction(READ_BUFFER(irradiance_direction, R, uv_front));
+#else
+    vec3 ldir = normalize(READ_BUFFER(light_direction, R, uv_v).xyz);
+#endif
+    vec3 i_s = vec3(0.0);
+    vec3 c_ambient = vec3(0.0);
+    bool unlit = P.unlit != 0u;
+    if (unlit) {
+        i_d = vec3(1.0);
+    } else {
+        chain_code = segment_light(dir, ldir, f_v, v_prev, n_here, a, seg_len, chain_in, c,
+                                   c_ambient, i_d);
+    }
+    bool reflections = HAVE_REFLECTIONS && P.refraction.y > 0.5;
+    bool specular = HAVE_SPECULAR && P.specular.y > 0.0 && !unlit;
+    if (reflections || specular) {
+        float reflected, highlight_ratio;
+        vec3 reflected_dir, highlight_n;
+        face_met(vp, vd, dir, seg_len, n_here, v_prev, eta_prev, f_v, eta_here, reflections,
+                 reflected, reflected_dir, highlight_n, highlight_ratio);
+        if (reflected > 0.0) {
+            C += (1.0 - A) * M * reflected * environment_radiance(reflected_dir);
+            A += (1.0 - A) * reflected;
+        }
+        if (specular && dot(highlight_n, highlight_n) > 0.0) {
+            i_s = face_highlight(vp, dir, seg_len, ldir, highlight_n, highlight_ratio, R);
+        }
+    }
+    // Oddy-Willis compositing (eq. 4.13): the medium factor once, specular not
+    // multiplied by opacity.
+    C += (1.0 - A) * M * (c * i_d + c_ambient * P.ambient.rgb + i_s);
+    A += (1.0 - A) * a;
+    M *= m;
+    return chain_code;
+}
+
+#endif
+
+#if PASS == 1
+// The forward transport's light-ray pass for one ray texel (`pixel` of the ray images;
+// read layer R): its outputs, the ray advanced to this plane.
+void light_ray_plane(ivec2 pixel, uint R) {
+// ---- light propagation, forward (Lagrangian) --------------------------------------
+// Each texel of the light state is one light ray: flux (rgb) and its position on the
+// previous plane (.w of both buffers), direction v = eta dx/ds (eq. 4.2). The ray is
+// advanced to this plane on its own; no neighbour's direction bends it, so rays cross
+// through a focus as they do physically (thesis ch. 7's bright spots came from the
+// backward step's one direction per pixel). Irradiance is made from the rays
+// afterwards by light_splat.*, which conserves their flux.
+// This draw covers the ray images; texels past the grid hold no ray.
+int r = pixel.y * int(P.light_rays.z) + pixel.x;
+ivec2 ray = ivec2(r % int(P.light_rays.x), r / int(P.light_rays.x));
+if (!ray_exists(ray)) {
+    out_light_colour = vec4(0.0);
+    out_light_direction = vec4(0.0, 0.0, 1.0, 0.0);
+    return;
+}
+vec4 lc = READ_RAY(rays_flux, R, r);
+vec4 lv = READ_RAY(rays_direction, R, r);
+vec3 flux = lc.rgb;
+#if SOFT_LIGHT
+flux = diffuse_flux(ray, r, lv, flux);   // softness (sect. 5.2) as diffusion
+#endif
+// To this plane (eqs. 4.2-4.4, advance_light_ray).
+vec3 v_new, p_new;
+advance_light_ray(lc, lv, flux, v_new, p_new);
+out_light_colour = vec4(flux, p_new.x);
+out_light_direction = vec4(v_new, p_new.y);
+}
+#endif
+
 void PLANE_MAIN() {
     vec2 size = P.camera.zw;
     vec2 uv = FRAG_XY / size;
@@ -907,32 +1066,7 @@ void PLANE_MAIN() {
     ivec2 pixel = ivec2(FRAG_XY);
 
 #if PASS == 1
-    // ---- light propagation, forward (Lagrangian) --------------------------------------
-    // Each texel of the light state is one light ray: flux (rgb) and its position on the
-    // previous plane (.w of both buffers), direction v = eta dx/ds (eq. 4.2). The ray is
-    // advanced to this plane on its own; no neighbour's direction bends it, so rays cross
-    // through a focus as they do physically (thesis ch. 7's bright spots came from the
-    // backward step's one direction per pixel). Irradiance is made from the rays
-    // afterwards by light_splat.*, which conserves their flux.
-    // This draw covers the ray images; texels past the grid hold no ray.
-    int r = pixel.y * int(P.light_rays.z) + pixel.x;
-    ivec2 ray = ivec2(r % int(P.light_rays.x), r / int(P.light_rays.x));
-    if (!ray_exists(ray)) {
-        out_light_colour = vec4(0.0);
-        out_light_direction = vec4(0.0, 0.0, 1.0, 0.0);
-        return;
-    }
-    vec4 lc = READ_RAY(rays_flux, R, r);
-    vec4 lv = READ_RAY(rays_direction, R, r);
-    vec3 flux = lc.rgb;
-#if SOFT_LIGHT
-    flux = diffuse_flux(ray, r, lv, flux);   // softness (sect. 5.2) as diffusion
-#endif
-    // To this plane (eqs. 4.2-4.4, advance_light_ray).
-    vec3 v_new, p_new;
-    advance_light_ray(lc, lv, flux, v_new, p_new);
-    out_light_colour = vec4(flux, p_new.x);
-    out_light_direction = vec4(v_new, p_new.y);
+    light_ray_plane(pixel, R);   // the light rays (sect. 4.2), forward
 #elif PASS == 0
     // ---- light propagation (sect. 4.2, 5.2) -------------------------------------------
     vec3 light, light_dir;
@@ -979,66 +1113,14 @@ void PLANE_MAIN() {
     float seg_len = ds / dir.z;   // arc length from plane i-1 to this plane
 
     float chain_code = M4.w;
-    // The surface normal at this plane's point (the smoothed gradient volume): the face's
-    // for the segment ending here, and the probing direction of the step starting here.
-    // One read, at the box's nearest point: zero outside the box for n_here, but a ray
-    // just outside it may still need its face's normal (the face step below).
-    vec3 t_here = to_tex(vp);
-    bool in_box = all(greaterThanEqual(t_here, vec3(0.0))) && all(lessThanEqual(t_here, vec3(1.0)));
-    vec3 n_box = surface_gradient_tex(clamp(t_here, vec3(0.0), vec3(1.0)));
+    // The surface normal at this plane's point: the face's for the segment ending here
+    // (zero outside the box), and the probing direction of the step starting here.
+    bool in_box;
+    vec3 n_box = normal_at_box(vp, in_box);
     vec3 n_here = in_box ? n_box : vec3(0.0);
     if (A < P.termination_alpha) {
-        vec2 uv_v = project(vp);
-        vec3 c; float a; vec3 m;
-        viewing_segment(vp, dir, seg_len, vp4.w, f_v, c, a, m);
-#if FORWARD_LIGHT
-        // The light of this plane's segment (i-1 -> i): the irradiance where the ray
-        // enters it, on plane i-1 (the segment's front, as the backward step uses).
-        vec2 uv_front = project(vp - dir * seg_len);
-        vec3 i_d = READ_BUFFER(irradiance, R, uv_front).rgb;
-        uint W = 1u - R;
-#else
-        vec3 i_d = READ_BUFFER(light_colour, R, uv_v).rgb;
-#endif
-        // Direction the light travels at the segment's front, where i_d is read: at a
-        // face, the side the light meets it from (read at the segment's back, a plane
-        // beyond a face, it was the refracted light's direction or not depending on how
-        // the planes fell: a highlight banded at the plane spacing).
-#if FORWARD_LIGHT
-        vec3 ldir = splatted_direction(READ_BUFFER(irradiance_direction, R, uv_front));
-#else
-        vec3 ldir = normalize(READ_BUFFER(light_direction, R, uv_v).xyz);
-#endif
-        vec3 i_s = vec3(0.0);
-        vec3 c_ambient = vec3(0.0);
-        bool unlit = P.unlit != 0u;
-        chain_code = 0.0;
-        if (unlit) {
-            i_d = vec3(1.0);
-        } else {
-            chain_code = segment_light(dir, ldir, f_v, vp4.w, n_here, a, seg_len, M4.w, c,
-                                       c_ambient, i_d);
-        }
-        bool reflections = HAVE_REFLECTIONS && P.refraction.y > 0.5;
-        bool specular = HAVE_SPECULAR && P.specular.y > 0.0 && !unlit;
-        if (reflections || specular) {
-            float reflected, highlight_ratio;
-            vec3 reflected_dir, highlight_n;
-            face_met(vp, vd, dir, seg_len, n_here, vp4.w, vd4.w, f_v, eta_here, reflections,
-                     reflected, reflected_dir, highlight_n, highlight_ratio);
-            if (reflected > 0.0) {
-                C += (1.0 - A) * M * reflected * environment_radiance(reflected_dir);
-                A += (1.0 - A) * reflected;
-            }
-            if (specular && dot(highlight_n, highlight_n) > 0.0) {
-                i_s = face_highlight(vp, dir, seg_len, ldir, highlight_n, highlight_ratio, R);
-            }
-        }
-        // Oddy-Willis compositing (eq. 4.13): the medium factor once, specular not
-        // multiplied by opacity.
-        C += (1.0 - A) * M * (c * i_d + c_ambient * P.ambient.rgb + i_s);
-        A += (1.0 - A) * a;
-        M *= m;
+        chain_code = composite_segment(vp, vd, dir, seg_len, vp4.w, vd4.w, f_v, eta_here,
+                                       n_here, M4.w, R, C, A, M);
     }
     // Advance to the next plane, turning on the way (eq. 4.3; advance_viewing_ray).
     vec3 vp_next = advance_viewing_ray(vp, vd, eta_here, grad_eta, n_box, in_box);
