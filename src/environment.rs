@@ -121,6 +121,9 @@ impl EnvironmentMap {
         )
     }
 
+    /// The built-in sky's width (`--env sky`, the viewer panel's "sky").
+    pub const SKY_WIDTH: u32 = 1024;
+
     /// The default when no map is given, so nothing must be downloaded: a sky gradient with
     /// a sun and a checkered ground, `width` × `width / 2`.
     pub fn procedural(width: u32) -> Result<Self> {

@@ -581,11 +581,12 @@ fn view_options_and_a_missing_display_are_clear_errors() {
 }
 
 #[test]
-fn the_panel_opens_with_a_click_and_switches_the_clipping_plane() {
+fn the_panel_opens_with_a_click_and_switches_the_environment_and_the_clipping_plane() {
     let _one = exclusive();
     // Issue 36: the on-screen panel (egui) is folded into a title bar in the top-left
-    // corner at first; a click on it opens it, and a click on its "clipping plane" box
-    // turns the clipping plane on, which the viewer says on stdout as the C key does.
+    // corner at first; a click on it opens it, a choice of "none" in its environment box
+    // puts the background colour behind the volume, and a click on its "clipping plane"
+    // box turns the clipping plane on, which the viewer says on stdout as the C key does.
     // Real pointer input through the X server (xdotool), validation on. With the panel
     // not drawn, not placed where it is laid out, or not wired to the view, no "clipping
     // on" line comes.
@@ -655,6 +656,7 @@ fn the_panel_opens_with_a_click_and_switches_the_clipping_plane() {
             "--sample-distance",
             "2",
         ])
+        .current_dir(dir.path())
         .env("REFRAKT_VALIDATE", "1")
         .env("DISPLAY", &display)
         .env_remove("WAYLAND_DISPLAY")
@@ -692,12 +694,24 @@ fn the_panel_opens_with_a_click_and_switches_the_clipping_plane() {
     let shown = wait_for("frame 0: ", 120);
     let window = xdotool(&["search", "--sync", "--name", "refrakt view"]);
     let window = window.lines().next().unwrap_or_default().to_string();
-    let mut clicked = false;
+    let (mut clicked, mut env_set, mut shot_taken) = (false, false, false);
     if shown && !window.is_empty() {
-        // The folded panel's title bar, then (once open) its "clipping plane" box.
-        xdotool(&["mousemove", "--window", &window, "16", "17", "click", "1"]);
-        std::thread::sleep(std::time::Duration::from_millis(1500));
-        xdotool(&["mousemove", "--window", &window, "14", "301", "click", "1"]);
+        let click = |x: &str, y: &str| {
+            xdotool(&["mousemove", "--window", &window, x, y, "click", "1"]);
+            std::thread::sleep(std::time::Duration::from_millis(1500));
+        };
+        // The folded panel's title bar, then (once open) its "environment" combo box and
+        // in the list it opens (upwards, the window's bottom being near) "none", whose
+        // background colour then lies behind the glass instead of the scene's sky; then
+        // the "clipping plane" box.
+        click("16", "17");
+        click("60", "330");
+        click("60", "307");
+        env_set = wait_for("environment: none", 30);
+        xdotool(&["windowfocus", "--sync", &window]);
+        xdotool(&["key", "p"]);
+        shot_taken = wait_for("screenshot: ", 120);
+        click("14", "301");
         clicked = wait_for("clipping on", 30);
     }
     let _ = child.kill();
@@ -706,6 +720,32 @@ fn the_panel_opens_with_a_click_and_switches_the_clipping_plane() {
     println!("{log}{err}");
     assert!(shown, "the viewer showed no frame:\n{log}{err}");
     assert!(!window.is_empty(), "no window named 'refrakt view'");
+    assert!(env_set, "the panel did not switch the environment:\n{log}");
+    assert!(
+        shot_taken,
+        "no screenshot after the environment switch:\n{log}"
+    );
+    // The frame's top-right corner, beside the panel: the sky there before (light grey
+    // and white checks, 198/255 at most when the choice does not reach the renderer), the
+    // dark background colour (0.08, 0.08, 0.1 linear: 99/255 at most) after.
+    let (w, _, pixels) = read_png(&dir.path().join("refrakt-glass-floor-001.png"));
+    let corner: Vec<u8> = (370..390)
+        .flat_map(|x| (10..30).map(move |y| (x, y)))
+        .map(|(x, y)| {
+            pixels[((y * w + x) * 4) as usize..][..3]
+                .iter()
+                .copied()
+                .max()
+                .unwrap()
+        })
+        .collect();
+    let brightest = corner.iter().copied().max().unwrap();
+    println!("environment none: the corner beside the panel at most {brightest}/255");
+    assert!(
+        brightest < 150,
+        "the background colour is not behind the volume after choosing no environment: \
+         the corner beside the panel reaches {brightest}/255"
+    );
     assert!(clicked, "the panel did not turn clipping on:\n{log}");
     assert!(!err.contains("[vulkan"), "validation messages:\n{err}");
     drop(xvfb);

@@ -277,6 +277,8 @@ pub struct LoadedScene {
     pub tf: TransferFunctions,
     /// Environment behind the volume (refractive model); None = the flat background.
     pub env: Option<EnvironmentMap>,
+    /// What `env` is, for people: "sky", "none" or the map's file name.
+    pub env_name: String,
     pub model: Model,
     pub camera: Camera,
     /// Image size, sampling, light, specular, clipping (the viewer replaces the size with
@@ -609,7 +611,7 @@ impl Scene {
     pub fn environment_map(&self) -> Result<Option<EnvironmentMap>> {
         Ok(match &self.environment {
             EnvSource::None => None,
-            EnvSource::Sky => Some(EnvironmentMap::procedural(1024)?),
+            EnvSource::Sky => Some(EnvironmentMap::procedural(EnvironmentMap::SKY_WIDTH)?),
             EnvSource::File(p) => Some(EnvironmentMap::load(p)?),
         })
     }
@@ -771,11 +773,19 @@ impl Scene {
         notes.extend(upright);
         notes.extend(light_note);
         let files = self.input_files(data_dir);
+        let env_name = match &self.environment {
+            EnvSource::Sky => "sky".to_string(),
+            EnvSource::None => "none".to_string(),
+            EnvSource::File(p) => p
+                .file_name()
+                .map_or_else(|| p.display().to_string(), |n| n.to_string_lossy().into()),
+        };
         Ok(LoadedScene {
             name: self.name.clone(),
             volume,
             tf,
             env,
+            env_name,
             model: self.model,
             camera: self.camera,
             opts,

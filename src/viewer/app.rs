@@ -1,8 +1,9 @@
 //! The main thread's winit application: input to view state and messages, file watching,
 //! the window's title and size.
 
-use super::panel::{Panel, PanelAction};
+use super::panel::{EnvChoice, Panel, PanelAction};
 use super::*;
+use crate::environment::EnvironmentMap;
 
 /// Mouse and keyboard state between events.
 #[derive(Default)]
@@ -40,6 +41,8 @@ pub(super) struct App {
     pub(super) last_minimised_poll: Instant,
     /// The on-screen panel (made with the window).
     pub(super) panel: Option<Panel>,
+    /// The scene's own environment, for the panel's "the scene's" choice.
+    pub(super) scene_env: Option<EnvironmentMap>,
 }
 
 pub(super) fn mtime(path: &Path) -> Option<SystemTime> {
@@ -84,6 +87,7 @@ impl App {
             watched,
             last_minimised_poll: Instant::now(),
             panel: None,
+            scene_env: None,
         }
     }
 
@@ -114,7 +118,13 @@ impl App {
                 .context("creating the window")?,
         );
         self.window = Some(window.clone());
-        let panel = Panel::new(&window, self.options.panel, self.volume_radius);
+        self.scene_env = scene.env.clone();
+        let panel = Panel::new(
+            &window,
+            self.options.panel,
+            self.volume_radius,
+            (scene.env_name.clone(), scene.env.is_none()),
+        );
         let panel_frame = panel.shared.clone();
         self.panel = Some(panel);
         let mut desc = self.desc.clone();
@@ -211,8 +221,10 @@ impl App {
             Ok(new) => {
                 self.watched = new.files.iter().map(|f| (f.clone(), mtime(f))).collect();
                 self.volume_radius = 0.5 * Vec3::from(new.volume.normalised_extent()).length();
+                self.scene_env = new.env.clone();
                 if let Some(p) = self.panel.as_mut() {
                     p.set_radius(self.volume_radius);
+                    p.set_scene_env((new.env_name.clone(), new.env.is_none()));
                 }
                 println!(
                     "reloaded the {} scene (transfer functions {}) in {:.0} ms",
@@ -472,6 +484,29 @@ impl ApplicationHandler<FromRender> for App {
                             self.send(ToRender::TransferFunctions(Box::new(tf)));
                         }
                         Err(e) => eprintln!("transfer functions {name}: {e:#}"),
+                    }
+                }
+                PanelAction::Environment(choice) => {
+                    let map = match choice {
+                        EnvChoice::Scene => Ok(self.scene_env.clone()),
+                        EnvChoice::Sky => {
+                            EnvironmentMap::procedural(EnvironmentMap::SKY_WIDTH).map(Some)
+                        }
+                        EnvChoice::None => Ok(None),
+                    };
+                    match map {
+                        Ok(map) => {
+                            println!(
+                                "environment: {}",
+                                match choice {
+                                    EnvChoice::Scene => "the scene's",
+                                    EnvChoice::Sky => "sky",
+                                    EnvChoice::None => "none (the background colour)",
+                                }
+                            );
+                            self.send(ToRender::Environment(map.map(Box::new)));
+                        }
+                        Err(e) => eprintln!("environment: {e:#}"),
                     }
                 }
             }

@@ -88,6 +88,8 @@ pub(super) enum ToRender {
     Screenshot,
     /// New transfer functions (the panel's preset).
     TransferFunctions(Box<crate::transfer::TransferFunctions>),
+    /// A new environment behind the volume (the panel's choice; None: the background).
+    Environment(Option<Box<crate::environment::EnvironmentMap>>),
     Quit,
 }
 

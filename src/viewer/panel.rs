@@ -31,6 +31,18 @@ pub(super) struct PanelFrame {
 pub(super) enum PanelAction {
     /// Load this transfer-function preset.
     TransferFunctions(String),
+    /// Put this environment behind the volume.
+    Environment(EnvChoice),
+}
+
+/// The environment the panel's combo box chose: the scene's own (its map, the sky or
+/// none, as its file or command line said), the built-in sky, or none (the flat
+/// background colour, which the panel then offers).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum EnvChoice {
+    Scene,
+    Sky,
+    None,
 }
 
 pub(super) struct Panel {
@@ -46,10 +58,19 @@ pub(super) struct Panel {
     preset: String,
     /// The volume's half diagonal: the clipping plane's offset range.
     radius: f32,
+    /// The environment chosen, and what the scene's own is (its name; whether it is none).
+    env: EnvChoice,
+    scene_env: (String, bool),
 }
 
 impl Panel {
-    pub(super) fn new(window: &Window, visible: bool, radius: f32) -> Self {
+    /// `scene_env`: the scene's own environment, its name and whether it is none.
+    pub(super) fn new(
+        window: &Window,
+        visible: bool,
+        radius: f32,
+        scene_env: (String, bool),
+    ) -> Self {
         let egui = egui::Context::default();
         // No shadow: the panel darkens no pixel of the frame outside its own box.
         egui.style_mut(|s| s.visuals.window_shadow = egui::Shadow::NONE);
@@ -73,7 +94,16 @@ impl Panel {
             last: None,
             preset: "(the scene's)".into(),
             radius,
+            env: EnvChoice::Scene,
+            scene_env,
         }
+    }
+
+    /// A reloaded scene brings its own environment back (the render thread puts it up).
+    pub(super) fn set_scene_env(&mut self, scene_env: (String, bool)) {
+        self.scene_env = scene_env;
+        self.env = EnvChoice::Scene;
+        self.dirty = true;
     }
 
     /// Feed a window event; true when the panel took it (the pointer is over it or a
@@ -117,10 +147,14 @@ impl Panel {
         let before = edited.clone();
         let input = self.winit.take_egui_input(window);
         let visible = self.visible;
+        let mut env = EnvControl {
+            choice: &mut self.env,
+            scene: &self.scene_env,
+        };
         let (radius, preset) = (self.radius, &mut self.preset);
         let output = self.egui.run(input, |ctx| {
             if visible {
-                controls(ctx, &mut edited, &status, radius, preset, actions);
+                controls(ctx, &mut edited, &status, radius, preset, &mut env, actions);
             }
         });
         if edited != before {
@@ -183,6 +217,10 @@ fn from_angles(azimuth: f32, elevation: f32) -> Vec3 {
     Vec3::new(e.cos() * a.sin(), e.sin(), e.cos() * a.cos())
 }
 
+/// The ambient slider's top, in `--ambient-level`'s units (linear irradiance; the default
+/// light's is 1).
+const MAX_AMBIENT_LEVEL: f32 = 2.0;
+
 const MODELS: [Model; 5] = [
     Model::Refract,
     Model::Ea,
@@ -191,12 +229,80 @@ const MODELS: [Model; 5] = [
     Model::Ambient,
 ];
 
+/// The panel's environment combo box: what it shows and the scene's own environment.
+struct EnvControl<'a> {
+    choice: &'a mut EnvChoice,
+    scene: &'a (String, bool),
+}
+
+impl EnvControl<'_> {
+    fn label(&self, choice: EnvChoice) -> String {
+        match choice {
+            EnvChoice::Scene => format!("the scene's ({})", self.scene.0),
+            EnvChoice::Sky => "sky".into(),
+            EnvChoice::None => "none (background colour)".into(),
+        }
+    }
+
+    /// Whether the flat background colour is what lies behind the volume.
+    fn is_none(&self) -> bool {
+        match *self.choice {
+            EnvChoice::Scene => self.scene.1,
+            EnvChoice::Sky => false,
+            EnvChoice::None => true,
+        }
+    }
+
+    /// The combo box, the background colour where no map is behind the volume, the
+    /// map's rotation where one is.
+    fn show(&mut self, ui: &mut egui::Ui, v: &mut ViewState, actions: &mut Vec<PanelAction>) {
+        egui::ComboBox::from_label("environment")
+            .selected_text(self.label(*self.choice))
+            .show_ui(ui, |ui| {
+                for c in [EnvChoice::Scene, EnvChoice::Sky, EnvChoice::None] {
+                    if ui
+                        .selectable_label(*self.choice == c, self.label(c))
+                        .clicked()
+                        && *self.choice != c
+                    {
+                        *self.choice = c;
+                        actions.push(PanelAction::Environment(c));
+                    }
+                }
+            });
+        if self.is_none() {
+            // Linear RGB, as --background takes it.
+            let b = &mut v.opts.background;
+            let mut colour = egui::Rgba::from_rgb(b[0], b[1], b[2]);
+            ui.horizontal(|ui| {
+                let picked = egui::widgets::color_picker::color_edit_button_rgba(
+                    ui,
+                    &mut colour,
+                    egui::widgets::color_picker::Alpha::Opaque,
+                );
+                ui.label("background");
+                if picked.changed() {
+                    b[0] = colour.r();
+                    b[1] = colour.g();
+                    b[2] = colour.b();
+                }
+            });
+        } else {
+            ui.add(
+                egui::Slider::new(&mut v.opts.sweep.env_rotation, -180.0..=180.0)
+                    .text("environment rotation °"),
+            );
+        }
+    }
+}
+
 fn controls(
     ctx: &egui::Context,
     v: &mut ViewState,
     status: &str,
     radius: f32,
     preset: &mut String,
+    env: &mut EnvControl,
     actions: &mut Vec<PanelAction>,
 ) {
     // Folded at first (a title bar in the corner; a click opens it), so that a first look
@@ -289,10 +395,23 @@ fn controls(
                 }
             }
             ui.separator();
-            ui.add(
-                egui::Slider::new(&mut s.env_rotation, -180.0..=180.0)
-                    .text("environment rotation °"),
-            );
+            // The environment and the ambient level are the refractive model's (the
+            // others draw the background colour and take no ambient light).
+            if v.model == Model::Refract {
+                env.show(ui, v, actions);
+                let s = &mut v.opts.sweep;
+                let mut level = s.ambient.into_iter().fold(0.0f32, f32::max);
+                let hue = s.ambient.map(|c| if level > 0.0 { c / level } else { 1.0 });
+                if ui
+                    .add(
+                        egui::Slider::new(&mut level, 0.0..=MAX_AMBIENT_LEVEL)
+                            .text("ambient level"),
+                    )
+                    .changed()
+                {
+                    s.ambient = hue.map(|c| c * level);
+                }
+            }
             ui.add(egui::Slider::new(&mut v.tone.exposure, -8.0..=8.0).text("exposure (stops)"));
         });
 }

@@ -487,6 +487,12 @@ impl RenderLoop {
                     self.seen = None;
                     self.preintegrate()?;
                 }
+                ToRender::Environment(map) => {
+                    self.gpu.swapchain.wait_idle()?;
+                    self.gpu.renderer.set_environment(map.as_deref())?;
+                    // Drawn again: previews, then a full frame.
+                    self.seen = None;
+                }
                 ToRender::Quit => return Ok(false),
             }
         }
