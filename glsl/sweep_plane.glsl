@@ -339,7 +339,16 @@ void PLANE_MAIN() {
                                        n_here, M4.w, R, C, A, M);
     }
     // Advance to the next plane, turning on the way (eq. 4.3; advance_viewing_ray).
-    vec3 vp_next = advance_viewing_ray(vp, vd, eta_here, grad_eta, n_box, in_box);
+    vec3 turned_back;
+    vec3 vp_next = advance_viewing_ray(vp, vd, eta_here, grad_eta, n_box, in_box, turned_back);
+    // Totally reflected at a face into a direction the sweep cannot follow (back towards
+    // the viewer): what the ray sees from here on is what lies that way, looked up as
+    // the Fresnel reflections are (the environment, unoccluded), and the ray ends.
+    bool reflections = HAVE_REFLECTIONS && P.refraction.y > 0.5;
+    if (reflections && dot(turned_back, turned_back) > 0.0 && A < P.termination_alpha) {
+        C += (1.0 - A) * M * environment_radiance(normalize(turned_back));
+        A = 1.0;
+    }
 
 #if PASS == 0
     out_light_colour = vec4(light, 0.0);

@@ -189,8 +189,10 @@ void face_reflection(float eta_prev, float eta_here, float e_minus, float e_plus
         // 1 - F). Not occluded: the mirrored direction is not traced through the
         // volume (like the thesis' highlights, ch. 8). Beyond the critical angle
         // the ray itself is the reflected light (its Snell step turns it back), so
-        // nothing is looked up. (Looking the environment up with F = 1 there and
-        // ending the ray was tried: no visible difference on the wine glass.)
+        // nothing is looked up (where the sweep cannot follow it back, PLANE_MAIN looks
+        // up what it sees then). (Looking the environment up with F = 1 there and
+        // ending the ray was tried: no visible difference on the wine glass; it is done
+        // only where the sweep cannot follow the turned ray, advance_viewing_ray.)
         if (reflections && sin_lo < 1.0) {
             reflected = face_fresnel(length(vt), eta_lo, eta_hi);
             // Mirror the direction the ray had on the side it came from.
@@ -353,9 +355,10 @@ float face_sharpness(vec3 centre, vec3 nn, float hs, float eta_lo, float eta_hi,
 // grad eta there grad_eta, the smoothed surface normal at the box's nearest point n_box)
 // to the next plane: vd becomes its new v, the return value its point there.
 vec3 advance_viewing_ray(vec3 vp, inout vec3 vd, float eta_here, vec3 grad_eta, vec3 n_box,
-                         bool in_box) {
+                         bool in_box, out vec3 turned_back) {
     float ds = P.planes.y;
     float ref_step = P.planes.w;
+    turned_back = vec3(0.0);
     if (vd.z < MIN_FORWARD * length(vd)) {
         count_clamp(2u);
         vd = limit_direction(vd);
@@ -417,9 +420,17 @@ vec3 advance_viewing_ray(vec3 vp, inout vec3 vd, float eta_here, vec3 grad_eta, 
         }
         vec3 x = mix(centre, x_sharp, sharp);
         vec3 n = surface_gradient(x);
-        v_face = refract_step(vd, mix(eta_b, eta_side, sharp), dot(n, n) > 1e-12 ? n : nn);
+        vec3 n_turn = dot(n, n) > 1e-12 ? n : nn;
+        v_face = refract_step(vd, mix(eta_b, eta_side, sharp), n_turn);
         if (v_face.z < MIN_FORWARD * length(v_face)) {
             if (face_used) count_clamp(2u);
+            // Turned by a face (totally reflected back towards the viewer, at once at a
+            // sharp face, over a few planes through a graded one) into a direction the
+            // front-to-back sweep cannot follow. Clamped, the ray went on sideways and out
+            // through the face it should not pass (a glass wedge's exit face met at 42-45
+            // degrees showed what lies beyond it); the caller ends it with what lies that
+            // way instead.
+            turned_back = face_step >= FACE_STEP_HI ? v_face : vec3(0.0);
             v_face = limit_direction(v_face);
         }
         vec3 d2 = normalize(v_face);

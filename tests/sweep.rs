@@ -873,3 +873,108 @@ fn a_full_box_attenuates_by_beer_lambert_wherever_its_faces_fall() {
         assert!(failures.is_empty(), "{}", failures.join("\n"));
     });
 }
+
+/// The mean linear red of the frame's central quarter: a glass wedge (η 1.5, 64³) seen
+/// face-on through its entry face (perpendicular to the view), whose exit face, graded as
+/// a tanh ramp `ramp` voxels wide when given, meets the viewing rays at `angle` degrees,
+/// under an environment that is 10 on the viewer's side (world z > -0.05: the camera looks
+/// down -z) and 0 beyond, at sample distance `sd`.
+fn wedge_seen_face_on(ctx: &Context, angle: f32, ramp: Option<f32>, sd: f32) -> f64 {
+    let n = 64u32;
+    let a = angle.to_radians();
+    let m = Vec3::new(a.sin(), 0.0, -a.cos());
+    let vol = f32_volume(n, |p| {
+        let p = Vec3::from(p);
+        let entry = 0.45 - p.z;
+        let exit = -(p - Vec3::new(0.0, 0.0, -0.1)).dot(m);
+        let x = entry.min(exit) * n as f32;
+        match ramp {
+            // tanh reaches ±0.8 at ±atanh(0.8) = ±1.0986 widths.
+            Some(r) => 0.5 + 0.5 * (x * 2.0 * 1.0986 / r).tanh(),
+            None => 0.5 + x,
+        }
+    });
+    let tf = TransferFunctions {
+        eta: Piecewise::new(vec![(0.0, [1.0]), (1.0, [1.5])]),
+        ..Default::default()
+    };
+    // Equirectangular, texel (i, j) at azimuth phi = atan2(x, -z) and elevation theta.
+    let (ew, eh) = (512u32, 256u32);
+    let pixels = (0..eh)
+        .flat_map(|j| (0..ew).map(move |i| (i, j)))
+        .map(|(i, j)| {
+            let phi = (i as f32 + 0.5) / ew as f32 * std::f32::consts::TAU - std::f32::consts::PI;
+            let theta =
+                std::f32::consts::FRAC_PI_2 - (j as f32 + 0.5) / eh as f32 * std::f32::consts::PI;
+            let z = -theta.cos() * phi.cos();
+            let v = if z > -0.05 { 10.0 } else { 0.0 };
+            [v, v, v, 1.0]
+        })
+        .collect();
+    let env =
+        refrakt::environment::EnvironmentMap::new(ew, eh, pixels, "the viewer's side").unwrap();
+    let cam = face_on(2.5, 12.0);
+    let (w, h) = (48u32, 48u32);
+    let mut opts = RenderOptions {
+        width: w,
+        height: h,
+        sample_distance: sd,
+        ..Default::default()
+    };
+    opts.sweep = SweepOptions {
+        light: headlight(&cam, 0.0),
+        specular: 0.0,
+        ..Default::default()
+    };
+    let mut r = Renderer::new(ctx, &vol, &tf).unwrap();
+    r.set_environment(Some(&env)).unwrap();
+    let f = r.render(Model::Refract, &cam, &opts).unwrap();
+    let (mut sum, mut count) = (0.0f64, 0);
+    for y in h / 4..3 * h / 4 {
+        for x in w / 4..3 * w / 4 {
+            sum += f.pixel(x, y)[0] as f64;
+            count += 1;
+        }
+    }
+    sum / count as f64
+}
+
+/// Issue 32, "faces found whole": a viewing ray totally reflected at a face into a
+/// direction the sweep cannot follow (back towards the viewer: a wedge's exit face met at
+/// 41.8-47.9°, where the mirrored ray's forward part is below MIN_FORWARD) sees what lies
+/// that way, and nothing beyond the face. The wedge of `wedge_seen_face_on` under an
+/// environment lit only on the viewer's side: at 43.5° and 44.5° the mirrored rays look
+/// 3.9-5.9° into the lit side, so the wedge shows it (10 where every ray reflects; the
+/// environment beyond the face is dark). Sharp and graded faces (tanh, 2 and 3 voxels),
+/// sample distance 1 and 0.5. Measured 2026-11-27: 8.6-10 (3-voxel ramp at 44.5°, sd 0.5:
+/// 6.4: a graded face turns the ray over several planes, and it ends where the sweep first
+/// cannot follow it, short of the mirror direction); before, the clamped rays went on
+/// through the face and showed the dark beyond: 0.74-1.9. Controls: at 30° the face
+/// transmits (0.93: the dark beyond, the faces' Fresnel reflections of the lit side), at
+/// 50° the mirrored ray is followed to the far side (0.78).
+#[test]
+fn viewing_rays_totally_reflected_back_see_the_viewers_side() {
+    with_context(|ctx| {
+        for ramp in [None, Some(2.0f32), Some(3.0)] {
+            for sd in [1.0f32, 0.5] {
+                for angle in [43.5f32, 44.5] {
+                    let seen = wedge_seen_face_on(ctx, angle, ramp, sd);
+                    println!("exit face {ramp:?} at {angle}°, sample distance {sd}: {seen:.3}");
+                    assert!(
+                        seen >= 5.0,
+                        "exit face {ramp:?} at {angle}°, sd {sd}: the wedge shows {seen:.3}, \
+                         not the viewer's side (10) its face reflects totally"
+                    );
+                }
+            }
+        }
+        for angle in [30.0f32, 50.0] {
+            let seen = wedge_seen_face_on(ctx, angle, None, 1.0);
+            println!("exit face at {angle}° (control): {seen:.3}");
+            assert!(
+                seen <= 1.5,
+                "{angle}°: the wedge shows {seen:.3}, expected the dark beyond"
+            );
+        }
+    });
+}
