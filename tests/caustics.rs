@@ -208,12 +208,7 @@ fn ball_lens_focus_at_every_sample_distance() {
             let behind = ((cam.distance + r + 3.0 * vox - planes.first_depth) / planes.spacing)
                 .ceil() as u32;
             let depth = planes.depth(behind);
-            let mut opts = RenderOptions {
-                width: w,
-                height: h,
-                sample_distance: sd,
-                ..Default::default()
-            };
+            let mut opts = frame_options(w, h, sd);
             opts.sweep = SweepOptions {
                 light: headlight(&cam, 0.0),
                 dumps: vec![
@@ -296,32 +291,15 @@ fn light_beyond_graded_wedge(
 ) -> f64 {
     let n = 64u32;
     let a = angle.to_radians();
-    // Light travels along world -z (the camera looks down -z). The glass fills the box
-    // below the entry face z = 0.45 and inside the exit face, whose outward normal m makes
-    // `angle` with the light: m = (sin a, 0, -cos a), through the point (0, 0, -0.1). The
-    // faces meet outside the box, so no light reaches the edge between them.
-    let m = Vec3::new(a.sin(), 0.0, -a.cos());
-    let vol = f32_volume(n, |p| {
-        let p = Vec3::from(p);
-        let entry = 0.45 - p.z;
-        let exit = -(p - Vec3::new(0.0, 0.0, -0.1)).dot(m);
-        let x = entry.min(exit) * n as f32;
-        match ramp {
-            // tanh reaches ±0.8 at ±atanh(0.8) = ±1.0986 widths.
-            Some(r) => 0.5 + 0.5 * (x * 2.0 * 1.0986 / r).tanh(),
-            None => 0.5 + x,
-        }
-    });
+    // Light travels along world -z (the camera looks down -z) into the wedge's entry face;
+    // its exit face makes `angle` with the light; the faces meet outside the box, so no
+    // light reaches the edge between them.
+    let vol = glass_wedge(n, angle, ramp);
     let cam = face_on(2.5, 12.0);
     let (w, h) = (64u32, 64u32);
     let planes = Planes::for_box(&cam, Vec3::splat(0.5), sd / n as f32).unwrap();
     let last = planes.count - 1;
-    let mut opts = RenderOptions {
-        width: w,
-        height: h,
-        sample_distance: sd,
-        ..Default::default()
-    };
+    let mut opts = frame_options(w, h, sd);
     opts.sweep = SweepOptions {
         light_transport: transport,
         light: headlight(&cam, 0.0),

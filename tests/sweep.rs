@@ -266,12 +266,7 @@ fn weak_lens_conserves_light_power() {
         let sd = 0.5f32;
         let planes = Planes::for_box(&cam, Vec3::splat(0.5), sd / n as f32).unwrap();
         let behind = plane_at(&planes, cam.distance + 0.25 + 3.0 / n as f32);
-        let mut opts = RenderOptions {
-            width: w,
-            height: h,
-            sample_distance: sd,
-            ..Default::default()
-        };
+        let mut opts = frame_options(w, h, sd);
         opts.sweep = SweepOptions {
             light: headlight(&cam, 0.0),
             dumps: vec![(StateBuffer::LightColour, behind)],
@@ -399,12 +394,7 @@ fn rays_through_the_side_face(
         // Block: x in [-0.5, 0], z in [-0.3, 0.3], all y; eta 1.5 inside.
         let vol = f32_volume(n, |p| {
             let vox = 1.0 / n as f32;
-            let inside = (-p[0]).min(0.3 - p[2].abs()) / vox;
-            match ramp {
-                // tanh reaches ±0.8 at ±atanh(0.8) = ±1.0986 widths.
-                Some(r) => 0.5 + 0.5 * (inside * 2.0 * 1.0986 / r).tanh(),
-                None => 0.5 + inside,
-            }
+            face_profile((-p[0]).min(0.3 - p[2].abs()) / vox, ramp)
         });
         let tf = TransferFunctions {
             eta: Piecewise::new(vec![(0.0, [1.0]), (1.0, [1.5])]),
@@ -421,12 +411,7 @@ fn rays_through_the_side_face(
         let spacing = sd / n as f32;
         let planes = Planes::for_box(&cam, Vec3::splat(0.5), spacing).unwrap();
         let every: Vec<u32> = (0..planes.count).step_by(4).collect();
-        let mut opts = RenderOptions {
-            width: w,
-            height: h,
-            sample_distance: sd,
-            ..Default::default()
-        };
+        let mut opts = frame_options(w, h, sd);
         opts.sweep = SweepOptions {
             light: headlight(&cam, 0.0),
             dumps: every
@@ -671,12 +656,7 @@ fn plano_convex_lens_focuses_at_its_back_focal_distance() {
                 let vertex_depth = cam.distance - zv;
                 let p = plane_at(&planes, vertex_depth + 4.0 * vox);
                 let depth = planes.depth(p);
-                let mut opts = RenderOptions {
-                    width: w,
-                    height: h,
-                    sample_distance: sd,
-                    ..Default::default()
-                };
+                let mut opts = frame_options(w, h, sd);
                 // The thesis' backward step: one light direction per pixel, which this
                 // test reads; the forward transport's rays are tested in caustics.rs.
                 opts.sweep = SweepOptions {
@@ -880,20 +860,7 @@ fn a_full_box_attenuates_by_beer_lambert_wherever_its_faces_fall() {
 /// under an environment that is 10 on the viewer's side (world z > -0.05: the camera looks
 /// down -z) and 0 beyond, at sample distance `sd`.
 fn wedge_seen_face_on(ctx: &Context, angle: f32, ramp: Option<f32>, sd: f32) -> f64 {
-    let n = 64u32;
-    let a = angle.to_radians();
-    let m = Vec3::new(a.sin(), 0.0, -a.cos());
-    let vol = f32_volume(n, |p| {
-        let p = Vec3::from(p);
-        let entry = 0.45 - p.z;
-        let exit = -(p - Vec3::new(0.0, 0.0, -0.1)).dot(m);
-        let x = entry.min(exit) * n as f32;
-        match ramp {
-            // tanh reaches ±0.8 at ±atanh(0.8) = ±1.0986 widths.
-            Some(r) => 0.5 + 0.5 * (x * 2.0 * 1.0986 / r).tanh(),
-            None => 0.5 + x,
-        }
-    });
+    let vol = glass_wedge(64, angle, ramp);
     let tf = TransferFunctions {
         eta: Piecewise::new(vec![(0.0, [1.0]), (1.0, [1.5])]),
         ..Default::default()
@@ -915,12 +882,7 @@ fn wedge_seen_face_on(ctx: &Context, angle: f32, ramp: Option<f32>, sd: f32) -> 
         refrakt::environment::EnvironmentMap::new(ew, eh, pixels, "the viewer's side").unwrap();
     let cam = face_on(2.5, 12.0);
     let (w, h) = (48u32, 48u32);
-    let mut opts = RenderOptions {
-        width: w,
-        height: h,
-        sample_distance: sd,
-        ..Default::default()
-    };
+    let mut opts = frame_options(w, h, sd);
     opts.sweep = SweepOptions {
         light: headlight(&cam, 0.0),
         specular: 0.0,
@@ -993,16 +955,7 @@ fn viewing_rays_reflect_totally_where_the_sweep_can_follow() {
                 for angle in [50.0f32, 60.0] {
                     let n = 64u32;
                     let a = angle.to_radians();
-                    let m = Vec3::new(a.sin(), 0.0, -a.cos());
-                    let vol = f32_volume(n, |p| {
-                        let p = Vec3::from(p);
-                        let x =
-                            (0.45 - p.z).min(-(p - Vec3::new(0.0, 0.0, -0.1)).dot(m)) * n as f32;
-                        match ramp {
-                            Some(r) => 0.5 + 0.5 * (x * 2.0 * 1.0986 / r).tanh(),
-                            None => 0.5 + x,
-                        }
-                    });
+                    let vol = glass_wedge(n, angle, ramp);
                     let tf = TransferFunctions {
                         eta: Piecewise::new(vec![(0.0, [1.0]), (1.0, [1.5])]),
                         ..Default::default()
@@ -1010,12 +963,7 @@ fn viewing_rays_reflect_totally_where_the_sweep_can_follow() {
                     let cam = face_on(2.5, 12.0);
                     let (w, h) = (48u32, 48u32);
                     let planes = Planes::for_box(&cam, Vec3::splat(0.5), sd / n as f32).unwrap();
-                    let mut opts = RenderOptions {
-                        width: w,
-                        height: h,
-                        sample_distance: sd,
-                        ..Default::default()
-                    };
+                    let mut opts = frame_options(w, h, sd);
                     opts.sweep = SweepOptions {
                         light: headlight(&cam, 0.0),
                         dumps: (0..planes.count)

@@ -116,6 +116,32 @@ pub fn refrakt(args: &[&str]) -> std::process::Output {
 
 /// An n³ volume of f32 values f(p), p the voxel centre in [-0.5, 0.5]³, clamped to [0, 1]
 /// and mapped to [0, 1] unchanged.
+/// A value's profile across a face of glass, `x` voxels inside it (negative: outside):
+/// the one-voxel linear ramp 0.5 + x (the transfer functions clamp it to 0..1), or with
+/// `ramp` a tanh whose 10-90 % rise spans `ramp` voxels (tanh reaches ±0.8 at
+/// ±atanh(0.8) = ±1.0986 of its widths).
+pub fn face_profile(x: f32, ramp: Option<f32>) -> f32 {
+    match ramp {
+        Some(r) => 0.5 + 0.5 * (x * 2.0 * 1.0986 / r).tanh(),
+        None => 0.5 + x,
+    }
+}
+
+/// The glass wedge of the total-reflection tests, n³ voxels: glass (value 1) below the
+/// entry face z = 0.45 and inside the exit face, whose outward normal (sin a, 0, -cos a)
+/// makes `angle` degrees with -z (the face-on camera's view, the headlight's travel),
+/// through (0, 0, -0.1); the faces meet outside the box. Faces as `face_profile` says.
+pub fn glass_wedge(n: u32, angle: f32, ramp: Option<f32>) -> Volume {
+    let a = angle.to_radians();
+    let m = glam::Vec3::new(a.sin(), 0.0, -a.cos());
+    f32_volume(n, |p| {
+        let p = glam::Vec3::from(p);
+        let entry = 0.45 - p.z;
+        let exit = -(p - glam::Vec3::new(0.0, 0.0, -0.1)).dot(m);
+        face_profile(entry.min(exit) * n as f32, ramp)
+    })
+}
+
 pub fn f32_volume(n: u32, f: impl Fn([f32; 3]) -> f32) -> Volume {
     let mut v = Vec::new();
     for z in 0..n {
