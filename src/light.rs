@@ -1,22 +1,38 @@
-//! The directional light: plain data (no GPU types), with ONE default: white, softness
+//! The lights: plain data (no GPU types). One type for every model ([`Light`]: a
+//! directional or point source, a colour and a softness), held by the render options as a
+//! list whose first entry is the main light ([`crate::render::RenderOptions::lights`]).
+//! Each model says how many it takes and whether point lights are among them
+//! ([`crate::render::Model::light_support`]). ONE default: white, softness
 //! [`Light::DEFAULT_SOFTNESS`], from [`default_light`] for the camera it lights
-//! ([`Light::for_camera`]). Scenes without a light direction and the renderer's own
-//! default options (for the default camera) both use it.
+//! ([`Light::for_camera`]). Scenes without a light and the renderer's own default options
+//! (for the default camera) both use it.
 
+use anyhow::Context;
 use glam::Vec3;
 
 use crate::camera::Camera;
 
-/// One directional light (thesis sect. 4.2).
+/// Where a light shines from.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightSource {
+    /// Parallel light from the world-space direction `towards` (need not be unit): the
+    /// thesis' light (sect. 4.2).
+    Directional { towards: Vec3 },
+    /// Light from a point in world space (the volume's box is centred at the origin); its
+    /// colour is the irradiance at unit distance, falling off with the squared distance.
+    Point { position: Vec3 },
+}
+
+/// One light: its source, linear RGB colour and softness.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Light {
-    /// World-space direction pointing towards the light (where the light comes from).
-    pub towards: Vec3,
+    pub source: LightSource,
     /// Linear RGB.
     pub colour: [f32; 3],
     /// Size of the elliptical filter applied to the light at every plane, in reference
     /// steps (smallest voxel sides): 0 = one tap, hard shadows; larger = softer shadows
-    /// and caustics (the light source's apparent size).
+    /// and caustics (the light source's apparent size). The sweep's; the ray-marched
+    /// models' lights are hard.
     pub softness: f32,
 }
 
@@ -24,41 +40,63 @@ impl Light {
     pub const DEFAULT_COLOUR: [f32; 3] = [1.0; 3];
     pub const DEFAULT_SOFTNESS: f32 = 0.5;
 
-    /// The default light for `camera`: white, default softness, from [`default_light`].
-    pub fn for_camera(camera: &Camera) -> Self {
+    /// A directional light towards `towards`, with the default softness.
+    pub fn directional(towards: Vec3, colour: [f32; 3]) -> Self {
         Self {
-            towards: default_light(camera),
-            colour: Self::DEFAULT_COLOUR,
+            source: LightSource::Directional { towards },
+            colour,
             softness: Self::DEFAULT_SOFTNESS,
         }
     }
-}
 
-/// Where a light of the ambient-scattering model shines from.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum LightSource {
-    /// Parallel light from the world-space direction `towards` (need not be unit).
-    Directional { towards: Vec3 },
-    /// Light from a point in world space (the volume's box is centred at the origin).
-    Point { position: Vec3 },
-}
+    /// The default light for `camera`: white, default softness, from [`default_light`].
+    pub fn for_camera(camera: &Camera) -> Self {
+        Self::directional(default_light(camera), Self::DEFAULT_COLOUR)
+    }
 
-/// A light beside the main one ([`Light`]), for the models that take several (ambient
-/// scattering): its source and linear RGB colour (a point light's: the irradiance at unit
-/// distance; it falls off with the squared distance).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ExtraLight {
-    pub source: LightSource,
-    pub colour: [f32; 3],
-}
+    /// Towards the light from the volume's centre (the world origin): a directional
+    /// light's direction, a point light's position. Not normalised.
+    pub fn towards(&self) -> Vec3 {
+        match self.source {
+            LightSource::Directional { towards } => towards,
+            LightSource::Point { position } => position,
+        }
+    }
 
-impl ExtraLight {
+    /// The unit direction the light travels from the volume's centre on: −towards,
+    /// normalised (the sweep's, whose light is directional; thesis sect. 4.2).
+    pub fn travel(&self) -> Vec3 {
+        -self.towards().normalize()
+    }
+
+    /// Make this a directional light towards `towards` (colour and softness kept).
+    pub fn set_towards(&mut self, towards: Vec3) {
+        self.source = LightSource::Directional { towards };
+    }
+
+    pub fn is_point(&self) -> bool {
+        matches!(self.source, LightSource::Point { .. })
+    }
+
+    /// "directional light towards (x, y, z)" or "point light at (x, y, z)", for errors.
+    pub fn describe(&self) -> String {
+        match self.source {
+            LightSource::Directional { towards: t } => {
+                format!("directional light towards ({}, {}, {})", t.x, t.y, t.z)
+            }
+            LightSource::Point { position: p } => {
+                format!("point light at ({}, {}, {})", p.x, p.y, p.z)
+            }
+        }
+    }
+
     pub fn validate(&self) -> anyhow::Result<()> {
         let v = match self.source {
             LightSource::Directional { towards } => {
                 anyhow::ensure!(
                     towards.is_finite() && towards.length() > 1e-6,
-                    "a directional light needs a finite, non-zero direction, got {towards}"
+                    "light direction {towards} must be a finite, non-zero vector (towards a \
+                     directional light)"
                 );
                 towards
             }
@@ -70,16 +108,19 @@ impl ExtraLight {
             "light colour {:?} must be finite and non-negative",
             self.colour
         );
+        anyhow::ensure!(
+            self.softness.is_finite() && (0.0..=8.0).contains(&self.softness),
+            "light softness {} must be in [0, 8] (filter radius in voxels)",
+            self.softness
+        );
         Ok(())
     }
 }
 
-impl std::str::FromStr for ExtraLight {
-    type Err = anyhow::Error;
-
-    /// `dir:X,Y,Z` (towards the light) or `point:X,Y,Z` (world position), optionally
-    /// followed by `@R,G,B` (linear colour; white without it).
-    fn from_str(text: &str) -> anyhow::Result<Self> {
+impl LightSource {
+    /// `X,Y,Z` or `dir:X,Y,Z` (towards the light), or `point:X,Y,Z` (world position),
+    /// optionally followed by `@R,G,B` (linear colour): the source and the colour if given.
+    pub fn parse_with_colour(text: &str) -> anyhow::Result<(Self, Option<[f32; 3]>)> {
         let triple = |t: &str, what: &str| -> anyhow::Result<Vec3> {
             let v: Vec<f32> = t
                 .split(',')
@@ -92,24 +133,42 @@ impl std::str::FromStr for ExtraLight {
             );
             Ok(Vec3::new(v[0], v[1], v[2]))
         };
-        let (kind, rest) = text.split_once(':').ok_or_else(|| {
-            anyhow::anyhow!("light '{text}' must be dir:X,Y,Z or point:X,Y,Z (then @R,G,B)")
-        })?;
-        let (at, colour) = match rest.split_once('@') {
-            Some((a, c)) => (a, triple(c, "colour")?.to_array()),
-            None => (rest, [1.0; 3]),
+        let (kind, rest) = match text.split_once(':') {
+            Some((k, r)) => (k.trim(), r),
+            None => ("dir", text),
         };
-        let source = match kind.trim() {
+        let (at, colour) = match rest.split_once('@') {
+            Some((a, c)) => (a, Some(triple(c, "colour")?.to_array())),
+            None => (rest, None),
+        };
+        let source = match kind {
             "dir" | "directional" => LightSource::Directional {
                 towards: triple(at, "direction")?,
             },
             "point" => LightSource::Point {
                 position: triple(at, "position")?,
             },
-            other => anyhow::bail!("light '{text}': unknown kind '{other}' (dir or point)"),
+            other => anyhow::bail!(
+                "light '{text}': unknown kind '{other}' (X,Y,Z, dir:X,Y,Z or point:X,Y,Z, \
+                 then @R,G,B)"
+            ),
         };
-        let l = Self { source, colour };
-        l.validate()?;
+        Ok((source, colour))
+    }
+}
+
+impl std::str::FromStr for Light {
+    type Err = anyhow::Error;
+
+    /// As [`LightSource::parse_with_colour`]; white without a colour, the default softness.
+    fn from_str(text: &str) -> anyhow::Result<Self> {
+        let (source, colour) = LightSource::parse_with_colour(text)?;
+        let l = Self {
+            source,
+            colour: colour.unwrap_or(Self::DEFAULT_COLOUR),
+            softness: Self::DEFAULT_SOFTNESS,
+        };
+        l.validate().with_context(|| format!("light '{text}'"))?;
         Ok(l)
     }
 }
@@ -184,8 +243,8 @@ mod tests {
     }
 
     #[test]
-    fn extra_lights_parse_and_refuse_nonsense() {
-        let l: ExtraLight = "point:0.5,1,-2@2,1,0.5".parse().unwrap();
+    fn lights_parse_and_refuse_nonsense() {
+        let l: Light = "point:0.5,1,-2@2,1,0.5".parse().unwrap();
         assert_eq!(
             l.source,
             LightSource::Point {
@@ -193,17 +252,26 @@ mod tests {
             }
         );
         assert_eq!(l.colour, [2.0, 1.0, 0.5]);
-        let d: ExtraLight = "dir:0,1,0".parse().unwrap();
+        let d: Light = "dir:0,1,0".parse().unwrap();
         assert_eq!(d.colour, [1.0; 3]);
+        // A bare direction is a directional light, as `--light X,Y,Z` always was.
+        let bare: Light = "0,2,1@0.5,0.5,0.5".parse().unwrap();
+        assert_eq!(
+            bare.source,
+            LightSource::Directional {
+                towards: Vec3::new(0.0, 2.0, 1.0)
+            }
+        );
+        assert_eq!(bare.colour, [0.5; 3]);
         for bad in [
-            "0,1,0",
+            "0,1",
             "dir:0,0,0",
             "spot:0,1,0",
             "dir:0,1",
             "point:0,1,x",
             "dir:0,1,0@-1,0,0",
         ] {
-            assert!(bad.parse::<ExtraLight>().is_err(), "{bad} accepted");
+            assert!(bad.parse::<Light>().is_err(), "{bad} accepted");
         }
     }
 

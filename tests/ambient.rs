@@ -11,7 +11,7 @@ mod common;
 
 use common::{constant_tf, f32_volume, face_on, single_scattering_block, with_context};
 use glam::Vec3;
-use refrakt::light::{ExtraLight, LightSource};
+use refrakt::light::LightSource;
 use refrakt::render::ambient::table::{AmbientTable, TableParams};
 use refrakt::render::ambient::{AmbientOptions, CACHE_SCOPE, EXTINCTION_SCOPE};
 use refrakt::render::{Light, Model, RenderOptions, Renderer, ScatterOptions, SweepOptions};
@@ -36,12 +36,14 @@ fn options(towards: Vec3, g: f32, albedo: f32, radius: f32, size: u32) -> Render
         background: [0.0, 0.0, 0.0, 1.0],
         scatter: ScatterOptions { g, albedo },
         ambient: AmbientOptions { radius },
-        sweep: SweepOptions {
-            light: Light {
+        lights: vec![Light {
+            source: refrakt::light::LightSource::Directional {
                 towards: towards.normalize(),
-                colour: [1.0; 3],
-                softness: 0.0,
             },
+            colour: [1.0; 3],
+            softness: 0.0,
+        }],
+        sweep: SweepOptions {
             ..Default::default()
         },
         ..Default::default()
@@ -161,22 +163,17 @@ fn several_lights_add_up() {
             ..face_on(3.0, 20.0)
         };
         let main = Vec3::new(0.2, 1.0, 0.5);
-        let point = ExtraLight {
+        let point = Light {
             source: LightSource::Point {
                 position: Vec3::new(-0.8, 0.3, 0.9),
             },
-            colour: [0.2, 0.5, 1.5],
+            ..Light::directional(Vec3::Y, [0.2, 0.5, 1.5])
         };
-        let side = ExtraLight {
-            source: LightSource::Directional {
-                towards: Vec3::new(1.0, -0.2, 0.3),
-            },
-            colour: [1.0, 0.3, 0.1],
-        };
-        let mut render = |main_colour: [f32; 3], extra: Vec<ExtraLight>| {
+        let side = Light::directional(Vec3::new(1.0, -0.2, 0.3), [1.0, 0.3, 0.1]);
+        let mut render = |main_colour: [f32; 3], extra: Vec<Light>| {
             let mut o = options(main, 0.4, 0.9, 3.0, 24);
-            o.sweep.light.colour = main_colour;
-            o.extra_lights = extra;
+            o.light_mut().colour = main_colour;
+            o.lights.extend(extra);
             renderer_frame(&mut renderer, &camera, &o)
         };
         let dark = render([0.0; 3], vec![]);
@@ -207,7 +204,7 @@ fn several_lights_add_up() {
         );
         // A light gives the same image in any slot: the side light as the main light.
         let mut o = options(Vec3::new(1.0, -0.2, 0.3), 0.4, 0.9, 3.0, 24);
-        o.sweep.light.colour = side.colour;
+        o.light_mut().colour = side.colour;
         let side_as_main = renderer_frame(&mut renderer, &camera, &o);
         let slot_err = (0..c.len())
             .flat_map(|i| (0..3).map(move |ch| (i, ch)))
@@ -216,6 +213,18 @@ fn several_lights_add_up() {
         assert!(
             slot_err <= 1e-4 * max_c,
             "the side light in slot 2 vs slot 0: {slot_err}"
+        );
+        // And a point light as the main light (one light type: any slot takes either).
+        let mut o = options(main, 0.4, 0.9, 3.0, 24);
+        o.lights = vec![point];
+        let point_as_main = renderer_frame(&mut renderer, &camera, &o);
+        let point_err = (0..b.len())
+            .flat_map(|i| (0..3).map(move |ch| (i, ch)))
+            .map(|(i, ch)| (b[i][ch] - dark[i][ch] - point_as_main[i][ch]).abs())
+            .fold(0.0f32, f32::max);
+        assert!(
+            point_err <= 1e-4 * max_b,
+            "the point light in slot 1 vs slot 0: {point_err}"
         );
         // The point light's colour lands in its own channel: blue over red where it alone
         // shines.
@@ -279,7 +288,8 @@ fn a_change_rebuilds_only_what_depends_on_it() {
             "camera"
         );
         let mut o = base.clone();
-        o.sweep.light.towards = Vec3::new(0.3, 1.0, 1.0).normalize();
+        o.light_mut()
+            .set_towards(Vec3::new(0.3, 1.0, 1.0).normalize());
         assert_eq!(
             rebuilt(&mut renderer, &camera, &o),
             (false, true, false),
@@ -291,7 +301,7 @@ fn a_change_rebuilds_only_what_depends_on_it() {
             (false, true, false),
             "phase function"
         );
-        o.extra_lights = vec!["point:0,1,1".parse().unwrap()];
+        o.lights.push("point:0,1,1".parse().unwrap());
         assert_eq!(
             rebuilt(&mut renderer, &camera, &o),
             (false, true, false),

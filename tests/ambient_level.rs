@@ -38,7 +38,7 @@ fn a_frame_lit_by_the_ambient_level_alone_is_the_ambient_times_the_unlit_frame()
             unlit.sweep.unlit = true;
             let base = sweep(ctx, &vol, &tf, &cam, &unlit);
             let mut lit = opts.clone();
-            lit.sweep.light.colour = [0.0; 3];
+            lit.light_mut().colour = [0.0; 3];
             lit.sweep.ambient = ambient;
             let amb = sweep(ctx, &vol, &tf, &cam, &lit);
             let (mut worst, mut seen) = (0.0f32, 0);
@@ -93,7 +93,7 @@ fn a_white_ball_in_a_uniform_environment_lit_by_its_ambient_level_vanishes() {
             opts.sweep.light_transport = transport;
             opts.sweep.reflections = false;
             opts.sweep.specular = 0.0;
-            opts.sweep.light.colour = [0.0; 3];
+            opts.light_mut().colour = [0.0; 3];
             // Without the ambient level the ball is a black disk on the map: where it is
             // and where its rim lets the map through in part.
             let dark = renderer.render(Model::Refract, &cam, &opts).unwrap();

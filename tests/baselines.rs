@@ -96,11 +96,10 @@ impl Fog {
     /// Lit from the side, hard light, no specular or reflections (nothing to reflect).
     fn options(side: u32, sample_distance: f32, transport: LightTransport) -> RenderOptions {
         let mut opts = common::frame_options(side, side, sample_distance);
-        opts.sweep.light = Light {
-            towards: glam::Vec3::new(1.0, 0.6, 0.3).normalize(),
-            colour: [1.0; 3],
+        opts.lights = vec![Light {
             softness: 0.0,
-        };
+            ..Light::directional(glam::Vec3::new(1.0, 0.6, 0.3).normalize(), [1.0; 3])
+        }];
         opts.sweep.light_transport = transport;
         opts.sweep.specular = 0.0;
         opts.sweep.reflections = false;

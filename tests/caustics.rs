@@ -56,7 +56,6 @@ fn power_is_conserved_through_a_focus() {
             };
             opts.sweep = SweepOptions {
                 light_transport: LightTransport::Forward,
-                light: headlight(&cam, softness),
                 levers: refrakt::render::Levers {
                     sweep: path,
                     ..Default::default()
@@ -66,6 +65,7 @@ fn power_is_conserved_through_a_focus() {
                     .collect(),
                 ..Default::default()
             };
+            opts.lights = vec![headlight(&cam, softness)];
             let f = sweep(ctx, &vol, &tf, &cam, &opts);
             let stats = f.sweep.as_ref().unwrap();
             println!("softness {softness}, {path:?}: clamps {:?}", stats.clamps);
@@ -210,13 +210,13 @@ fn ball_lens_focus_at_every_sample_distance() {
             let depth = planes.depth(behind);
             let mut opts = frame_options(w, h, sd);
             opts.sweep = SweepOptions {
-                light: headlight(&cam, 0.0),
                 dumps: vec![
                     (StateBuffer::LightRays, behind),
                     (StateBuffer::LightRayDirections, behind),
                 ],
                 ..Default::default()
             };
+            opts.lights = vec![headlight(&cam, 0.0)];
             let f = sweep(ctx, &vol, &tf, &cam, &opts);
             // Each near-axis ray's axis crossing from the sweep and from the photon tracer
             // in the same field (rays the tracer sees turn back are left out of both).
@@ -302,10 +302,10 @@ fn light_beyond_graded_wedge(
     let mut opts = frame_options(w, h, sd);
     opts.sweep = SweepOptions {
         light_transport: transport,
-        light: headlight(&cam, 0.0),
         dumps: vec![(StateBuffer::LightColour, last)],
         ..Default::default()
     };
+    opts.lights = vec![headlight(&cam, 0.0)];
     let f = sweep(ctx, &vol, &glass(1.5), &cam, &opts);
     let d = f.dumps.iter().find(|d| d.plane == last).unwrap();
     let depth = planes.depth(last);
@@ -501,7 +501,9 @@ fn sphere_on_floor_caustic_matches_the_photon_tracer() {
         };
         let (w, h) = (128usize, 128usize);
         let light = Light {
-            towards: -Vec3::new(0.35, -1.0, 0.25).normalize(),
+            source: refrakt::light::LightSource::Directional {
+                towards: -Vec3::new(0.35, -1.0, 0.25).normalize(),
+            },
             colour: [1.0; 3],
             softness: 0.0,
         };
@@ -528,9 +530,9 @@ fn sphere_on_floor_caustic_matches_the_photon_tracer() {
                 sample_distance: sd,
                 ..Default::default()
             };
+            opts.lights = vec![light];
             opts.sweep = SweepOptions {
                 light_transport: transport,
-                light,
                 dumps: vec![(StateBuffer::LightColour, k)],
                 ..Default::default()
             };
@@ -679,7 +681,9 @@ impl DemoFromAbove {
             tf: TransferFunctions::load("glass-floor").unwrap(),
             cam,
             light: Light {
-                towards: Vec3::new(0.25, 1.0, -0.15).normalize(),
+                source: refrakt::light::LightSource::Directional {
+                    towards: Vec3::new(0.25, 1.0, -0.15).normalize(),
+                },
                 colour: [1.0; 3],
                 softness: 0.0,
             },
@@ -713,10 +717,10 @@ impl DemoFromAbove {
             ..Default::default()
         };
         opts.sweep = SweepOptions {
-            light: self.light,
             dumps: vec![(StateBuffer::LightColour, k)],
             ..Default::default()
         };
+        opts.lights = vec![self.light];
         (planes, opts)
     }
 }

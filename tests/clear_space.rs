@@ -51,7 +51,7 @@ fn value_ranges_bound_every_sample_of_their_bricks() {
             height: 8,
             ..Default::default()
         };
-        opts.sweep.light = Light::for_camera(&cam);
+        opts.lights = vec![Light::for_camera(&cam)];
         renderer
             .render(refrakt::render::Model::Refract, &cam, &opts)
             .unwrap();
@@ -162,7 +162,9 @@ fn clear_space_keeps_every_ray_through_an_oblique_lens() {
         let side = view.cross(Vec3::Y).normalize();
         let (s, c) = 25f32.to_radians().sin_cos();
         let light = Light {
-            towards: (view * c + side * s).normalize(),
+            source: refrakt::light::LightSource::Directional {
+                towards: (view * c + side * s).normalize(),
+            },
             colour: [1.0; 3],
             softness: 0.0,
         };
@@ -177,8 +179,8 @@ fn clear_space_keeps_every_ray_through_an_oblique_lens() {
                     sample_distance: sd,
                     ..Default::default()
                 };
+                opts.lights = vec![light];
                 opts.sweep = SweepOptions {
-                    light,
                     dumps: vec![
                         (StateBuffer::LightRays, behind),
                         (StateBuffer::LightRayDirections, behind),

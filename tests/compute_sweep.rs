@@ -44,7 +44,7 @@ fn compute_and_fragment_sweeps_render_the_same_glass_sphere_on_its_floor() {
             opts.height = 40;
             opts.sample_distance = sd;
             opts.sweep.light_transport = transport;
-            opts.sweep.light.softness = softness;
+            opts.light_mut().softness = softness;
             let mut frame = |levers: Levers| {
                 opts.sweep.levers = levers;
                 renderer.render(Model::Refract, &cam, &opts).unwrap()
@@ -222,11 +222,13 @@ fn sheared_caustic(
         .max((1.0 / (spacing * spacing)).ceil() as u32)
         .min(refrakt::render::MAX_LIGHT_RAYS);
     // Light from the side: the rays' cells shear, a caustic forms behind the ball.
-    opts.sweep.light = refrakt::render::Light {
-        towards: glam::Vec3::new(0.4, 0.3, 1.0).normalize(),
-        colour: [1.0, 0.8, 0.6],
+    opts.lights = vec![refrakt::render::Light {
         softness: 0.0,
-    };
+        ..refrakt::render::Light::directional(
+            glam::Vec3::new(0.4, 0.3, 1.0).normalize(),
+            [1.0, 0.8, 0.6],
+        )
+    }];
     opts.sweep.dumps = [6u32, 14, 22, 30]
         .iter()
         .flat_map(|&p| {

@@ -43,7 +43,7 @@ fn a_finished_ray_takes_nothing_from_behind() {
                 let mut opts = frame_options(24, 24, sd);
                 opts.background = [0.0, 0.0, 0.0, 1.0];
                 opts.sweep.unlit = true;
-                opts.sweep.light = headlight(&cam, 0.0);
+                opts.lights = vec![headlight(&cam, 0.0)];
                 opts.sweep.levers.sweep = path;
                 let f = sweep(ctx, &vol, &tf, &cam, &opts);
                 // Unlit, a sample's premultiplied colour is its opacity times its colour,

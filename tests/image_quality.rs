@@ -86,14 +86,16 @@ fn floor_banding_lit(
     };
     opts.sweep = SweepOptions {
         light_transport: transport,
-        light: Light {
-            towards: towards.normalize(),
-            colour: [1.0; 3],
-            softness,
-        },
         specular: 0.0,
         ..Default::default()
     };
+    opts.lights = vec![Light {
+        source: refrakt::light::LightSource::Directional {
+            towards: towards.normalize(),
+        },
+        colour: [1.0; 3],
+        softness,
+    }];
     let mut r = Renderer::new(ctx, &vol, &tf).unwrap();
     let f = r.render(Model::Refract, &cam, &opts).unwrap();
     // Row means over the central half of the columns, for rows showing the floor.
@@ -633,16 +635,16 @@ fn highlights_on_glass_have_no_rings() {
                 ..Default::default()
             };
             opts.sweep = SweepOptions {
-                light: Light {
-                    towards: mirror,
-                    colour: [1.0; 3],
-                    softness: 0.0,
-                },
                 specular: 1.0,
                 roughness: 0.5,
                 reflections: false,
                 ..Default::default()
             };
+            opts.lights = vec![Light {
+                source: refrakt::light::LightSource::Directional { towards: mirror },
+                colour: [1.0; 3],
+                softness: 0.0,
+            }];
             let mut r = Renderer::new(ctx, &vol, &tf).unwrap();
             r.set_environment(None).unwrap();
             let f = r.render(Model::Refract, &cam, &opts).unwrap();

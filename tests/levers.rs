@@ -29,7 +29,7 @@ fn render(renderer: &mut Renderer, scene: &Scene, case: &Case, levers: Levers) -
     opts.sample_distance = case.sample_distance;
     opts.sweep.light_transport = case.transport;
     if let Some(s) = case.softness {
-        opts.sweep.light.softness = s;
+        opts.light_mut().softness = s;
     }
     opts.sweep.levers = levers;
     let cam = (case.camera)(scene.camera);
@@ -270,7 +270,7 @@ fn the_field_texture_holds_the_value_and_the_central_difference_of_eta() {
             height: 8,
             ..Default::default()
         };
-        opts.sweep.light = refrakt::render::Light::for_camera(&scene_cam);
+        opts.lights = vec![refrakt::render::Light::for_camera(&scene_cam)];
         // The field texture is made the first time a frame asks for it.
         opts.sweep.levers.field = true;
         renderer.render(Model::Refract, &scene_cam, &opts).unwrap();

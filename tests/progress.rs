@@ -23,7 +23,7 @@ fn the_sweep_reports_its_planes_while_it_runs_and_the_frame_is_unchanged() {
         let cam = face_on(2.5, 30.0);
         for path in [SweepPath::Fragment, SweepPath::Compute] {
             let mut opts = frame_options(64, 64, 0.5);
-            opts.sweep.light = headlight(&cam, 0.0);
+            opts.lights = vec![headlight(&cam, 0.0)];
             opts.sweep.levers.sweep = path;
             let mut r = Renderer::new(ctx, &vol, &tf).expect("renderer");
             let plain = r.render(Model::Refract, &cam, &opts).expect("render");

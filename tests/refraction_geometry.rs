@@ -120,14 +120,16 @@ fn lit_from_the_camera(
         ..Default::default()
     };
     opts.sweep = SweepOptions {
-        light: Light {
-            towards: cam.eye().normalize(),
-            colour: [1.0; 3],
-            softness: 0.0,
-        },
         dumps,
         ..Default::default()
     };
+    opts.lights = vec![Light {
+        source: refrakt::light::LightSource::Directional {
+            towards: cam.eye().normalize(),
+        },
+        colour: [1.0; 3],
+        softness: 0.0,
+    }];
     opts
 }
 

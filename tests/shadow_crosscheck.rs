@@ -297,7 +297,7 @@ fn single_scattering_and_the_sweep_cast_the_same_shadow() {
         let light = towards(LIGHT_POLAR_DEG, LIGHT_AZIMUTH_DEG);
         let mut renderer = Renderer::new(ctx, &scene_volume(), &scene_tf()).expect("renderer");
         let lit = |softness| Light {
-            towards: light,
+            source: refrakt::light::LightSource::Directional { towards: light },
             colour: [1.0; 3],
             softness,
         };
@@ -310,8 +310,8 @@ fn single_scattering_and_the_sweep_cast_the_same_shadow() {
                 g: 0.0,
                 albedo: 1.0,
             },
+            lights: vec![lit(0.0)],
             sweep: SweepOptions {
-                light: lit(0.0),
                 ..Default::default()
             },
             ..Default::default()

@@ -35,14 +35,10 @@ fn a_homogeneous_block_matches_the_single_scattering_integral() {
                     g: g as f32,
                     albedo: albedo as f32,
                 },
-                sweep: refrakt::render::SweepOptions {
-                    light: Light {
-                        towards: t,
-                        colour: [1.0; 3],
-                        softness: 0.0,
-                    },
-                    ..Default::default()
-                },
+                lights: vec![Light {
+                    softness: 0.0,
+                    ..Light::directional(t, [1.0; 3])
+                }],
                 ..Default::default()
             };
             let frame = renderer.render(Model::Single, &camera, &opts).unwrap();

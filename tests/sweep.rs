@@ -135,10 +135,10 @@ fn light_through_a_slab_follows_beer_lambert_and_the_medium_filter() {
                 ..Default::default()
             };
             opts.sweep = SweepOptions {
-                light: headlight(&cam, 0.0),
                 dumps: vec![(StateBuffer::LightColour, behind)],
                 ..Default::default()
             };
+            opts.lights = vec![headlight(&cam, 0.0)];
             let f = sweep(ctx, &vol, tf, &cam, &opts);
             let d = dump(&f, StateBuffer::LightColour, behind);
             let l = d.pixels[(16 * 32 + 16) as usize];
@@ -193,11 +193,11 @@ fn ball_lens_focus(ctx: &Context, n_index: f32, diameter: f32) -> (f32, f32) {
     // The thesis' backward step; the forward transport's ball lens is tests/caustics.rs.
     opts.sweep = SweepOptions {
         light_transport: LightTransport::Backward,
-        light: headlight(&cam, 0.0),
         max_gain: 8.0,
         dumps,
         ..Default::default()
     };
+    opts.lights = vec![headlight(&cam, 0.0)];
     let f = sweep(ctx, &vol, &tf, &cam, &opts);
     let d = dump(&f, StateBuffer::LightDirection, behind);
     let (mut sum, mut count) = (0.0f64, 0);
@@ -268,10 +268,10 @@ fn weak_lens_conserves_light_power() {
         let behind = plane_at(&planes, cam.distance + 0.25 + 3.0 / n as f32);
         let mut opts = frame_options(w, h, sd);
         opts.sweep = SweepOptions {
-            light: headlight(&cam, 0.0),
             dumps: vec![(StateBuffer::LightColour, behind)],
             ..Default::default()
         };
+        opts.lights = vec![headlight(&cam, 0.0)];
         let f = sweep(ctx, &vol, &tf, &cam, &opts);
         let d = dump(&f, StateBuffer::LightColour, behind);
         // Every pixel of a plane has the same footprint, so power = footprint * sum(L).
@@ -315,14 +315,14 @@ fn shadow(ctx: &Context, angle: f32, softness: f32) -> (f32, f32, f32) {
         ..Default::default()
     };
     opts.sweep = SweepOptions {
-        light: Light {
-            towards,
-            colour: [1.0; 3],
-            softness,
-        },
         dumps: vec![(StateBuffer::LightColour, p)],
         ..Default::default()
     };
+    opts.lights = vec![Light {
+        source: refrakt::light::LightSource::Directional { towards },
+        colour: [1.0; 3],
+        softness,
+    }];
     let f = sweep(ctx, &vol, &tf, &cam, &opts);
     let d = dump(&f, StateBuffer::LightColour, p);
     let row = h / 2;
@@ -413,13 +413,13 @@ fn rays_through_the_side_face(
         let every: Vec<u32> = (0..planes.count).step_by(4).collect();
         let mut opts = frame_options(w, h, sd);
         opts.sweep = SweepOptions {
-            light: headlight(&cam, 0.0),
             dumps: every
                 .iter()
                 .map(|&p| (StateBuffer::ViewPosition, p))
                 .collect(),
             ..Default::default()
         };
+        opts.lights = vec![headlight(&cam, 0.0)];
         let f = sweep(ctx, &vol, &tf, &cam, &opts);
         let (eye, fwd, right, up) = cam.frame();
         let world = |q: [f32; 4]| eye + q[0] * right + q[1] * up + q[2] * fwd;
@@ -517,7 +517,7 @@ fn light_from_behind_is_a_clear_error() {
             height: 16,
             ..Default::default()
         };
-        opts.sweep.light.towards = -cam.eye();
+        opts.light_mut().set_towards(-cam.eye());
         let err = r
             .render(Model::Refract, &cam, &opts)
             .unwrap_err()
@@ -541,9 +541,9 @@ fn clipping_removes_opacity_but_keeps_the_medium() {
         opts.sweep = SweepOptions {
             specular: 0.0,
             clip: Some((Vec3::X, 0.0)),
-            light: headlight(&cam, 0.0),
             ..Default::default()
         };
+        opts.lights = vec![headlight(&cam, 0.0)];
         let f = sweep(ctx, &vol, &tf, &cam, &opts);
         let left = f.pixel(8, 8); // x < 0: kept
         let right = f.pixel(24, 8); // x > 0: clipped
@@ -661,10 +661,10 @@ fn plano_convex_lens_focuses_at_its_back_focal_distance() {
                 // test reads; the forward transport's rays are tested in caustics.rs.
                 opts.sweep = SweepOptions {
                     light_transport: LightTransport::Backward,
-                    light: headlight(&cam, 0.0),
                     dumps: vec![(StateBuffer::LightDirection, p)],
                     ..Default::default()
                 };
+                opts.lights = vec![headlight(&cam, 0.0)];
                 let f = sweep(ctx, &vol, &tf, &cam, &opts);
                 let d = dump(&f, StateBuffer::LightDirection, p);
                 // Near-axis rays of the centre row: within 0.15 r of the axis.
@@ -746,10 +746,6 @@ fn specialized_pipelines_render_what_the_general_one_renders() {
             let render = |renderer: &mut Renderer, specialize: bool| {
                 let mut opts = frame_options(32, 32, 1.0);
                 opts.sweep = SweepOptions {
-                    light: Light {
-                        softness,
-                        ..headlight(&cam, 0.0)
-                    },
                     specular,
                     reflections,
                     clip,
@@ -760,6 +756,10 @@ fn specialized_pipelines_render_what_the_general_one_renders() {
                     },
                     ..Default::default()
                 };
+                opts.lights = vec![Light {
+                    softness,
+                    ..headlight(&cam, 0.0)
+                }];
                 renderer.render(Model::Refract, &cam, &opts).unwrap().pixels
             };
             let general = render(&mut renderer, false);
@@ -884,10 +884,10 @@ fn wedge_seen_face_on(ctx: &Context, angle: f32, ramp: Option<f32>, sd: f32) -> 
     let (w, h) = (48u32, 48u32);
     let mut opts = frame_options(w, h, sd);
     opts.sweep = SweepOptions {
-        light: headlight(&cam, 0.0),
         specular: 0.0,
         ..Default::default()
     };
+    opts.lights = vec![headlight(&cam, 0.0)];
     let mut r = Renderer::new(ctx, &vol, &tf).unwrap();
     r.set_environment(Some(&env)).unwrap();
     let f = r.render(Model::Refract, &cam, &opts).unwrap();
@@ -965,12 +965,12 @@ fn viewing_rays_reflect_totally_where_the_sweep_can_follow() {
                     let planes = Planes::for_box(&cam, Vec3::splat(0.5), sd / n as f32).unwrap();
                     let mut opts = frame_options(w, h, sd);
                     opts.sweep = SweepOptions {
-                        light: headlight(&cam, 0.0),
                         dumps: (0..planes.count)
                             .map(|p| (StateBuffer::ViewDirection, p))
                             .collect(),
                         ..Default::default()
                     };
+                    opts.lights = vec![headlight(&cam, 0.0)];
                     let f = sweep(ctx, &vol, &tf, &cam, &opts);
                     // The mirror direction in view space (x right, y up, z forward, which
                     // is world -z for this camera).

@@ -56,11 +56,6 @@ fn floor_lattice(
     };
     opts.sweep = SweepOptions {
         light_transport: LightTransport::Forward,
-        light: Light {
-            towards: Vec3::new(0.3, 1.0, 0.45).normalize(),
-            colour: [1.0; 3],
-            softness: 0.0,
-        },
         light_spacing: spacing,
         light_rays: budget,
         specular: 0.0,
@@ -70,6 +65,13 @@ fn floor_lattice(
         },
         ..Default::default()
     };
+    opts.lights = vec![Light {
+        source: refrakt::light::LightSource::Directional {
+            towards: Vec3::new(0.3, 1.0, 0.45).normalize(),
+        },
+        colour: [1.0; 3],
+        softness: 0.0,
+    }];
     let mut r = Renderer::new(ctx, &vol, &tf).unwrap();
     let f = r.render(Model::Refract, &cam, &opts).unwrap();
     let launched = f.sweep.as_ref().unwrap().light_spacing[1];
@@ -149,7 +151,6 @@ fn a_weak_smooth_lens_lights_smoothly() {
                 let mut opts = frame_options(w as u32, h as u32, sd);
                 opts.sweep = SweepOptions {
                     light_transport: LightTransport::Forward,
-                    light: headlight(&cam, 0.0),
                     dumps: vec![(StateBuffer::LightColour, last)],
                     light_spacing: spacing,
                     light_rays: 8,
@@ -159,6 +160,7 @@ fn a_weak_smooth_lens_lights_smoothly() {
                     },
                     ..Default::default()
                 };
+                opts.lights = vec![headlight(&cam, 0.0)];
                 let f = sweep(ctx, &vol, &tf, &cam, &opts);
                 let swept = &f.dumps[0].pixels;
                 let traced = traced.get_or_insert_with(|| {
@@ -241,7 +243,7 @@ fn cell_deposits_are_reproducible() {
         opts.height = 40;
         opts.sample_distance = 0.5;
         opts.sweep.light_transport = LightTransport::Forward;
-        opts.sweep.light.softness = 0.5;
+        opts.light_mut().softness = 0.5;
         let cam = Camera {
             azimuth: scene.camera.azimuth - 60.0,
             elevation: 4.0,

@@ -335,13 +335,25 @@ fn changed_tf(tf: &TransferFunctions) -> TransferFunctions {
     t
 }
 
-/// `opts` with the light direction turned [`LS_CHANGE_DEG`] (about an axis perpendicular
-/// to it).
+/// `opts` with the main light turned [`LS_CHANGE_DEG`] about the volume's centre (about an
+/// axis perpendicular to the direction towards it): a directional light's direction, a
+/// point light's position.
 fn changed_light(opts: &RenderOptions) -> RenderOptions {
+    use crate::light::LightSource;
     let mut o = opts.clone();
-    let towards: Vec3 = o.sweep.light.towards;
-    let axis = towards.normalize_or_zero().any_orthonormal_vector();
-    o.sweep.light.towards = Quat::from_axis_angle(axis, LS_CHANGE_DEG.to_radians()) * towards;
+    let turn = |v: Vec3| {
+        let axis = v.normalize_or_zero().any_orthonormal_vector();
+        Quat::from_axis_angle(axis, LS_CHANGE_DEG.to_radians()) * v
+    };
+    let l = o.light_mut();
+    l.source = match l.source {
+        LightSource::Directional { towards } => LightSource::Directional {
+            towards: turn(towards),
+        },
+        LightSource::Point { position } => LightSource::Point {
+            position: turn(position),
+        },
+    };
     o
 }
 
@@ -826,11 +838,10 @@ mod tests {
         let o = RenderOptions::default();
         let c = changed_light(&o);
         let cos = c
-            .sweep
-            .light
-            .towards
+            .light()
+            .towards()
             .normalize()
-            .dot(o.sweep.light.towards.normalize());
+            .dot(o.light().towards().normalize());
         assert!(cos < 1.0 && cos > 0.999, "{cos}");
     }
 }

@@ -438,7 +438,8 @@ pub enum ModelArg {
     Single,
     /// Ambient scattering (Ament et al.): multiple scattering in a sphere around each
     /// sample from a preintegrated Monte-Carlo table, soft shadows and translucency by tube
-    /// marching; several lights (--light, --add-light, --g, --albedo, --ambient-radius).
+    /// marching; up to four lights, directional or point (--light repeated, --g,
+    /// --albedo, --ambient-radius).
     Ambient,
 }
 
@@ -575,19 +576,25 @@ pub struct SceneArgs {
     /// 0.08,0.08,0.1,1].
     #[arg(help_heading = "Environment", long, allow_hyphen_values = true)]
     pub background: Option<String>,
-    /// World-space direction towards the light, "x,y,z" (refract). It must lie in the
-    /// viewer's hemisphere: the sweep runs front to back, so light cannot come from behind
-    /// the volume. Also the AO model's diffuse light. Default: from above, tilted towards
-    /// the camera. "env": direction and colour from the environment map's brightest
-    /// region (its irradiance, in the map's units: a night map gives a night scene).
+    /// A light, repeatable; the first is the main light. "X,Y,Z" or "dir:X,Y,Z": a
+    /// directional light, the world-space direction towards it; "point:X,Y,Z": a point
+    /// light at that world position (the volume's box is centred at 0 with its longest
+    /// half side 1); either optionally followed by "@R,G,B" (linear colour; a point
+    /// light's is the irradiance at distance 1). The refract, ao and single models take
+    /// one directional light; for the sweep it must lie in the viewer's hemisphere (the
+    /// sweep runs front to back, so light cannot come from behind the volume). The
+    /// ambient model takes up to 4, directional or point. Default: one light from above,
+    /// tilted towards the camera. "env" (first only): direction and colour from the
+    /// environment map's brightest region (its irradiance, in the map's units: a night
+    /// map gives a night scene).
     #[arg(
         help_heading = "Light",
         long,
-        value_name = "X,Y,Z|env",
+        value_name = "X,Y,Z|dir:X,Y,Z|point:X,Y,Z[@R,G,B]|env",
         allow_hyphen_values = true
     )]
-    pub light: Option<String>,
-    /// Light colour, linear "r,g,b" (refract, ao) [default: 1,1,1].
+    pub light: Vec<String>,
+    /// The main light's colour, linear "r,g,b" [default: 1,1,1].
     #[arg(help_heading = "Light", long)]
     pub light_colour: Option<String>,
     /// Ambient level, linear "r,g,b": every sample of the refract model is lit by it
@@ -642,12 +649,11 @@ pub struct SceneArgs {
         allow_negative_numbers = true
     )]
     pub ambient_radius: Option<f32>,
-    /// Ambient scattering (--model ambient): another light beside --light, repeatable (up
-    /// to 3): "dir:X,Y,Z" (direction towards the light) or "point:X,Y,Z" (world position;
-    /// the volume's box is centred at 0 with its longest half side 1), optionally
-    /// "@R,G,B" (linear colour; a point light's is the irradiance at distance 1).
+    /// Deprecated: give --light again. Another light after the main one, as --light
+    /// takes it.
     #[arg(
         help_heading = "Scattering models (ao, single, ambient)",
+        hide = true,
         long,
         value_name = "LIGHT",
         allow_hyphen_values = true

@@ -7,6 +7,7 @@ use std::process::ExitCode;
 
 use anyhow::{bail, ensure, Context as _, Result};
 
+use refrakt::light::LightSource;
 use refrakt::output;
 use refrakt::render::{Model, StateBuffer};
 use refrakt::scene::{self, EnvSource, LoadedScene, Scene, TransferSource, VolumeSource};
@@ -192,7 +193,7 @@ pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Resu
     if let Some(b) = &args.background {
         o.background = Some(parse_background(b)?);
     }
-    if let Some(l) = &args.light {
+    if let Some(l) = args.light.first() {
         if l.trim().eq_ignore_ascii_case("env") {
             if args.light_colour.is_some() {
                 bail!(
@@ -202,10 +203,19 @@ pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Resu
             }
             o.light_from_env = Some(true);
         } else {
-            o.light_towards = Some(glam::Vec3::from(parse_floats::<3>("--light", l)?));
+            let (source, colour) =
+                LightSource::parse_with_colour(l).with_context(|| format!("--light {l}"))?;
+            o.light_source = Some(source);
+            o.light_colour = colour;
         }
     }
     if let Some(c) = &args.light_colour {
+        ensure!(
+            !args.light.first().is_some_and(|l| l.contains('@')),
+            "--light {} gives the main light's colour already: drop --light-colour or the \
+             light's @R,G,B",
+            args.light[0]
+        );
         o.light_colour = Some(parse_floats::<3>("--light-colour", c)?);
     }
     if let Some(a) = &args.ambient_level {
@@ -250,12 +260,23 @@ pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Resu
     o.albedo = args.albedo;
     o.ambient_radius = args.ambient_radius;
     if !args.add_light.is_empty() {
+        eprintln!(
+            "note: --add-light is deprecated; give --light again (the first is the main light)"
+        );
+    }
+    let more: Vec<&String> = args.light.iter().skip(1).chain(&args.add_light).collect();
+    if !more.is_empty() {
         o.extra_lights = Some(
-            args.add_light
-                .iter()
-                .map(|l| l.parse())
-                .collect::<Result<_>>()
-                .context("--add-light")?,
+            more.into_iter()
+                .map(|l| {
+                    ensure!(
+                        !l.trim().eq_ignore_ascii_case("env"),
+                        "--light env: only the first (main) light can come from the \
+                         environment map"
+                    );
+                    l.parse().with_context(|| format!("--light {l}"))
+                })
+                .collect::<Result<_>>()?,
         );
     }
     s.apply(o);
@@ -294,7 +315,6 @@ pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Resu
     if s.model != Model::Ambient {
         let given: Vec<&str> = [
             ("--ambient-radius", args.ambient_radius.is_some()),
-            ("--add-light", !args.add_light.is_empty()),
             ("--ambient-table", args.ambient_table.is_some()),
         ]
         .into_iter()
@@ -336,7 +356,7 @@ pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Resu
 /// error, not silently ignored).
 fn refract_only_flags(args: &SceneArgs) -> Vec<&'static str> {
     [
-        ("--light", args.light.is_some()),
+        ("--light", !args.light.is_empty()),
         ("--light-colour", args.light_colour.is_some()),
         ("--ambient-level", args.ambient_level.is_some()),
         ("--softness", args.softness.is_some()),

@@ -28,6 +28,18 @@ pub fn trace_irradiance_with_progress(
     progress: &(dyn Fn(u64, u64) + Sync),
 ) -> Result<PhotonImage> {
     popts.validate()?;
+    // The tracer is the sweep's reference: it takes what the sweep takes, one directional
+    // light.
+    let support = crate::render::Model::Refract.light_support();
+    ensure!(
+        opts.lights.len() <= support.max && !opts.light().is_point(),
+        "the photon tracer follows the sweep's one directional light; got {}",
+        opts.lights
+            .iter()
+            .map(|l| l.describe())
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
     let planes = planes(volume, camera, opts)?;
     let field = Field::new(volume, tf, opts)?;
     let start = Instant::now();
@@ -40,7 +52,7 @@ pub fn trace_irradiance_with_progress(
     let forward = forward.as_dvec3().normalize();
     let right = (right.as_dvec3() - forward * right.as_dvec3().dot(forward)).normalize();
     let up = right.cross(forward);
-    let travel = (-opts.sweep.light.towards.normalize()).as_dvec3();
+    let travel = opts.light().travel().as_dvec3();
     let d = DVec3::new(travel.dot(right), travel.dot(up), travel.dot(forward));
     if d.z < MIN_FORWARD as f64 {
         bail!(
@@ -116,7 +128,7 @@ pub fn trace_irradiance_with_progress(
             steps / (cols * rows) as f64
         );
     }
-    let colour = opts.sweep.light.colour.map(|c| c as f64);
+    let colour = opts.light().colour.map(|c| c as f64);
     let cell = dx * dy;
     let target = Target {
         n: forward,

@@ -33,11 +33,10 @@ fn options(size: u32, towards: Vec3, colour: [f32; 3]) -> RenderOptions {
         height: size,
         ..Default::default()
     };
-    o.sweep.light = Light {
-        towards: towards.normalize(),
-        colour,
+    o.lights = vec![Light {
         softness: 0.0,
-    };
+        ..Light::directional(towards.normalize(), colour)
+    }];
     o
 }
 

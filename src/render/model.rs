@@ -14,7 +14,7 @@
 //! in each function here; the CLI, viewer and benchmark go on calling
 //! [`super::Renderer::render`] / [`super::Renderer::record`] with the variant.
 
-use anyhow::{ensure, Result};
+use anyhow::{bail, ensure, Result};
 
 use super::refract::{EnvInputs, SweepRecording};
 use super::{
@@ -87,12 +87,39 @@ pub(crate) fn check(
     camera: &Camera,
     opts: &RenderOptions,
 ) -> Result<()> {
-    ensure!(
-        model == Model::Ambient || opts.extra_lights.is_empty(),
-        "the {} model takes one light; several lights are the ambient-scattering model's \
-         (--model ambient)",
-        model.name()
-    );
+    let support = model.light_support();
+    if support.max > 0 {
+        ensure!(
+            opts.lights.len() <= support.max,
+            "{} lights given; the {} model takes {}{}",
+            opts.lights.len(),
+            model.name(),
+            if support.max == 1 {
+                "one".to_string()
+            } else {
+                format!("at most {}", support.max)
+            },
+            if support.max == 1 {
+                " (several lights are the ambient-scattering model's: --model ambient)"
+            } else {
+                ""
+            }
+        );
+        if let Some((i, l)) = opts
+            .lights
+            .iter()
+            .enumerate()
+            .find(|(_, l)| l.is_point() && !support.point)
+        {
+            bail!(
+                "light {} is a {}: the {} model takes directional lights only (point \
+                 lights are the ambient-scattering model's: --model ambient)",
+                i + 1,
+                l.describe(),
+                model.name()
+            );
+        }
+    }
     match model {
         Model::Ea | Model::Ao | Model::Single | Model::Ambient => ea::check(model, opts),
         Model::Refract => refract::check_model(info, camera, opts),

@@ -1,10 +1,19 @@
 //! What a frame is asked for and what it returns: the optical model, the render options
 //! (size, sampling, background, early termination, the sweep's options) and the frame.
 
-use anyhow::{ensure, Result};
+use anyhow::{ensure, Context, Result};
 use glam::Vec3;
 
 use super::*;
+
+/// What lights a model takes: [`Model::light_support`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LightSupport {
+    /// How many (0: the model is unlit and ignores them).
+    pub max: usize,
+    /// Whether point lights are among them (else directional only).
+    pub point: bool,
+}
 
 /// Rendering models `refrakt render --model` offers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -33,12 +42,34 @@ impl Model {
         Model::Refract,
     ];
 
-    /// Whether the model lights the volume with [`SweepOptions::light`] (direction and
-    /// colour): a light change can cost it a rebuild.
+    /// Whether the model lights the volume with [`RenderOptions::lights`] (a light change
+    /// can cost it a rebuild); the others ignore the lights.
     pub fn uses_light(self) -> bool {
         match self {
             Model::Ea => false,
             Model::Ao | Model::Single | Model::Ambient | Model::Refract => true,
+        }
+    }
+
+    /// How many lights the model takes (the main light first) and whether point lights
+    /// are among them. The sweep carries one directional light (thesis sect. 4.2; several
+    /// lights are future work), and so do ambient occlusion and single scattering, whose
+    /// caches are built for one direction; ambient scattering takes up to
+    /// [`super::limits::MAX_LIGHTS`], directional or point. EA takes none and ignores them.
+    pub fn light_support(self) -> LightSupport {
+        match self {
+            Model::Ea => LightSupport {
+                max: 0,
+                point: false,
+            },
+            Model::Ao | Model::Single | Model::Refract => LightSupport {
+                max: 1,
+                point: false,
+            },
+            Model::Ambient => LightSupport {
+                max: super::limits::MAX_LIGHTS,
+                point: true,
+            },
         }
     }
 
@@ -86,16 +117,15 @@ pub struct RenderOptions {
     pub termination_alpha: f32,
     /// Light, specular, clipping and diagnostics of the refractive model.
     pub sweep: SweepOptions,
-    /// Radius and diffuse weight of the ambient-occlusion model (its light is
-    /// `sweep.light`: direction and colour).
+    /// Radius and diffuse weight of the ambient-occlusion model.
     pub ao: super::ao::AoOptions,
     /// Phase function and albedo of the scattering models.
     pub scatter: ScatterOptions,
     /// Radius of the ambient-scattering model.
     pub ambient: super::ambient::AmbientOptions,
-    /// Lights beside `sweep.light`, for the models that take several (ambient
-    /// scattering: up to [`super::ambient::MAX_LIGHTS`] in all); the others refuse them.
-    pub extra_lights: Vec<crate::light::ExtraLight>,
+    /// The lights, the main one first (the only one of the models that take one; see
+    /// [`Model::light_support`]): never empty, at most [`super::limits::MAX_LIGHTS`].
+    pub lights: Vec<Light>,
 }
 
 /// How the scattering models' media scatter light.
@@ -151,12 +181,23 @@ impl Default for RenderOptions {
             ao: Default::default(),
             scatter: Default::default(),
             ambient: Default::default(),
-            extra_lights: Vec::new(),
+            // The default camera's default light (thesis scenes set their own).
+            lights: vec![Light::for_camera(&crate::camera::Camera::default())],
         }
     }
 }
 
 impl RenderOptions {
+    /// The main light: the first of [`Self::lights`] (which `validate` keeps non-empty).
+    pub fn light(&self) -> &Light {
+        &self.lights[0]
+    }
+
+    /// The main light, to change.
+    pub fn light_mut(&mut self) -> &mut Light {
+        &mut self.lights[0]
+    }
+
     pub fn validate(&self) -> Result<()> {
         if !(self.sample_distance.is_finite() && self.sample_distance > 0.0) {
             bail!(
@@ -192,15 +233,18 @@ impl RenderOptions {
         self.scatter.validate()?;
         self.ambient.validate()?;
         ensure!(
-            self.extra_lights.len() < super::ambient::MAX_LIGHTS,
-            "{} lights given; the ambient-scattering model takes at most {} (the main light \
-             and {} more)",
-            self.extra_lights.len() + 1,
-            super::ambient::MAX_LIGHTS,
-            super::ambient::MAX_LIGHTS - 1
+            !self.lights.is_empty(),
+            "no light given: every frame has at least its main light"
         );
-        for l in &self.extra_lights {
-            l.validate()?;
+        ensure!(
+            self.lights.len() <= super::limits::MAX_LIGHTS,
+            "{} lights given; at most {} (the ambient-scattering model's limit; the others \
+             take one)",
+            self.lights.len(),
+            super::limits::MAX_LIGHTS
+        );
+        for (i, l) in self.lights.iter().enumerate() {
+            l.validate().with_context(|| format!("light {}", i + 1))?;
         }
         self.sweep.validate()
     }

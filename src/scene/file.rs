@@ -3,6 +3,7 @@
 //! [`Scene::apply`] like the command line's).
 
 use super::*;
+use crate::light::LightSource;
 
 // ---- the file format -------------------------------------------------------------------
 
@@ -13,7 +14,9 @@ pub(super) struct SceneFile {
     volume: VolumeTable,
     transfer: Option<TransferTable>,
     camera: Option<CameraTable>,
-    light: Option<LightTable>,
+    /// `[light]` (the main light) or `[[light]]` tables (the first the main light): read
+    /// as a value, then as [`LightTable`]s.
+    light: Option<toml::Value>,
     environment: Option<EnvTable>,
     render: Option<RenderTable>,
 }
@@ -73,6 +76,8 @@ struct CameraTable {
 #[serde(deny_unknown_fields)]
 struct LightTable {
     towards: Option<Towards>,
+    /// A point light's world position (instead of `towards`).
+    position: Option<[f32; 3]>,
     colour: Option<[f32; 3]>,
     /// The ambient level, linear RGB irradiance (`--ambient-level`).
     ambient_level: Option<[f32; 3]>,
@@ -118,8 +123,36 @@ struct RenderTable {
     g: Option<f32>,
     albedo: Option<f32>,
     ambient_radius: Option<f32>,
-    /// Lights beside the main one: "dir:X,Y,Z@R,G,B" or "point:X,Y,Z@R,G,B".
+    /// Deprecated (`[[light]]` tables): lights beside the main one, "dir:X,Y,Z@R,G,B" or
+    /// "point:X,Y,Z@R,G,B".
     lights: Option<Vec<String>>,
+}
+
+/// The scene file's `light`: one `[light]` table or `[[light]]` tables, each with the
+/// name an error should give it.
+fn light_tables(v: toml::Value) -> Result<Vec<(String, LightTable)>> {
+    match v {
+        toml::Value::Table(_) => {
+            let t = v
+                .try_into()
+                .map_err(|e| anyhow::anyhow!("[light]: {}", e.message()))?;
+            Ok(vec![("[light]".to_string(), t)])
+        }
+        toml::Value::Array(a) => {
+            ensure!(!a.is_empty(), "light = []: give [[light]] tables or none");
+            a.into_iter()
+                .enumerate()
+                .map(|(i, t)| {
+                    let name = format!("[[light]] {}", i + 1);
+                    let t = t
+                        .try_into()
+                        .map_err(|e| anyhow::anyhow!("{name}: {}", e.message()))?;
+                    Ok((name, t))
+                })
+                .collect()
+        }
+        other => bail!("light = {other}: expected a [light] table or [[light]] tables"),
+    }
 }
 
 /// "x", "xy", "xyz", ... (or "none") to the axes to mirror.
@@ -355,26 +388,79 @@ impl SceneFile {
             o.distance = c.distance.or(o.distance);
             o.fov = c.fov;
         }
-        if let Some(l) = self.light {
-            match l.towards {
-                Some(Towards::Direction(d)) => o.light_towards = Some(Vec3::from(d)),
-                Some(Towards::Word(w)) if w.eq_ignore_ascii_case("env") => {
-                    ensure!(
-                        l.colour.is_none(),
-                        "[light] towards = \"env\" takes the colour from the environment map \
-                         too: drop [light] colour"
-                    );
-                    o.light_from_env = Some(true);
+        let mut more_lights = None;
+        if let Some(v) = self.light {
+            let tables = light_tables(v)?;
+            let mut tables = tables.into_iter();
+            if let Some((name, l)) = tables.next() {
+                match (l.towards, l.position) {
+                    (Some(_), Some(_)) => bail!(
+                        "{name}: give towards (a directional light) or position (a point \
+                         light), not both"
+                    ),
+                    (Some(Towards::Direction(d)), None) => {
+                        o.light_source = Some(LightSource::Directional {
+                            towards: Vec3::from(d),
+                        })
+                    }
+                    (Some(Towards::Word(w)), None) if w.eq_ignore_ascii_case("env") => {
+                        ensure!(
+                            l.colour.is_none(),
+                            "{name} towards = \"env\" takes the colour from the environment \
+                             map too: drop its colour"
+                        );
+                        o.light_from_env = Some(true);
+                    }
+                    (Some(Towards::Word(w)), None) => bail!(
+                        "{name} towards = \"{w}\": expected [x, y, z] or \"env\" (the \
+                         environment map's brightest region)"
+                    ),
+                    (None, Some(p)) => {
+                        o.light_source = Some(LightSource::Point {
+                            position: Vec3::from(p),
+                        })
+                    }
+                    (None, None) => {}
                 }
-                Some(Towards::Word(w)) => bail!(
-                    "[light] towards = \"{w}\": expected [x, y, z] or \"env\" (the \
-                     environment map's brightest region)"
-                ),
-                None => {}
+                o.light_colour = l.colour;
+                o.ambient_level = l.ambient_level;
+                o.softness = l.softness;
             }
-            o.light_colour = l.colour;
-            o.ambient_level = l.ambient_level;
-            o.softness = l.softness;
+            let more: Vec<Light> = tables
+                .map(|(name, l)| {
+                    ensure!(
+                        l.ambient_level.is_none(),
+                        "{name}: ambient_level belongs to the first [[light]] table (the \
+                         frame's ambient level, not a light's)"
+                    );
+                    let source = match (l.towards, l.position) {
+                        (Some(Towards::Direction(d)), None) => LightSource::Directional {
+                            towards: Vec3::from(d),
+                        },
+                        (None, Some(p)) => LightSource::Point {
+                            position: Vec3::from(p),
+                        },
+                        (Some(Towards::Word(w)), None) => bail!(
+                            "{name} towards = \"{w}\": only the first light can come from \
+                             the environment map; expected [x, y, z]"
+                        ),
+                        _ => bail!(
+                            "{name}: give towards = [x, y, z] (a directional light) or \
+                             position = [x, y, z] (a point light)"
+                        ),
+                    };
+                    let light = Light {
+                        source,
+                        colour: l.colour.unwrap_or(Light::DEFAULT_COLOUR),
+                        softness: l.softness.unwrap_or(Light::DEFAULT_SOFTNESS),
+                    };
+                    light.validate().with_context(|| name.clone())?;
+                    Ok(light)
+                })
+                .collect::<Result<_>>()?;
+            if !more.is_empty() {
+                more_lights = Some(more);
+            }
         }
         if let Some(e) = self.environment {
             if let Some(m) = e.map {
@@ -423,7 +509,17 @@ impl SceneFile {
             o.albedo = r.albedo;
             o.ambient_radius = r.ambient_radius;
             if let Some(lights) = &r.lights {
-                o.extra_lights = Some(
+                ensure!(
+                    more_lights.is_none(),
+                    "[render] lights and more than one [[light]] table: give every light as \
+                     a [[light]] table"
+                );
+                log::warn!(
+                    "{}: [render] lights is deprecated; give each light as a [[light]] \
+                     table (towards = [x, y, z] or position = [x, y, z], colour = [r, g, b])",
+                    path.display()
+                );
+                more_lights = Some(
                     lights
                         .iter()
                         .map(|l| l.parse())
@@ -435,6 +531,7 @@ impl SceneFile {
                 o.tonemap = Some(parse_tonemap(&t).context("[render]")?);
             }
         }
+        o.extra_lights = more_lights;
         s.apply(o);
         // Everything checkable without the GPU, now, with the scene's name on it.
         s.render_options()?;

@@ -111,8 +111,9 @@ pub struct Scene {
     /// A preset name or a TF file path (resolved), or inline functions.
     pub transfer: TransferSource,
     pub camera: Camera,
-    /// `None`: the default key light for the camera (see [`default_light`]).
-    pub light_towards: Option<Vec3>,
+    /// Where the main light is; `None`: the default key light for the camera (see
+    /// [`default_light`]).
+    pub light_source: Option<crate::light::LightSource>,
     /// `--light env`: the key light's direction and colour come from the environment
     /// map's brightest region ([`EnvironmentMap::key_light`]) when the scene is loaded.
     pub light_from_env: bool,
@@ -150,8 +151,8 @@ pub struct Scene {
     pub scatter: ScatterOptions,
     /// The ambient-scattering model's radius.
     pub ambient: crate::render::ambient::AmbientOptions,
-    /// Lights beside the main one (the ambient-scattering model's).
-    pub extra_lights: Vec<crate::light::ExtraLight>,
+    /// The lights after the main one (the ambient-scattering model takes several).
+    pub extra_lights: Vec<Light>,
     /// The scene file this came from, if any (the viewer reloads when it changes).
     pub file: Option<PathBuf>,
 }
@@ -184,13 +185,13 @@ pub struct Overrides {
     pub g: Option<f32>,
     pub albedo: Option<f32>,
     pub ambient_radius: Option<f32>,
-    pub extra_lights: Option<Vec<crate::light::ExtraLight>>,
+    pub extra_lights: Option<Vec<Light>>,
     pub azimuth: Option<f32>,
     pub elevation: Option<f32>,
     pub distance: Option<f32>,
     pub fov: Option<f32>,
     pub target: Option<Vec3>,
-    pub light_towards: Option<Vec3>,
+    pub light_source: Option<crate::light::LightSource>,
     pub light_from_env: Option<bool>,
     pub light_colour: Option<[f32; 3]>,
     pub ambient_level: Option<[f32; 3]>,
@@ -240,13 +241,13 @@ impl Scene {
         set(&mut self.camera.distance, o.distance);
         set(&mut self.camera.fov_y, o.fov);
         set(&mut self.camera.target, o.target);
-        if o.light_towards.is_some() {
-            self.light_towards = o.light_towards;
+        if o.light_source.is_some() {
+            self.light_source = o.light_source;
             self.light_from_env = false;
         }
         if o.light_from_env == Some(true) {
             self.light_from_env = true;
-            self.light_towards = None;
+            self.light_source = None;
         }
         set(&mut self.light_colour, o.light_colour);
         if o.ambient_level.is_some() {
@@ -319,7 +320,7 @@ impl Default for Scene {
             labels: LabelChoice::Auto,
             transfer: TransferSource::Named("glass-floor".into()),
             camera: Camera::default(),
-            light_towards: None,
+            light_source: None,
             light_from_env: false,
             light_colour: Light::DEFAULT_COLOUR,
             softness: Light::DEFAULT_SOFTNESS,
@@ -616,11 +617,14 @@ impl Scene {
         })
     }
 
+    /// The main light.
     pub fn light(&self) -> Light {
         Light {
-            towards: self
-                .light_towards
-                .unwrap_or_else(|| default_light(&self.camera)),
+            source: self
+                .light_source
+                .unwrap_or_else(|| crate::light::LightSource::Directional {
+                    towards: default_light(&self.camera),
+                }),
             colour: self.light_colour,
             softness: self.softness,
         }
@@ -636,7 +640,6 @@ impl Scene {
             preintegrated: self.preintegrated,
             background: self.background,
             sweep: SweepOptions {
-                light: self.light(),
                 roughness: self.roughness,
                 specular: self.specular,
                 eta_scale: self.eta_scale,
@@ -652,7 +655,9 @@ impl Scene {
             ao: self.ao,
             scatter: self.scatter,
             ambient: self.ambient,
-            extra_lights: self.extra_lights.clone(),
+            lights: std::iter::once(self.light())
+                .chain(self.extra_lights.iter().copied())
+                .collect(),
             ..Default::default()
         };
         opts.validate()?;
@@ -715,8 +720,8 @@ impl Scene {
                     towards.z
                 );
             }
-            opts.sweep.light.towards = towards;
-            opts.sweep.light.colour = key.colour;
+            opts.light_mut().set_towards(towards);
+            opts.light_mut().colour = key.colour;
             // An ambient level given explicitly wins over the map's.
             if self.ambient_level.is_none() {
                 opts.sweep.ambient = key.ambient;

@@ -257,8 +257,7 @@ impl App {
     pub(super) fn light_moved(&mut self, yaw: f32, pitch: f32) {
         let mut s = self.state.lock().unwrap();
         let camera = s.camera;
-        let l = &mut s.opts.sweep.light.towards;
-        *l = turn_light(*l, &camera, yaw, pitch);
+        super::move_light(s.opts.light_mut(), |t| turn_light(t, &camera, yaw, pitch));
     }
 
     pub(super) fn key(&mut self, event: &KeyEvent, event_loop: &ActiveEventLoop) {
@@ -317,15 +316,18 @@ impl App {
                     _ => {
                         let mut st = self.state.lock().unwrap();
                         let ViewState { model, opts, .. } = &mut *st;
+                        // The main light's softness (a field apart from the sweep's
+                        // options, so both can be borrowed).
+                        let softness = &mut opts.lights[0].softness;
                         let s = &mut opts.sweep;
                         match c.as_str() {
                             "[" | "{" => {
-                                step(&mut s.light.softness, -0.25, LIMITS_SOFTNESS);
-                                said = Some(format!("softness {:.2}", s.light.softness));
+                                step(softness, -0.25, LIMITS_SOFTNESS);
+                                said = Some(format!("softness {:.2}", softness));
                             }
                             "]" | "}" => {
-                                step(&mut s.light.softness, 0.25, LIMITS_SOFTNESS);
-                                said = Some(format!("softness {:.2}", s.light.softness));
+                                step(softness, 0.25, LIMITS_SOFTNESS);
+                                said = Some(format!("softness {:.2}", softness));
                             }
                             "-" | "_" => {
                                 step(&mut s.eta_scale, -0.1, (0.0, MAX_ETA_SCALE));

@@ -74,8 +74,22 @@ pub(super) fn orbit(s: &mut ViewState, dx: f32, dy: f32) {
     c.azimuth = (c.azimuth - dx * DRAG_DEG_PER_PIXEL).rem_euclid(360.0);
     c.elevation = (c.elevation + dy * DRAG_DEG_PER_PIXEL).clamp(-89.0, 89.0);
     let camera = s.camera;
-    let l = &mut s.opts.sweep.light.towards;
-    *l = clamp_light(*l, &camera);
+    move_light(s.opts.light_mut(), |t| clamp_light(t, &camera));
+}
+
+/// Apply a turn of directions (`turn`: towards the light before → after, unit) to `light`:
+/// a directional light's direction, or a point light's position about the volume's centre
+/// at its distance.
+pub(super) fn move_light(light: &mut crate::light::Light, turn: impl Fn(Vec3) -> Vec3) {
+    use crate::light::LightSource;
+    light.source = match light.source {
+        LightSource::Directional { towards } => LightSource::Directional {
+            towards: turn(towards),
+        },
+        LightSource::Point { position } => LightSource::Point {
+            position: turn(position) * position.length(),
+        },
+    };
 }
 
 /// Main thread → render thread.

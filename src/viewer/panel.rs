@@ -348,8 +348,8 @@ fn controls(
                 .text("sample distance"),
             );
             ui.separator();
-            let s = &mut v.opts.sweep;
-            let (mut az, mut el) = light_angles(s.light.towards);
+            let light = v.opts.light_mut();
+            let (mut az, mut el) = light_angles(light.towards());
             let turned = ui
                 .add(egui::Slider::new(&mut az, -180.0..=180.0).text("light azimuth °"))
                 .changed()
@@ -357,23 +357,24 @@ fn controls(
                     .changed();
             if turned {
                 // Kept within reach of the sweep as the keys and drags keep it.
-                s.light.towards = clamp_light(from_angles(az, el), &v.camera);
+                let towards = clamp_light(from_angles(az, el), &v.camera);
+                super::move_light(light, |_| towards);
             }
-            let mut intensity = s.light.colour.into_iter().fold(0.0f32, f32::max);
-            let hue = s
-                .light
+            let mut intensity = light.colour.into_iter().fold(0.0f32, f32::max);
+            let hue = light
                 .colour
                 .map(|c| if intensity > 0.0 { c / intensity } else { 1.0 });
             if ui
                 .add(egui::Slider::new(&mut intensity, 0.0..=8.0).text("light intensity"))
                 .changed()
             {
-                s.light.colour = hue.map(|c| c * intensity);
+                light.colour = hue.map(|c| c * intensity);
             }
             ui.add(
-                egui::Slider::new(&mut s.light.softness, LIMITS_SOFTNESS.0..=LIMITS_SOFTNESS.1)
+                egui::Slider::new(&mut light.softness, LIMITS_SOFTNESS.0..=LIMITS_SOFTNESS.1)
                     .text("softness"),
             );
+            let s = &mut v.opts.sweep;
             ui.add(egui::Slider::new(&mut s.eta_scale, 0.0..=MAX_ETA_SCALE).text("η scale"));
             ui.add(
                 egui::Slider::new(&mut s.roughness, LIMITS_ROUGHNESS.0..=LIMITS_ROUGHNESS.1)

@@ -185,7 +185,9 @@ pub fn sweep(
 /// Light along the view axis (travelling away from the camera), white.
 pub fn headlight(cam: &Camera, softness: f32) -> Light {
     Light {
-        towards: (cam.eye() - cam.target).normalize(),
+        source: refrakt::light::LightSource::Directional {
+            towards: (cam.eye() - cam.target).normalize(),
+        },
         colour: [1.0; 3],
         softness,
     }

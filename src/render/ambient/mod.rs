@@ -33,7 +33,7 @@ use bytemuck::{Pod, Zeroable};
 use super::ea::{delegate_to_march, RayMarchPass};
 use super::model::{Inputs, ModelPass, Recorded};
 use super::RenderOptions;
-use crate::light::{ExtraLight, LightSource};
+use crate::light::LightSource;
 use crate::shaders;
 use crate::vk::{
     self, Access, Binding, ComputePipeline, Context, DescriptorSet, Filter, Image, ImageDesc,
@@ -57,7 +57,7 @@ pub const MAX_RADIUS: f32 = 64.0;
 const CUBE_PER_RADIUS: f32 = 1.611_991_9;
 
 /// Options of the ambient-scattering model (its phase function and albedo are
-/// [`super::ScatterOptions`], its lights the main light and [`RenderOptions::extra_lights`]).
+/// [`super::ScatterOptions`], its lights [`RenderOptions::lights`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AmbientOptions {
     /// Radius r of the ambient sphere, in reference steps: the scale of the soft shadows
@@ -164,17 +164,10 @@ impl TableTextures {
 pub(crate) fn lights(
     opts: &RenderOptions,
 ) -> (usize, [[f32; 4]; MAX_LIGHTS], [[f32; 4]; MAX_LIGHTS]) {
-    let main = ExtraLight {
-        source: LightSource::Directional {
-            towards: opts.sweep.light.towards,
-        },
-        colour: opts.sweep.light.colour,
-    };
     let mut at = [[0.0; 4]; MAX_LIGHTS];
     let mut colours = [[0.0; 4]; MAX_LIGHTS];
-    let all = std::iter::once(&main).chain(opts.extra_lights.iter());
     let mut n = 0;
-    for (j, l) in all.take(MAX_LIGHTS).enumerate() {
+    for (j, l) in opts.lights.iter().take(MAX_LIGHTS).enumerate() {
         at[j] = match l.source {
             LightSource::Directional { towards } => {
                 let t = towards.normalize();

@@ -305,8 +305,8 @@ impl ModelPass for AoPass {
             })?;
             self.cache_for = Some(key);
         }
-        let towards = opts.sweep.light.towards.normalize();
-        let c = opts.sweep.light.colour;
+        let towards = opts.light().towards().normalize();
+        let c = opts.light().colour;
         let (width, height) = self.march.size();
         let p = Params {
             march: super::ea::MarchParams::new(inputs, width, height),

@@ -172,7 +172,6 @@ pub struct PlaneBatch {
 /// Options of the refractive model beyond the common [`RenderOptions`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct SweepOptions {
-    pub light: Light,
     /// GGX roughness of the Cook–Torrance specular term.
     pub roughness: f32,
     /// Scale of the specular term (0 = no specular).
@@ -257,8 +256,6 @@ pub struct SweepOptions {
 impl Default for SweepOptions {
     fn default() -> Self {
         Self {
-            // The default camera's default light (thesis scenes set their own).
-            light: Light::for_camera(&Camera::default()),
             roughness: 0.3,
             specular: 1.0,
             max_gain: 4.0,
@@ -285,22 +282,6 @@ impl Default for SweepOptions {
 
 impl SweepOptions {
     pub fn validate(&self) -> Result<()> {
-        let l = &self.light;
-        ensure!(
-            l.towards.is_finite() && l.towards.length() > 1e-6,
-            "light direction {:?} must be a finite non-zero vector",
-            l.towards.to_array()
-        );
-        ensure!(
-            l.colour.iter().all(|c| c.is_finite() && *c >= 0.0),
-            "light colour {:?} must be finite and non-negative",
-            l.colour
-        );
-        ensure!(
-            l.softness.is_finite() && (0.0..=8.0).contains(&l.softness),
-            "light softness {} must be in [0, 8] (filter radius in voxels)",
-            l.softness
-        );
         ensure!(
             self.roughness.is_finite() && (0.01..=1.0).contains(&self.roughness),
             "roughness {} must be in [0.01, 1]",
@@ -411,7 +392,7 @@ pub(super) fn check(
     sweep: &SweepOptions,
 ) -> Result<Planes> {
     let (_, forward, _, _) = camera.frame();
-    let travel = -sweep.light.towards.normalize();
+    let travel = opts.light().travel();
     let forwardness = travel.dot(forward);
     if forwardness < MIN_FORWARD {
         bail!(

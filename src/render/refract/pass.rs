@@ -144,7 +144,8 @@ impl Features {
 
     /// `have_field`: whether the field texture exists (it may not fit in memory);
     /// `eta_films`: whether the transfer functions' η can make films.
-    pub(crate) fn of(sweep: &SweepOptions, have_field: bool, eta_films: bool) -> Self {
+    pub(crate) fn of(opts: &RenderOptions, have_field: bool, eta_films: bool) -> Self {
+        let sweep = &opts.sweep;
         let levers = sweep.levers;
         let shader = Self {
             arrays: levers.arrays,
@@ -161,7 +162,7 @@ impl Features {
             specular: sweep.specular > 0.0,
             clip: sweep.clip.is_some(),
             reflections: sweep.reflections,
-            soft_light: sweep.light.softness > 0.0,
+            soft_light: opts.light().softness > 0.0,
             films: eta_films,
             ..shader
         }

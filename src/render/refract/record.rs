@@ -22,7 +22,7 @@ impl SweepPass {
         let (camera, opts, read_back) = (inputs.camera, inputs.opts, inputs.read_back);
         let (ctx, info, env, sweep) = (inputs.ctx, inputs.info, &inputs.env, &opts.sweep);
         // The plane pipelines with what this frame does not use compiled out.
-        let features = Features::of(sweep, self.have_field, inputs.eta_films);
+        let features = Features::of(opts, self.have_field, inputs.eta_films);
         // Draws or dispatches per plane (issue 31): `auto` is what measured fastest on
         // this class of device.
         let compute = sweep.levers.sweep.for_device(
@@ -36,7 +36,7 @@ impl SweepPass {
         }
         let volume_dims = info.dims;
         let (eye, forward, right, up) = camera.frame();
-        let travel = -sweep.light.towards.normalize();
+        let travel = opts.light().travel();
         let planes = check(info, camera, opts, sweep)?;
         let batch = match sweep.batch {
             None => 0..planes.count,
@@ -96,9 +96,9 @@ impl SweepPass {
             sweep.light_spacing,
             ray_image[0] as u64 * ray_image[1] as u64,
         );
-        let soft = sweep.light.softness > 0.0;
+        let soft = opts.light().softness > 0.0;
         let (diffusion_w, diffusion_stride) = diffusion(
-            sweep.light.softness * info.ref_step,
+            opts.light().softness * info.ref_step,
             (grid[2] * grid[3]).sqrt(),
         );
         let p = SweepParams {
@@ -120,12 +120,12 @@ impl SweepPass {
                 light_view.x,
                 light_view.y,
                 light_view.z,
-                sweep.light.softness,
+                opts.light().softness,
             ],
             light_colour: [
-                sweep.light.colour[0],
-                sweep.light.colour[1],
-                sweep.light.colour[2],
+                opts.light().colour[0],
+                opts.light().colour[1],
+                opts.light().colour[2],
                 0.0,
             ],
             volume_dims: [
@@ -230,7 +230,7 @@ impl SweepPass {
             },
         ));
         // The compute splat's unit (glsl/light_splat_fixed.glsl): the brightest channel.
-        let unit = sweep.light.colour.into_iter().fold(0.0f32, f32::max);
+        let unit = opts.light().colour.into_iter().fold(0.0f32, f32::max);
         let unit = if unit > 0.0 { unit } else { 1.0 };
         let compute_splat = forward_on && (compute || sweep.levers.splat == Splat::Compute);
         // A later batch goes on from the state the earlier ones left in the images.

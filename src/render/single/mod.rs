@@ -125,7 +125,7 @@ impl TransmittanceCache {
 
 /// The unit light direction the cache is built for, from the frame's options.
 pub(crate) fn light_towards(opts: &RenderOptions) -> Vec3 {
-    opts.sweep.light.towards.normalize()
+    opts.light().towards().normalize()
 }
 
 /// std140 mirror of `Params` in glsl/single.comp (ea.comp's block, then the model's).
@@ -170,7 +170,7 @@ impl ModelPass for SinglePass {
         let opts = inputs.opts;
         let cache = transmittance(inputs)?;
         let towards = light_towards(opts);
-        let c = opts.sweep.light.colour;
+        let c = opts.light().colour;
         let (width, height) = self.march.size();
         let p = Params {
             march: super::ea::MarchParams::new(inputs, width, height),
