@@ -268,7 +268,8 @@ fn a_change_rebuilds_only_what_depends_on_it() {
             (
                 t.get(EXTINCTION_SCOPE).is_some(),
                 t.get(CACHE_SCOPE).is_some(),
-                t.get(refrakt::render::ao::EXTINCTION_SCOPE).is_some(),
+                t.get(refrakt::render::extinction::EXTINCTION_SCOPE)
+                    .is_some(),
             )
         };
         assert_eq!(

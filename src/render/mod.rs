@@ -10,10 +10,12 @@
 pub mod ambient;
 pub mod ao;
 mod ea;
+pub mod extinction;
 pub mod field;
 pub mod gradient;
 /// Limits shared with the shaders (build.rs defines each as a GLSL macro).
 pub mod limits;
+mod march;
 mod model;
 mod options;
 pub mod preintegration;
@@ -60,7 +62,7 @@ pub const REBUILD_SCOPES: [&str; 11] = [
     "environment SAT",
     "preintegration",
     "field texture",
-    ao::EXTINCTION_SCOPE,
+    extinction::EXTINCTION_SCOPE,
     sat3d::SCOPE,
     single::CACHE_SCOPE,
     ao::CACHE_SCOPE,
@@ -88,7 +90,7 @@ pub struct Renderer {
     field_dirty: bool,
     /// The extinction volume and its 3D SAT, for the ambient models: made on their first
     /// frame, rebuilt with the transfer functions.
-    extinction: Option<ao::Extinction>,
+    extinction: Option<extinction::Extinction>,
     extinction_dirty: bool,
     /// The single-scattering model's transmittance cache: made on its first frame,
     /// rebuilt when the extinction or the light's direction changed.
@@ -602,7 +604,7 @@ impl Renderer {
         let (_, device_budget) = gradient::GradientVolume::memory(&self.ctx, extent);
         let budget = self.gradient_budget.unwrap_or(device_budget);
         let cache = with_cache || self.transmittance.is_some();
-        let needed = ao::Extinction::bytes(extent, with_sat || has_sat)
+        let needed = extinction::Extinction::bytes(extent, with_sat || has_sat)
             + if cache {
                 single::TransmittanceCache::bytes(extent)
             } else {
@@ -625,7 +627,7 @@ impl Renderer {
             budget >> 20
         );
         if self.extinction.is_none() {
-            self.extinction = Some(ao::Extinction::new(
+            self.extinction = Some(extinction::Extinction::new(
                 &self.ctx,
                 &self.volume_tex,
                 &self.tf_image,

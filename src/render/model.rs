@@ -18,7 +18,7 @@ use anyhow::{bail, ensure, Result};
 
 use super::refract::{EnvInputs, SweepRecording};
 use super::{
-    ambient, ao, ea, refract, single, Camera, FrameTarget, Model, RenderOptions, VolumeInfo,
+    ambient, ao, ea, march, refract, single, Camera, FrameTarget, Model, RenderOptions, VolumeInfo,
 };
 use crate::vk::{Context, Image, Recorder, Sampler};
 
@@ -42,7 +42,7 @@ pub(crate) struct Inputs<'a> {
     /// The field texture (value, ∇η; render::field), if the sweep may use it.
     pub field: Option<&'a Image>,
     /// The extinction volume and its 3D SAT, if the model needs them (ambient models).
-    pub extinction: Option<&'a super::ao::Extinction>,
+    pub extinction: Option<&'a super::extinction::Extinction>,
     /// The single-scattering model's transmittance cache, if it needs it.
     pub transmittance: Option<&'a super::single::TransmittanceCache>,
     /// The ambient-scattering model's preintegrated tables, if it needs them.
@@ -121,7 +121,7 @@ pub(crate) fn check(
         }
     }
     match model {
-        Model::Ea | Model::Ao | Model::Single | Model::Ambient => ea::check(model, opts),
+        Model::Ea | Model::Ao | Model::Single | Model::Ambient => march::check(model, opts),
         Model::Refract => refract::check_model(info, camera, opts),
     }
 }

@@ -30,7 +30,7 @@ pub mod table;
 use anyhow::{ensure, Result};
 use bytemuck::{Pod, Zeroable};
 
-use super::ea::{delegate_to_march, RayMarchPass};
+use super::march::{delegate_to_march, RayMarchPass};
 use super::model::{Inputs, ModelPass, Recorded};
 use super::RenderOptions;
 use crate::light::LightSource;
@@ -205,7 +205,7 @@ struct CachePush {
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct Params {
-    march: super::ea::MarchParams,
+    march: super::march::MarchParams,
     lights: [[f32; 4]; MAX_LIGHTS],
     colours: [[f32; 4]; MAX_LIGHTS],
     ambient: [f32; 4],
@@ -282,7 +282,9 @@ pub(super) struct AmbientPass {
     radiance: CachedImage,
 }
 
-fn inputs_of<'a>(inputs: &Inputs<'a>) -> Result<(&'a super::ao::Extinction, &'a TableTextures)> {
+fn inputs_of<'a>(
+    inputs: &Inputs<'a>,
+) -> Result<(&'a super::extinction::Extinction, &'a TableTextures)> {
     let e = inputs.extinction.ok_or_else(|| {
         anyhow::anyhow!("the ambient-scattering model needs the extinction volume")
     })?;
@@ -403,7 +405,7 @@ impl ModelPass for AmbientPass {
         )?;
         let (width, height) = self.march.size();
         let p = Params {
-            march: super::ea::MarchParams::new(inputs, width, height),
+            march: super::march::MarchParams::new(inputs, width, height),
             lights: at,
             colours,
             ambient: [r_world, radius, g, opts.scatter.albedo],
@@ -459,7 +461,7 @@ mod tests {
 
     #[test]
     fn params_match_the_shaders_block() {
-        let mut host = crate::render::ea::march_layout();
+        let mut host = crate::render::march::march_layout();
         host.extend(crate::host_layout!(Params {
             lights,
             colours,

@@ -7,31 +7,24 @@
 //! The ambient light is the transmittance over a radius around the sample, the
 //! extinction at each distance estimated from nested cubes of voxels (`glsl/ao.glsl`):
 //! their sums come from the 3D summed-area table ([`super::sat3d`]) of the extinction
-//! volume σ_t = −ln(1 − α_tf) per reference step (`glsl/extinction.comp`), both rebuilt on
+//! volume σ_t = −ln(1 − α_tf) per reference step ([`super::extinction`]), both rebuilt on
 //! the GPU in the frame's recording when the transfer functions change (scopes
-//! [`EXTINCTION_SCOPE`] and [`super::sat3d::SCOPE`]: what a transfer-function change costs
+//! [`super::extinction::EXTINCTION_SCOPE`] and [`super::sat3d::SCOPE`]: what a transfer-function change costs
 //! this model, reported like the preintegration table's). Path lengths are in voxels,
 //! taken as reference steps: exact for cubic voxels, an approximation for anisotropic ones.
 
 use anyhow::{ensure, Result};
 use bytemuck::{Pod, Zeroable};
 
-use super::ea::{delegate_to_march, RayMarchPass};
+use super::extinction::Extinction;
+use super::march::{delegate_to_march, RayMarchPass};
 use super::model::{Inputs, ModelPass, Recorded};
-use super::sat3d::Sat3d;
 
 use crate::shaders;
 use crate::vk::{
-    self, Access, Binding, ComputePipeline, Context, DescriptorSet, Filter, Image, ImageDesc,
-    ImageKind, Recorder, Sampler, Use,
+    self, Access, Binding, ComputePipeline, DescriptorSet, Filter, Image, ImageDesc, ImageKind,
+    Recorder, Sampler, Use,
 };
-
-/// The timings scope of the extinction volume's build.
-pub const EXTINCTION_SCOPE: &str = "extinction volume";
-
-/// Largest extinction per voxel the volume holds (`glsl/extinction.comp`: α < 1 − 10⁻⁶):
-/// the SAT's bound.
-pub const MAX_EXTINCTION: f32 = 13.9;
 
 /// Options of the ambient-occlusion model.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -77,123 +70,11 @@ impl AoOptions {
     }
 }
 
-/// The extinction volume of the current transfer functions and, for the models that
-/// average it over boxes, its 3D summed-area table: the input of the scattering and
-/// occlusion models, owned by the renderer.
-pub struct Extinction {
-    extinction: Image,
-    set: DescriptorSet,
-    pipeline: ComputePipeline,
-    sat: Option<Sat3d>,
-    /// Builds so far: what the caches made from it (render::single) compare with.
-    builds: u64,
-}
-
-impl Extinction {
-    /// Bytes it takes for a volume of `extent`: 4 per voxel of extinction, 8 more with the
-    /// table.
-    pub fn bytes(extent: [u32; 3], with_sat: bool) -> u64 {
-        let per_voxel = if with_sat { 12 } else { 4 };
-        per_voxel * extent.iter().map(|&e| e as u64).product::<u64>()
-    }
-
-    /// Made empty; [`Extinction::record_build`] fills it.
-    pub fn new(ctx: &Context, volume: &Image, tf: &Image, sampler: &Sampler) -> Result<Self> {
-        let desc = ImageDesc::computed(ImageKind::D3, vk::Format::R32_SFLOAT, volume.extent(), 1);
-        let extinction = Image::new(ctx, desc, "extinction volume")?;
-        let set = DescriptorSet::new(
-            ctx,
-            &[
-                Binding::Texture(volume, sampler),
-                Binding::Texture(tf, sampler),
-                Binding::StorageImage(&extinction),
-            ],
-            "extinction volume",
-        )?;
-        let pipeline =
-            ComputePipeline::new(ctx, shaders::EXTINCTION_COMP, &set, 0, "extinction volume")?;
-        Ok(Self {
-            extinction,
-            set,
-            pipeline,
-            sat: None,
-            builds: 0,
-        })
-    }
-
-    /// Add the summed-area table (empty: the next [`Extinction::record_build`] fills it).
-    pub fn add_sat(&mut self, ctx: &Context) -> Result<()> {
-        if self.sat.is_none() {
-            self.sat = Some(Sat3d::new(ctx, &self.extinction)?);
-        }
-        Ok(())
-    }
-
-    /// The extinction volume (R32F, σ_t per reference step).
-    pub fn image(&self) -> &Image {
-        &self.extinction
-    }
-
-    /// Compute the extinction of `volume` through `tf` and rebuild the table (if any) from
-    /// it.
-    pub fn record_build(&mut self, rec: &mut Recorder, volume: &Image, tf: &Image) -> Result<()> {
-        let [w, h, d] = self.extinction.extent();
-        let uses = [
-            Use::all(volume, Access::Sampled),
-            Use::all(tf, Access::Sampled),
-            Use::all(&self.extinction, Access::ComputeStorage),
-        ];
-        rec.pass(EXTINCTION_SCOPE, &uses, |rec| {
-            rec.dispatch(
-                &self.pipeline,
-                &self.set,
-                &[],
-                [w.div_ceil(8), h.div_ceil(8), d],
-            )
-        })?;
-        self.builds += 1;
-        match &mut self.sat {
-            Some(sat) => sat.record_rebuild(rec, &self.extinction, MAX_EXTINCTION),
-            None => Ok(()),
-        }
-    }
-
-    /// How many times it was built (each transfer-function change adds one).
-    pub fn builds(&self) -> u64 {
-        self.builds
-    }
-
-    /// The summed-area table, if [`Extinction::add_sat`] made one.
-    pub fn sat(&self) -> Result<&Sat3d> {
-        self.sat
-            .as_ref()
-            .ok_or_else(|| anyhow::anyhow!("the extinction volume has no summed-area table"))
-    }
-
-    /// The ambient occlusion `glsl/ao.glsl` computes at each point (texture coordinates)
-    /// with `shells` cubes, evaluated on the GPU: for tests against closed forms.
-    pub fn occlusion_on_gpu(
-        &self,
-        ctx: &Context,
-        points: &[[f32; 3]],
-        shells: i32,
-    ) -> Result<Vec<f32>> {
-        let texels: Vec<[f32; 4]> = points.iter().map(|p| [p[0], p[1], p[2], 0.0]).collect();
-        self.sat()?.probe(
-            ctx,
-            shaders::AO_PROBE_COMP,
-            bytemuck::cast_slice(&texels),
-            points.len(),
-            shells,
-        )
-    }
-}
-
 /// std140 mirror of `Params` in glsl/ao.comp (ea.comp's block, then the model's).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct Params {
-    march: super::ea::MarchParams,
+    march: super::march::MarchParams,
     light: [f32; 4],
     light_colour: [f32; 4],
     dims: [i32; 4],
@@ -309,7 +190,7 @@ impl ModelPass for AoPass {
         let c = opts.light().colour;
         let (width, height) = self.march.size();
         let p = Params {
-            march: super::ea::MarchParams::new(inputs, width, height),
+            march: super::march::MarchParams::new(inputs, width, height),
             light: [towards.x, towards.y, towards.z, opts.ao.diffuse],
             light_colour: [c[0], c[1], c[2], 0.0],
             dims: [x, y, z, 0],
@@ -341,7 +222,7 @@ mod tests {
 
     #[test]
     fn params_match_the_shaders_block() {
-        let mut host = crate::render::ea::march_layout();
+        let mut host = crate::render::march::march_layout();
         for (name, offset, size) in crate::host_layout!(Params {
             light,
             light_colour,

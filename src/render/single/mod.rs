@@ -15,8 +15,8 @@ use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-use super::ao::Extinction;
-use super::ea::{delegate_to_march, RayMarchPass};
+use super::extinction::Extinction;
+use super::march::{delegate_to_march, RayMarchPass};
 use super::model::{Inputs, ModelPass, Recorded};
 use super::{RenderOptions, VolumeInfo};
 use crate::shaders;
@@ -132,7 +132,7 @@ pub(crate) fn light_towards(opts: &RenderOptions) -> Vec3 {
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct Params {
-    march: super::ea::MarchParams,
+    march: super::march::MarchParams,
     light: [f32; 4],
     light_colour: [f32; 4],
 }
@@ -173,7 +173,7 @@ impl ModelPass for SinglePass {
         let c = opts.light().colour;
         let (width, height) = self.march.size();
         let p = Params {
-            march: super::ea::MarchParams::new(inputs, width, height),
+            march: super::march::MarchParams::new(inputs, width, height),
             light: [towards.x, towards.y, towards.z, opts.scatter.g],
             light_colour: [c[0], c[1], c[2], opts.scatter.albedo],
         };
@@ -203,7 +203,7 @@ mod tests {
 
     #[test]
     fn params_match_the_shaders_block() {
-        let mut host = crate::render::ea::march_layout();
+        let mut host = crate::render::march::march_layout();
         host.extend(crate::host_layout!(Params {
             light,
             light_colour

@@ -1,0 +1,195 @@
+//! The emission–absorption ray march every ray-marched model shares (`glsl/march.glsl`;
+//! EA, AO, single and ambient scattering differ only in how a segment is lit): its
+//! parameter block ([`MarchParams`]), the check the ray-marched models share
+//! ([`check`]), and the pass skeleton each model's pass wraps ([`RayMarchPass`],
+//! [`delegate_to_march`]). Shared machinery, so it lives here and not in a model's
+//! folder (issue 34).
+
+use anyhow::{ensure, Result};
+use bytemuck::{Pod, Zeroable};
+
+use super::model::{Inputs, Recorded};
+use super::{FrameTarget, RenderOptions};
+use crate::vk::{Access, Binding, Buffer, ComputePipeline, DescriptorSet, Image, Recorder, Use};
+
+/// std140 mirror of `Params` in glsl/ea.comp: what the shared march (glsl/march.glsl)
+/// reads, also the head of the AO model's block.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+pub(crate) struct MarchParams {
+    cam_pos: [f32; 4],
+    cam_forward: [f32; 4],
+    cam_right: [f32; 4],
+    cam_up: [f32; 4],
+    box_half: [f32; 4],
+    background: [f32; 4],
+    march: [f32; 4],
+    size: [u32; 4],
+}
+
+impl MarchParams {
+    /// The camera, box and march of the frame `inputs` ask for, into a `width` × `height`
+    /// image.
+    pub(crate) fn new(inputs: &Inputs, width: u32, height: u32) -> Self {
+        let (info, camera, opts) = (inputs.info, inputs.camera, inputs.opts);
+        let (eye, forward, right, up) = camera.frame();
+        let tan_half = (camera.fov_y.to_radians() * 0.5).tan();
+        let aspect = width as f32 / height as f32;
+        Self {
+            cam_pos: [eye.x, eye.y, eye.z, tan_half],
+            cam_forward: [forward.x, forward.y, forward.z, aspect],
+            cam_right: [right.x, right.y, right.z, 0.0],
+            cam_up: [up.x, up.y, up.z, 0.0],
+            box_half: [
+                info.half_extent.x,
+                info.half_extent.y,
+                info.half_extent.z,
+                info.ref_step,
+            ],
+            background: opts.background,
+            march: [
+                opts.sample_distance,
+                opts.termination_alpha,
+                if opts.preintegrated { 1.0 } else { 0.0 },
+                0.0,
+            ],
+            size: [width, height, 0, 0],
+        }
+    }
+}
+
+/// The host layout of [`MarchParams`] for `spirv::check_block` (the AO model's test puts
+/// its own members after it).
+#[cfg(test)]
+pub(crate) fn march_layout() -> Vec<(&'static str, usize, usize)> {
+    crate::host_layout!(MarchParams {
+        cam_pos,
+        cam_forward,
+        cam_right,
+        cam_up,
+        box_half,
+        background,
+        march,
+        size,
+    })
+}
+
+/// What the EA model refuses that every model accepts.
+/// (and the other ray-marched models: they have no state buffers either).
+pub(crate) fn check(model: super::Model, opts: &RenderOptions) -> Result<()> {
+    ensure!(
+        opts.sweep.dumps.is_empty(),
+        "state-buffer dumps are the refractive sweep's (--model refract); the {} ray \
+         marcher has no state buffers",
+        model.name()
+    );
+    Ok(())
+}
+
+/// What every ray-marched model's pass has: its parameter block, frame, descriptor set
+/// (bindings 0–4 as glsl/march.glsl's users declare them: params, volume, transfer
+/// functions, preintegration table, frame; then the model's own) and compute pipeline.
+/// `ModelPass::fits` and `ModelPass::output` of a pass that renders through its `march`
+/// field (a [`RayMarchPass`]): such a pass is remade exactly when its march must be, and
+/// its frame is the march's.
+macro_rules! delegate_to_march {
+    () => {
+        fn fits(&self, opts: &$crate::render::RenderOptions) -> bool {
+            self.march.fits(opts)
+        }
+
+        fn output(&self) -> &$crate::render::FrameTarget {
+            self.march.output()
+        }
+    };
+}
+pub(crate) use delegate_to_march;
+
+pub(crate) struct RayMarchPass {
+    params: Buffer,
+    output: FrameTarget,
+    set: DescriptorSet,
+    pipeline: ComputePipeline,
+    width: u32,
+    height: u32,
+    /// The timings scope of the march ("ea raymarch", ...).
+    scope: String,
+}
+
+impl RayMarchPass {
+    /// `P` is the shader's `Params` block; `extra` are the bindings from 5 on.
+    pub(crate) fn new<P: Pod>(
+        inputs: &Inputs,
+        width: u32,
+        height: u32,
+        spirv: &[u8],
+        name: &str,
+        extra: &[Binding<'_>],
+    ) -> Result<Self> {
+        let ctx = inputs.ctx;
+        let sampler = inputs.linear;
+        let params = Buffer::uniform::<P>(ctx, &format!("{name} params"))?;
+        let output = FrameTarget::new(ctx, width, height, &format!("{name} frame"))?;
+        let mut bindings = vec![
+            Binding::Uniform(&params),
+            Binding::Texture(inputs.volume, inputs.volume_sampler),
+            Binding::Texture(inputs.tf, sampler),
+            Binding::Texture(inputs.preint, sampler),
+            Binding::StorageImage(&output.image),
+        ];
+        bindings.extend_from_slice(extra);
+        let set = DescriptorSet::new(ctx, &bindings, name)?;
+        let scope = format!("{name} raymarch");
+        let pipeline = ComputePipeline::new(ctx, spirv, &set, 0, &scope)?;
+        Ok(Self {
+            params,
+            output,
+            set,
+            pipeline,
+            width,
+            height,
+            scope,
+        })
+    }
+
+    pub(crate) fn fits(&self, opts: &RenderOptions) -> bool {
+        (self.width, self.height) == (opts.width, opts.height)
+    }
+
+    pub(crate) fn output(&self) -> &FrameTarget {
+        &self.output
+    }
+
+    pub(crate) fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// Record the march with `params` (the shader's block); `extra` are the model's own
+    /// images it reads. The most steps a ray takes is the box diagonal's.
+    pub(crate) fn record(
+        &self,
+        rec: &mut Recorder,
+        inputs: &Inputs,
+        params: &[u8],
+        extra: &[&Image],
+    ) -> Result<Recorded> {
+        let (info, opts) = (inputs.info, inputs.opts);
+        rec.update_uniform(&self.params, params)?;
+        let mut uses = vec![
+            Use::all(inputs.volume, Access::Sampled),
+            Use::all(inputs.tf, Access::Sampled),
+            Use::all(inputs.preint, Access::Sampled),
+            Use::all(&self.output.image, Access::ComputeStorage),
+        ];
+        uses.extend(extra.iter().map(|i| Use::all(i, Access::Sampled)));
+        let groups = [self.width.div_ceil(8), self.height.div_ceil(8), 1];
+        rec.pass(&self.scope, &uses, |rec| {
+            rec.dispatch(&self.pipeline, &self.set, &[], groups)
+        })?;
+        Ok(Recorded {
+            max_steps: super::steps_for(info.half_extent, info.ref_step, opts.sample_distance)
+                as u32,
+            sweep: None,
+        })
+    }
+}
