@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
 
-use refrakt::render::{Levers, LightTransport};
+use refrakt::render::{Levers, LightTransport, Model};
 
 /// `--variant`'s value: the sweep's levers (`Levers::parse`).
 fn parse_variant(s: &str) -> Result<Levers, String> {
@@ -424,23 +424,30 @@ pub enum ToneArg {
     None,
 }
 
-#[derive(Clone, Copy, ValueEnum)]
-pub enum ModelArg {
-    /// The refractive plane sweep: refraction, caustics, soft shadows, tinted media.
-    Refract,
-    /// Emission-absorption ray marcher (the baseline).
-    Ea,
-    /// Volumetric ambient occlusion (3D summed-area table of extinction) with a Lambert
-    /// term from --light (Ament et al.'s comparison; --ao-radius, --ao-diffuse).
-    Ao,
-    /// Single scattering with hard shadows from a transmittance cache, Henyey-Greenstein
-    /// phase function (--light, --g, --albedo).
-    Single,
-    /// Ambient scattering (Ament et al.): multiple scattering in a sphere around each
-    /// sample from a preintegrated Monte-Carlo table, soft shadows and translucency by tube
-    /// marching; up to four lights, directional or point (--light repeated, --g,
-    /// --albedo, --ambient-radius).
-    Ambient,
+/// `--model`'s value: a model of the registry (`Model::ALL`), its help from the model's
+/// own declaration.
+#[derive(Clone, Copy)]
+pub struct ModelArg(pub Model);
+
+/// The registry's models as `--model` values.
+const MODEL_ARGS: [ModelArg; Model::ALL.len()] = {
+    let mut v = [ModelArg(Model::ALL[0]); Model::ALL.len()];
+    let mut i = 0;
+    while i < v.len() {
+        v[i] = ModelArg(Model::ALL[i]);
+        i += 1;
+    }
+    v
+};
+
+impl ValueEnum for ModelArg {
+    fn value_variants<'a>() -> &'a [Self] {
+        &MODEL_ARGS
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(self.0.name()).help(self.0.summary()))
+    }
 }
 
 /// Scene options shared by `render` and `view`.

@@ -149,13 +149,7 @@ pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Resu
         o.rotate = Some(refrakt::volume::orientation::parse_rotation(spec).context("--rotate")?);
     }
     o.transfer = args.tf.clone().map(TransferSource::Named);
-    o.model = args.model.map(|m| match m {
-        ModelArg::Ea => Model::Ea,
-        ModelArg::Refract => Model::Refract,
-        ModelArg::Ao => Model::Ao,
-        ModelArg::Single => Model::Single,
-        ModelArg::Ambient => Model::Ambient,
-    });
+    o.model = args.model.map(|m| m.0);
     if args.no_preintegration {
         o.preintegrated = Some(false);
     }
@@ -342,7 +336,7 @@ pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Resu
             given.join(", "),
             if given.len() == 1 { "is" } else { "are" },
             s.model.name(),
-            if s.model == Model::Ea {
+            if !s.model.uses_light() {
                 ", and no light"
             } else {
                 ""

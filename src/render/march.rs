@@ -1,11 +1,10 @@
 //! The emission–absorption ray march every ray-marched model shares (`glsl/march.glsl`;
 //! EA, AO, single and ambient scattering differ only in how a segment is lit): its
-//! parameter block ([`MarchParams`]), the check the ray-marched models share
-//! ([`check`]), and the pass skeleton each model's pass wraps ([`RayMarchPass`],
+//! parameter block ([`MarchParams`]) and the pass skeleton each model's pass wraps ([`RayMarchPass`],
 //! [`delegate_to_march`]). Shared machinery, so it lives here and not in a model's
 //! folder (issue 34).
 
-use anyhow::{ensure, Result};
+use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 
 use super::model::{Inputs, Recorded};
@@ -72,18 +71,6 @@ pub(crate) fn march_layout() -> Vec<(&'static str, usize, usize)> {
         march,
         size,
     })
-}
-
-/// What the EA model refuses that every model accepts.
-/// (and the other ray-marched models: they have no state buffers either).
-pub(crate) fn check(model: super::Model, opts: &RenderOptions) -> Result<()> {
-    ensure!(
-        opts.sweep.dumps.is_empty(),
-        "state-buffer dumps are the refractive sweep's (--model refract); the {} ray \
-         marcher has no state buffers",
-        model.name()
-    );
-    Ok(())
 }
 
 /// What every ray-marched model's pass has: its parameter block, frame, descriptor set

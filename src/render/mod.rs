@@ -20,6 +20,7 @@ mod model;
 mod options;
 pub mod preintegration;
 pub mod refract;
+mod registry;
 pub mod sat;
 pub mod sat3d;
 pub mod single;
@@ -42,6 +43,7 @@ use crate::vk::{
 };
 use crate::volume::Volume;
 pub use options::*;
+pub use registry::{LightSupport, Model};
 pub use sat::SummedAreaTable;
 
 pub use preintegration::{PreintegrationTable, TABLE_SIZE};
@@ -532,7 +534,7 @@ impl Renderer {
     /// submission, waited for (once per volume; a caller's open recording is unaffected,
     /// it is submitted later).
     fn ensure_gradient(&mut self, model: Model) -> Result<()> {
-        if !model::needs_gradient(model)
+        if !model.declaration().gradient
             || self.gradient_status != gradient::GradientStatus::Unbuilt
         {
             return Ok(());
@@ -559,7 +561,7 @@ impl Renderer {
     /// `field` lever), once: beside the gradient volume (8 bytes per voxel once built) in
     /// the same budget; built in the frame's recording.
     fn ensure_field(&mut self, model: Model, opts: &RenderOptions) -> Result<()> {
-        if !model::needs_gradient(model) || !opts.sweep.levers.field || self.field_checked {
+        if !model.declaration().gradient || !opts.sweep.levers.field || self.field_checked {
             return Ok(());
         }
         self.field_checked = true;
@@ -589,7 +591,7 @@ impl Renderer {
     /// them (the ambient models); built in the frame's recording. Refused with the sizes
     /// when they do not fit the device's budget (the gradient volume's).
     fn ensure_extinction(&mut self, model: Model) -> Result<()> {
-        let Some(with_sat) = model::needs_extinction(model) else {
+        let Some(with_sat) = model.declaration().extinction else {
             return Ok(());
         };
         let has_sat = self.extinction.as_ref().is_some_and(|e| e.sat().is_ok());
@@ -758,7 +760,7 @@ impl Renderer {
             if !passes.get(&key).is_some_and(|p| p.fits(opts)) {
                 // Free the old pass's images before making the new one.
                 passes.remove(&key);
-                passes.insert(key, model::make_pass(model, &inputs)?);
+                passes.insert(key, (model.declaration().make_pass)(&inputs)?);
             }
             let pass = passes.get_mut(&key).expect("just made");
             pass.record(rec, &inputs)

@@ -1,25 +1,25 @@
 //! The interface between the renderer and its optical models. Each model lives in its own
-//! folder (`ea/`, `refract/`) and reaches the renderer through three things only:
+//! folder (`ea/`, `ao/`, `single/`, `ambient/`, `refract/`) and reaches the renderer
+//! through three things only:
 //!
 //! - [`Inputs`]: the GPU resources every model may read (volume, transfer functions,
 //!   preintegration table, gradient volume, environment), owned by the renderer and
 //!   rebuilt there when the data changes;
 //! - [`ModelPass`]: the model's own images and pipelines for one output size, which record
 //!   a frame into a [`FrameTarget`];
-//! - the three functions below ([`check`], [`needs_gradient`], [`make_pass`]): the only
-//!   place that matches on [`Model`] to pick a model's code.
+//! - [`OpticalModel`]: what the model declares from its folder (name, lights, the shared
+//!   data it reads, its checks, its pass), one `static` per model, listed once in
+//!   render/registry.rs ([`Model::declaration`]).
 //!
-//! A new model (ambient occlusion, single scattering, ambient scattering, the eikonal
-//! tracer) adds a folder with a `check` and a `ModelPass`, a [`Model`] variant and one arm
-//! in each function here; the CLI, viewer and benchmark go on calling
-//! [`super::Renderer::render`] / [`super::Renderer::record`] with the variant.
+//! A new model adds a folder with its declaration and its `ModelPass`, a [`Model`] variant
+//! and its line in the registry; the CLI, viewer and benchmark go on calling
+//! [`super::Renderer::render`] / [`super::Renderer::record`] with the variant. (Its own
+//! options, flags and scene keys are not declared from its folder yet: issue 34 item 1.)
 
 use anyhow::{bail, ensure, Result};
 
 use super::refract::{EnvInputs, SweepRecording};
-use super::{
-    ambient, ao, ea, march, refract, single, Camera, FrameTarget, Model, RenderOptions, VolumeInfo,
-};
+use super::{ambient, Camera, FrameTarget, LightSupport, Model, RenderOptions, VolumeInfo};
 use crate::vk::{Context, Image, Recorder, Sampler};
 
 /// The renderer's GPU resources, as every model sees them, and the frame asked for.
@@ -80,6 +80,48 @@ pub(crate) trait ModelPass: Send {
     fn output(&self) -> &FrameTarget;
 }
 
+/// What an optical model declares, from its own folder (a `static`): its name, the
+/// lights it takes, what it reads of the renderer's shared data, what it refuses, and its
+/// pass. The one list of models is [`Model::declaration`] (render/registry.rs).
+pub(crate) struct OpticalModel {
+    /// The name `--model`, scene files and reports use.
+    pub name: &'static str,
+    /// One sentence for `--help`: what it renders and its own flags.
+    pub summary: &'static str,
+    /// How many lights it takes and whether point lights are among them.
+    pub lights: LightSupport,
+    /// Whether it has a phase function (a phase-function change applies).
+    pub phase_function: bool,
+    /// Whether it reads the gradient volume (built on its first frame).
+    pub gradient: bool,
+    /// Whether it reads the extinction volume (built on its first frame, rebuilt with the
+    /// transfer functions), and whether it needs its 3D SAT too.
+    pub extinction: Option<bool>,
+    /// What it refuses beyond the checks every model shares (camera, options, steps, and
+    /// the lights against `lights`); [`no_state_buffers`] for a model without the
+    /// sweep's state.
+    pub check: fn(&OpticalModel, VolumeInfo, &Camera, &RenderOptions) -> Result<()>,
+    /// Its pass for the frames `inputs.opts` asks for.
+    pub make_pass: fn(&Inputs) -> Result<Box<dyn ModelPass>>,
+}
+
+/// The check of a model that has no state buffers (every ray marcher): dumps of them are
+/// the sweep's.
+pub(crate) fn no_state_buffers(
+    model: &OpticalModel,
+    _info: VolumeInfo,
+    _camera: &Camera,
+    opts: &RenderOptions,
+) -> Result<()> {
+    ensure!(
+        opts.sweep.dumps.is_empty(),
+        "state-buffer dumps are the refractive sweep's (--model refract); the {} ray \
+         marcher has no state buffers",
+        model.name
+    );
+    Ok(())
+}
+
 /// What `model` refuses beyond the checks every model shares (camera, options, steps).
 pub(crate) fn check(
     model: Model,
@@ -120,43 +162,6 @@ pub(crate) fn check(
             );
         }
     }
-    match model {
-        Model::Ea | Model::Ao | Model::Single | Model::Ambient => march::check(model, opts),
-        Model::Refract => refract::check_model(info, camera, opts),
-    }
-}
-
-/// Whether `model` reads the gradient volume (built on its first frame).
-pub(crate) fn needs_gradient(model: Model) -> bool {
-    match model {
-        Model::Ea | Model::Ao | Model::Single | Model::Ambient => false,
-        Model::Refract => true,
-    }
-}
-
-/// Whether `model` reads the extinction volume (built on its first frame, rebuilt with
-/// the transfer functions), and whether it needs its 3D SAT too.
-pub(crate) fn needs_extinction(model: Model) -> Option<bool> {
-    match model {
-        Model::Ao | Model::Ambient => Some(true),
-        Model::Single => Some(false),
-        Model::Ea | Model::Refract => None,
-    }
-}
-
-/// Make `model`'s pass for the frames `opts` asks for.
-pub(crate) fn make_pass(model: Model, inputs: &Inputs) -> Result<Box<dyn ModelPass>> {
-    let opts = inputs.opts;
-    Ok(match model {
-        Model::Ea => Box::new(ea::EaPass::new(inputs, opts.width, opts.height)?),
-        Model::Ao => Box::new(ao::AoPass::new(inputs, opts.width, opts.height)?),
-        Model::Single => Box::new(single::SinglePass::new(inputs, opts.width, opts.height)?),
-        Model::Ambient => Box::new(ambient::AmbientPass::new(inputs, opts.width, opts.height)?),
-        Model::Refract => Box::new(refract::SweepPass::new(
-            inputs,
-            opts.width,
-            opts.height,
-            opts.sweep.light_rays,
-        )?),
-    })
+    let declared = model.declaration();
+    (declared.check)(declared, info, camera, opts)
 }

@@ -1,96 +1,10 @@
-//! What a frame is asked for and what it returns: the optical model, the render options
-//! (size, sampling, background, early termination, the sweep's options) and the frame.
+//! What a frame is asked for and what it returns: the render options (size, sampling,
+//! background, early termination, the lights, the models' options) and the frame.
 
 use anyhow::{ensure, Context, Result};
 use glam::Vec3;
 
 use super::*;
-
-/// What lights a model takes: [`Model::light_support`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct LightSupport {
-    /// How many (0: the model is unlit and ignores them).
-    pub max: usize,
-    /// Whether point lights are among them (else directional only).
-    pub point: bool,
-}
-
-/// Rendering models `refrakt render --model` offers.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Model {
-    /// Emission–absorption ray marcher, the baseline.
-    Ea,
-    /// The refractive plane sweep (thesis ch. 4, Algorithm 1).
-    Refract,
-    /// Volumetric ambient occlusion from a 3D summed-area table (render::ao).
-    Ao,
-    /// Single scattering with shadows from a transmittance cache (render::single).
-    Single,
-    /// Ambient scattering: multiple scattering in a sphere around each sample from a
-    /// preintegrated Monte-Carlo table, soft shadows by tube marching (render::ambient).
-    Ambient,
-}
-
-impl Model {
-    /// Every model, in the order `bench models` compares them (EA first: the ratios'
-    /// base).
-    pub const ALL: [Model; 5] = [
-        Model::Ea,
-        Model::Ao,
-        Model::Single,
-        Model::Ambient,
-        Model::Refract,
-    ];
-
-    /// Whether the model lights the volume with [`RenderOptions::lights`] (a light change
-    /// can cost it a rebuild); the others ignore the lights.
-    pub fn uses_light(self) -> bool {
-        match self {
-            Model::Ea => false,
-            Model::Ao | Model::Single | Model::Ambient | Model::Refract => true,
-        }
-    }
-
-    /// How many lights the model takes (the main light first) and whether point lights
-    /// are among them. The sweep carries one directional light (thesis sect. 4.2; several
-    /// lights are future work), and so do ambient occlusion and single scattering, whose
-    /// caches are built for one direction; ambient scattering takes up to
-    /// [`super::limits::MAX_LIGHTS`], directional or point. EA takes none and ignores them.
-    pub fn light_support(self) -> LightSupport {
-        match self {
-            Model::Ea => LightSupport {
-                max: 0,
-                point: false,
-            },
-            Model::Ao | Model::Single | Model::Refract => LightSupport {
-                max: 1,
-                point: false,
-            },
-            Model::Ambient => LightSupport {
-                max: super::limits::MAX_LIGHTS,
-                point: true,
-            },
-        }
-    }
-
-    /// Whether the model has a phase function (a phase-function change applies).
-    pub fn has_phase_function(self) -> bool {
-        match self {
-            Model::Single | Model::Ambient => true,
-            Model::Ea | Model::Ao | Model::Refract => false,
-        }
-    }
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Model::Ea => "ea",
-            Model::Refract => "refract",
-            Model::Ao => "ao",
-            Model::Single => "single",
-            Model::Ambient => "ambient",
-        }
-    }
-}
 
 /// Most samples (ray-marcher steps or sweep planes) one ray may take. Far more than any
 /// useful sample distance needs (a 1024³ volume at sample distance 0.1 takes ~18k); it

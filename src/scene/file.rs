@@ -179,14 +179,10 @@ pub fn parse_flip(s: &str) -> Result<[bool; 3]> {
 }
 
 pub fn parse_model(s: &str) -> Result<Model> {
-    match s {
-        "refract" => Ok(Model::Refract),
-        "ea" => Ok(Model::Ea),
-        "ao" => Ok(Model::Ao),
-        "single" => Ok(Model::Single),
-        "ambient" => Ok(Model::Ambient),
-        _ => bail!("model '{s}' is not one of refract, ea, ao, single, ambient"),
-    }
+    Model::from_name(s).ok_or_else(|| {
+        let names: Vec<&str> = Model::ALL.iter().map(|m| m.name()).collect();
+        anyhow::anyhow!("model '{s}' is not one of {}", names.join(", "))
+    })
 }
 
 pub fn parse_tonemap(s: &str) -> Result<ToneOperator> {

@@ -356,13 +356,7 @@ impl App {
                                 said = Some(format!("sample distance {:.3}", opts.sample_distance));
                             }
                             "m" => {
-                                *model = match *model {
-                                    Model::Refract => Model::Ea,
-                                    Model::Ea => Model::Ao,
-                                    Model::Ao => Model::Single,
-                                    Model::Single => Model::Ambient,
-                                    Model::Ambient => Model::Refract,
-                                };
+                                *model = model.next();
                                 said = Some(format!("model {}", model.name()));
                             }
                             _ => {}

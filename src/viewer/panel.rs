@@ -221,14 +221,6 @@ fn from_angles(azimuth: f32, elevation: f32) -> Vec3 {
 /// light's is 1).
 const MAX_AMBIENT_LEVEL: f32 = 2.0;
 
-const MODELS: [Model; 5] = [
-    Model::Refract,
-    Model::Ea,
-    Model::Ao,
-    Model::Single,
-    Model::Ambient,
-];
-
 /// The panel's environment combo box: what it shows and the scene's own environment.
 struct EnvControl<'a> {
     choice: &'a mut EnvChoice,
@@ -325,7 +317,7 @@ fn controls(
             egui::ComboBox::from_label("model")
                 .selected_text(v.model.name())
                 .show_ui(ui, |ui| {
-                    for m in MODELS {
+                    for m in Model::ALL {
                         ui.selectable_value(&mut v.model, m, m.name());
                     }
                 });

@@ -31,7 +31,8 @@ use anyhow::{ensure, Result};
 use bytemuck::{Pod, Zeroable};
 
 use super::march::{delegate_to_march, RayMarchPass};
-use super::model::{Inputs, ModelPass, Recorded};
+use super::model::{no_state_buffers, Inputs, ModelPass, OpticalModel, Recorded};
+use super::LightSupport;
 use super::RenderOptions;
 use crate::light::LightSource;
 use crate::shaders;
@@ -349,6 +350,25 @@ impl AmbientPass {
         })
     }
 }
+
+/// The ambient-scattering model's declaration (listed in render/registry.rs).
+pub(crate) static AMBIENT: OpticalModel = OpticalModel {
+    name: "ambient",
+    summary: "Ambient scattering (Ament et al.): multiple scattering in a sphere around each sample from a preintegrated Monte-Carlo table, soft shadows and translucency by tube marching; up to four lights, directional or point (--light repeated, --g, --albedo, --ambient-radius).",
+    // Up to MAX_LIGHTS, directional or point: each is marched through its tubes.
+    lights: LightSupport {
+        max: MAX_LIGHTS,
+        point: true,
+    },
+    phase_function: true,
+    gradient: false,
+    extinction: Some(true),
+    check: no_state_buffers,
+    make_pass: |inputs| {
+        let o = inputs.opts;
+        Ok(Box::new(AmbientPass::new(inputs, o.width, o.height)?))
+    },
+};
 
 impl ModelPass for AmbientPass {
     delegate_to_march!();

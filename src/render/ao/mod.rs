@@ -18,7 +18,8 @@ use bytemuck::{Pod, Zeroable};
 
 use super::extinction::Extinction;
 use super::march::{delegate_to_march, RayMarchPass};
-use super::model::{Inputs, ModelPass, Recorded};
+use super::model::{no_state_buffers, Inputs, ModelPass, OpticalModel, Recorded};
+use super::LightSupport;
 
 use crate::shaders;
 use crate::vk::{
@@ -155,6 +156,22 @@ impl AoPass {
         })
     }
 }
+
+/// The ambient-occlusion model's declaration (listed in render/registry.rs).
+pub(crate) static AO: OpticalModel = OpticalModel {
+    name: "ao",
+    summary: "Volumetric ambient occlusion (3D summed-area table of extinction) with a Lambert term from --light (Ament et al.'s comparison; --ao-radius, --ao-diffuse).",
+    // One directional light: the unshadowed diffuse term through the gradient.
+    lights: LightSupport::ONE_DIRECTIONAL,
+    phase_function: false,
+    gradient: false,
+    extinction: Some(true),
+    check: no_state_buffers,
+    make_pass: |inputs| {
+        let o = inputs.opts;
+        Ok(Box::new(AoPass::new(inputs, o.width, o.height)?))
+    },
+};
 
 impl ModelPass for AoPass {
     delegate_to_march!();

@@ -4,7 +4,8 @@
 use anyhow::Result;
 
 use super::march::{delegate_to_march, MarchParams, RayMarchPass};
-use super::model::{Inputs, ModelPass, Recorded};
+use super::model::{no_state_buffers, Inputs, ModelPass, OpticalModel, Recorded};
+use super::LightSupport;
 use crate::shaders;
 use crate::vk::Recorder;
 
@@ -26,6 +27,22 @@ impl EaPass {
         })
     }
 }
+
+/// The emission–absorption model's declaration (listed in render/registry.rs).
+pub(crate) static EA: OpticalModel = OpticalModel {
+    name: "ea",
+    summary: "Emission-absorption ray marcher (the baseline).",
+    // Unlit: emission only.
+    lights: LightSupport::NONE,
+    phase_function: false,
+    gradient: false,
+    extinction: None,
+    check: no_state_buffers,
+    make_pass: |inputs| {
+        let o = inputs.opts;
+        Ok(Box::new(EaPass::new(inputs, o.width, o.height)?))
+    },
+};
 
 impl ModelPass for EaPass {
     delegate_to_march!();

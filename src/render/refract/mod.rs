@@ -28,7 +28,8 @@ use anyhow::{bail, ensure, Result};
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
-use super::model::{Inputs, ModelPass, Recorded};
+use super::model::{Inputs, ModelPass, OpticalModel, Recorded};
+use super::LightSupport;
 use super::{Camera, FrameTarget, RenderOptions, VolumeInfo};
 use crate::shaders;
 use crate::vk::{
@@ -432,6 +433,22 @@ pub(super) fn check_model(info: VolumeInfo, camera: &Camera, opts: &RenderOption
     );
     check(info, camera, opts, &opts.sweep).map(|_| ())
 }
+
+/// The refractive sweep's declaration (listed in render/registry.rs).
+pub(crate) static REFRACT: OpticalModel = OpticalModel {
+    name: "refract",
+    summary: "The refractive plane sweep: refraction, caustics, soft shadows, tinted media (the default).",
+    // One directional light (thesis sect. 4.2; several lights are future work).
+    lights: LightSupport::ONE_DIRECTIONAL,
+    phase_function: false,
+    gradient: true,
+    extinction: None,
+    check: |_, info, camera, opts| check_model(info, camera, opts),
+    make_pass: |inputs| {
+        let o = inputs.opts;
+        Ok(Box::new(SweepPass::new(inputs, o.width, o.height, o.sweep.light_rays)?))
+    },
+};
 
 impl ModelPass for SweepPass {
     /// The state images are sized by the viewport, the ray images by the rays per pixel too.

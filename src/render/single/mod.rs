@@ -17,7 +17,8 @@ use glam::Vec3;
 
 use super::extinction::Extinction;
 use super::march::{delegate_to_march, RayMarchPass};
-use super::model::{Inputs, ModelPass, Recorded};
+use super::model::{no_state_buffers, Inputs, ModelPass, OpticalModel, Recorded};
+use super::LightSupport;
 use super::{RenderOptions, VolumeInfo};
 use crate::shaders;
 use crate::vk::{
@@ -162,6 +163,23 @@ fn transmittance<'a>(inputs: &Inputs<'a>) -> Result<&'a TransmittanceCache> {
         .transmittance
         .ok_or_else(|| anyhow::anyhow!("the single-scattering model needs the transmittance cache"))
 }
+
+/// The single-scattering model's declaration (listed in render/registry.rs).
+pub(crate) static SINGLE: OpticalModel = OpticalModel {
+    name: "single",
+    summary: "Single scattering with hard shadows from a transmittance cache, Henyey-Greenstein phase function (--light, --g, --albedo).",
+    // One directional light: the transmittance cache is built for one direction.
+    lights: LightSupport::ONE_DIRECTIONAL,
+    phase_function: true,
+    gradient: false,
+    // The extinction volume, no SAT: the cache marches it.
+    extinction: Some(false),
+    check: no_state_buffers,
+    make_pass: |inputs| {
+        let o = inputs.opts;
+        Ok(Box::new(SinglePass::new(inputs, o.width, o.height)?))
+    },
+};
 
 impl ModelPass for SinglePass {
     delegate_to_march!();
