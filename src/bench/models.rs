@@ -3,7 +3,7 @@
 //! ray termination at α = 0.98): per row and model the rendering time, its ratio to EA's,
 //! and what a change of the transfer function (TF), the light source (LS) and the phase
 //! function (PF) costs: the GPU time of everything the renderer rebuilds for it
-//! ([`REBUILD_SCOPES`]) in the first frame after the change, measured per model on a
+//! ([`rebuild_scopes`]) in the first frame after the change, measured per model on a
 //! renderer of its own. The models are rendered
 //! interleaved frame by frame (frame k of every model before frame k+1 of any), as `bench
 //! variants` does, so a change in machine load hits them alike.
@@ -11,7 +11,7 @@
 use glam::{Quat, Vec3};
 
 use super::*;
-use crate::render::REBUILD_SCOPES;
+use crate::render::rebuild_scopes;
 use crate::scene::FETCHED;
 use crate::transfer::TransferFunctions;
 
@@ -206,7 +206,7 @@ pub struct ScopeMs {
     pub ms: f64,
 }
 
-/// What one change cost: the sum of the [`REBUILD_SCOPES`] in the first frame after it,
+/// What one change cost: the sum of the [`rebuild_scopes`] in the first frame after it,
 /// and those scopes (empty, and `ms` 0, when the change rebuilt nothing).
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -219,8 +219,8 @@ pub struct Change {
 
 impl Change {
     fn of(f: &Frame) -> Result<Change> {
-        let scopes: Vec<ScopeMs> = REBUILD_SCOPES
-            .iter()
+        let scopes: Vec<ScopeMs> = rebuild_scopes()
+            .into_iter()
             .filter_map(|s| {
                 f.timings.get(s).map(|ms| ScopeMs {
                     scope: s.to_string(),
@@ -304,7 +304,7 @@ pub struct ModelsSettingsRecord {
     pub models: Vec<String>,
     /// The model the ratios divide by.
     pub ratio_to: String,
-    /// The scopes a change's cost sums ([`REBUILD_SCOPES`]).
+    /// The scopes a change's cost sums ([`rebuild_scopes`]).
     pub rebuild_scopes: Vec<String>,
     pub tf_change: String,
     pub ls_change: String,
@@ -567,7 +567,7 @@ pub fn models(ctx: &Context, s: &ModelsSettings) -> Result<ModelsReport> {
             rows: out.iter().map(|r| r.dataset.clone()).collect(),
             models: Model::ALL.iter().map(|m| m.name().to_string()).collect(),
             ratio_to: Model::ALL[ea].name().to_string(),
-            rebuild_scopes: REBUILD_SCOPES.iter().map(|s| s.to_string()).collect(),
+            rebuild_scopes: rebuild_scopes().iter().map(|s| s.to_string()).collect(),
             tf_change: format!("every opacity × {TF_CHANGE_OPACITY_SCALE}"),
             ls_change: format!("light direction turned by {LS_CHANGE_DEG}°"),
             pf_change: "the phase function's anisotropy g moved by 0.01 (models with one)".into(),

@@ -72,7 +72,7 @@ fn human_seconds(s: f64) -> String {
 
 /// Timestamp scopes of builds that are not part of a frame (see `Renderer`).
 fn one_off(scope: &str) -> bool {
-    refrakt::render::REBUILD_SCOPES.contains(&scope)
+    refrakt::render::rebuild_scopes().contains(&scope)
         || refrakt::render::sat3d::AXIS_SCOPES.contains(&scope)
 }
 

@@ -54,11 +54,10 @@ pub use refract::{
 };
 pub use tonemap::ToneMapPass;
 
-/// The timestamp scopes of everything the renderer rebuilds only when its inputs change
-/// (volume, transfer functions, environment, light), outside a frame's "render" scope:
-/// what a transfer-function or light change costs is the sum of these in the first frame
-/// after it (nested scopes, like the SAT's per-axis ones, are not listed).
-pub const REBUILD_SCOPES: [&str; 11] = [
+/// The timestamp scopes of what the renderer itself rebuilds only when its inputs change
+/// (volume, transfer functions, environment), outside a frame's "render" scope; the
+/// models declare their own ([`rebuild_scopes`]).
+const SHARED_REBUILD_SCOPES: [&str; 7] = [
     "gradient volume",
     "value ranges",
     "environment SAT",
@@ -66,11 +65,19 @@ pub const REBUILD_SCOPES: [&str; 11] = [
     "field texture",
     extinction::EXTINCTION_SCOPE,
     sat3d::SCOPE,
-    single::CACHE_SCOPE,
-    ao::CACHE_SCOPE,
-    ambient::EXTINCTION_SCOPE,
-    ambient::CACHE_SCOPE,
 ];
+
+/// The timestamp scopes of everything rebuilt only when its inputs change (volume,
+/// transfer functions, environment, light), outside a frame's "render" scope: the
+/// renderer's and every model's (`OpticalModel::rebuild_scopes`). What a
+/// transfer-function or light change costs is the sum of these in the first frame after
+/// it (nested scopes, like the SAT's per-axis ones, are not listed).
+pub fn rebuild_scopes() -> Vec<&'static str> {
+    let models = Model::ALL
+        .iter()
+        .flat_map(|m| m.declaration().rebuild_scopes.iter().copied());
+    SHARED_REBUILD_SCOPES.into_iter().chain(models).collect()
+}
 
 /// GPU state for one volume and its transfer functions.
 pub struct Renderer {
@@ -94,12 +101,10 @@ pub struct Renderer {
     /// frame, rebuilt with the transfer functions.
     extinction: Option<extinction::Extinction>,
     extinction_dirty: bool,
-    /// The single-scattering model's transmittance cache: made on its first frame,
-    /// rebuilt when the extinction or the light's direction changed.
-    transmittance: Option<single::TransmittanceCache>,
-    /// The ambient-scattering model's tables: set by [`Renderer::set_ambient_table`], or
-    /// loaded (built on first use, then cached on disk) for the frame's albedo.
-    ambient_table: Option<ambient::TableTextures>,
+    /// Each model's own persistent data ([`model::OpticalModel::state`]: the
+    /// single-scattering model's transmittance cache, the ambient-scattering model's
+    /// tables), made on its first frame.
+    states: HashMap<Model, Box<dyn model::ModelState>>,
     tf: TransferFunctions,
     tf_image: Image,
     tf_dirty: bool,
@@ -226,8 +231,7 @@ impl Renderer {
             field_dirty: false,
             extinction: None,
             extinction_dirty: false,
-            transmittance: None,
-            ambient_table: None,
+            states: HashMap::new(),
             tf: tf.clone(),
             tf_image,
             tf_dirty: true,
@@ -328,27 +332,6 @@ impl Renderer {
         Ok(t)
     }
 
-    /// The ambient occlusion the AO model computes (`glsl/ao.glsl`) at `points` (texture
-    /// coordinates of the volume box) with `opts`' radius, of the current transfer
-    /// functions (the extinction volume and its table are made or rebuilt first, in their
-    /// own submission): the model's occlusion, evaluated on the GPU, for checks against
-    /// closed forms.
-    pub fn ambient_occlusion_at(
-        &mut self,
-        points: &[[f32; 3]],
-        opts: &ao::AoOptions,
-    ) -> Result<Vec<f32>> {
-        opts.validate()?;
-        self.ensure_extinction(Model::Ao)?;
-        let e = self.extinction.as_mut().expect("made above");
-        if self.extinction_dirty {
-            let (volume, tf) = (&self.volume_tex, &self.tf_image);
-            self.ctx.execute(|rec| e.record_build(rec, volume, tf))?;
-            self.extinction_dirty = false;
-        }
-        e.occlusion_on_gpu(&self.ctx, points, opts.shells())
-    }
-
     /// Whether the sweep has its field texture (the `field` lever can take effect).
     pub fn has_field_texture(&self) -> bool {
         self.field.is_some()
@@ -432,7 +415,7 @@ impl Renderer {
         self.ensure_gradient(model)?;
         self.ensure_field(model, opts)?;
         self.ensure_extinction(model)?;
-        self.ensure_ambient_table(model, opts)?;
+        self.ensure_state(model, opts)?;
         let ctx = self.ctx.clone();
         let mut recorded = None;
         let record = |rec: &mut Recorder| {
@@ -503,7 +486,7 @@ impl Renderer {
         self.ensure_gradient(model)?;
         self.ensure_field(model, opts)?;
         self.ensure_extinction(model)?;
-        self.ensure_ambient_table(model, opts)?;
+        self.ensure_state(model, opts)?;
         let r = self.record_inner(rec, slot, model, camera, opts, false)?;
         Ok(RecordedFrame {
             image: &self.target(model, slot)?.image,
@@ -591,37 +574,37 @@ impl Renderer {
     /// them (the ambient models); built in the frame's recording. Refused with the sizes
     /// when they do not fit the device's budget (the gradient volume's).
     fn ensure_extinction(&mut self, model: Model) -> Result<()> {
-        let Some(with_sat) = model.declaration().extinction else {
+        let declared = model.declaration();
+        let Some(with_sat) = declared.extinction else {
             return Ok(());
         };
         let has_sat = self.extinction.as_ref().is_some_and(|e| e.sat().is_ok());
-        let with_cache = model == Model::Single;
-        let ready = self.extinction.is_some()
-            && (has_sat || !with_sat)
-            && (self.transmittance.is_some() || !with_cache);
-        if ready {
+        // The model's own state is made from the extinction volume (the transmittance
+        // cache) and shares its budget.
+        let new_state = declared
+            .state
+            .as_ref()
+            .filter(|_| !self.states.contains_key(&model));
+        if self.extinction.is_some() && (has_sat || !with_sat) && new_state.is_none() {
             return Ok(());
         }
         let extent = self.volume_tex.extent();
         let (_, device_budget) = gradient::GradientVolume::memory(&self.ctx, extent);
         let budget = self.gradient_budget.unwrap_or(device_budget);
-        let cache = with_cache || self.transmittance.is_some();
+        let state_bytes = new_state.map_or(0, |s| (s.bytes)(extent));
         let needed = extinction::Extinction::bytes(extent, with_sat || has_sat)
-            + if cache {
-                single::TransmittanceCache::bytes(extent)
-            } else {
-                0
-            };
+            + self.states.values().map(|s| s.bytes()).sum::<u64>()
+            + state_bytes;
         ensure!(
             needed <= budget,
             "the {} model needs {} MiB for the extinction volume{} ({}x{}x{} voxels); the \
              device budget is {} MiB: use a smaller volume (--scale)",
             model.name(),
             needed >> 20,
-            if with_sat {
-                " and its summed-area table"
-            } else {
-                " and the transmittance cache"
+            match new_state {
+                _ if with_sat => " and its summed-area table".to_string(),
+                Some(s) if state_bytes > 0 => format!(" and {}", s.what),
+                _ => String::new(),
             },
             extent[0],
             extent[1],
@@ -642,59 +625,51 @@ impl Renderer {
             extinction.add_sat(&self.ctx)?;
             self.extinction_dirty = true;
         }
-        if with_cache && self.transmittance.is_none() {
-            self.transmittance = Some(single::TransmittanceCache::new(
-                &self.ctx,
-                extinction,
-                &self.linear,
-            )?);
+        Ok(())
+    }
+
+    /// `model`'s own state ([`model::OpticalModel::state`]), made now if it has none yet
+    /// (after the extinction volume it may be made from); an error for a model without
+    /// state.
+    fn model_state(&mut self, model: Model) -> Result<&mut Box<dyn model::ModelState>> {
+        let Some(decl) = &model.declaration().state else {
+            bail!("the {} model keeps no state", model.name());
+        };
+        if !self.states.contains_key(&model) {
+            let shared = model::Shared {
+                ctx: &self.ctx,
+                info: self.volume_info,
+                extinction: self.extinction.as_ref(),
+                linear: &self.linear,
+            };
+            let state = (decl.make)(&shared)?;
+            self.states.insert(model, state);
         }
-        Ok(())
+        Ok(self.states.get_mut(&model).expect("made above"))
     }
 
-    /// Use `table` for the ambient-scattering model's frames from now on (instead of the
-    /// default table for the frame's albedo, built or loaded from the disk cache): frames
-    /// whose albedo differs from the table's are refused.
-    pub fn set_ambient_table(&mut self, table: &ambient::table::AmbientTable) -> Result<()> {
-        table.params.validate()?;
-        self.remove_passes(Model::Ambient);
-        self.ambient_table = Some(ambient::TableTextures::new(&self.ctx, table, true)?);
-        Ok(())
+    /// `model`'s state if it has been made.
+    fn existing_model_state(&self, model: Model) -> Option<&dyn model::ModelState> {
+        self.states.get(&model).map(|s| s.as_ref())
     }
 
-    /// The parameters of the ambient-scattering table in use, if one is loaded.
-    pub fn ambient_table_params(&self) -> Option<ambient::table::TableParams> {
-        self.ambient_table.as_ref().map(|t| *t.params())
-    }
-
-    /// Load the ambient-scattering table for the frame's albedo if the model needs it
-    /// and the one loaded is not for that albedo (the default parameters; built on first
-    /// use, then read from the disk cache: see [`ambient::table::load_or_build`]).
-    fn ensure_ambient_table(&mut self, model: Model, opts: &RenderOptions) -> Result<()> {
-        if model != Model::Ambient {
+    /// Make `model`'s state on its first frame and prepare it for a frame of `opts`
+    /// (outside the recording); its passes are remade when what they bind changed.
+    fn ensure_state(&mut self, model: Model, opts: &RenderOptions) -> Result<()> {
+        if model.declaration().state.is_none() {
             return Ok(());
         }
-        let albedo = opts.scatter.albedo;
-        if let Some(t) = &self.ambient_table {
-            if t.params().albedo == albedo {
-                return Ok(());
-            }
-            ensure!(
-                !t.is_explicit(),
-                "the ambient-scattering table in use was built for albedo {}, the frame asks \
-                 for {albedo}: build one for it (refrakt precompute ambient --albedo {albedo}) \
-                 or leave the albedo at the table's",
-                t.params().albedo
-            );
-        }
-        let params = ambient::table::TableParams {
-            albedo,
-            ..Default::default()
+        self.model_state(model)?;
+        let shared = model::Shared {
+            ctx: &self.ctx,
+            info: self.volume_info,
+            extinction: self.extinction.as_ref(),
+            linear: &self.linear,
         };
-        log::info!("ambient-scattering table for albedo {albedo}: loading or building");
-        let (table, _) = ambient::table::load_or_build(&params, None, 0, &|_, _| {})?;
-        self.remove_passes(Model::Ambient);
-        self.ambient_table = Some(ambient::TableTextures::new(&self.ctx, &table, false)?);
+        let state = self.states.get_mut(&model).expect("made above");
+        if state.prepare(&shared, opts)? {
+            self.remove_passes(model);
+        }
         Ok(())
     }
 
@@ -720,13 +695,14 @@ impl Renderer {
             e.record_build(rec, &self.volume_tex, &self.tf_image)?;
             self.extinction_dirty = false;
         }
-        if let (Model::Single, Some(cache), Some(e)) =
-            (model, self.transmittance.as_mut(), self.extinction.as_ref())
-        {
-            let towards = single::light_towards(opts);
-            if !cache.is_current(towards, e) {
-                cache.record_build(rec, e, self.volume_info, towards)?;
-            }
+        if let Some(state) = self.states.get_mut(&model) {
+            let shared = model::Shared {
+                ctx: &self.ctx,
+                info: self.volume_info,
+                extinction: self.extinction.as_ref(),
+                linear: &self.linear,
+            };
+            state.record_update(rec, &shared, opts)?;
         }
 
         let inputs = Inputs {
@@ -740,8 +716,7 @@ impl Renderer {
             value_ranges: self.value_ranges.as_ref().map(|r| r.image()),
             field: self.field.as_ref().map(|f| f.image()),
             extinction: self.extinction.as_ref(),
-            transmittance: self.transmittance.as_ref(),
-            ambient_table: self.ambient_table.as_ref(),
+            state: self.states.get(&model).map(|s| s.as_ref()),
             tf: &self.tf_image,
             eta_films: self.tf.eta_has_films(),
             preint: self.preint.image(),

@@ -18,8 +18,9 @@
 
 use anyhow::{bail, ensure, Result};
 
+use super::extinction::Extinction;
 use super::refract::{EnvInputs, SweepRecording};
-use super::{ambient, Camera, FrameTarget, LightSupport, Model, RenderOptions, VolumeInfo};
+use super::{Camera, FrameTarget, LightSupport, Model, RenderOptions, VolumeInfo};
 use crate::vk::{Context, Image, Recorder, Sampler};
 
 /// The renderer's GPU resources, as every model sees them, and the frame asked for.
@@ -43,10 +44,8 @@ pub(crate) struct Inputs<'a> {
     pub field: Option<&'a Image>,
     /// The extinction volume and its 3D SAT, if the model needs them (ambient models).
     pub extinction: Option<&'a super::extinction::Extinction>,
-    /// The single-scattering model's transmittance cache, if it needs it.
-    pub transmittance: Option<&'a super::single::TransmittanceCache>,
-    /// The ambient-scattering model's preintegrated tables, if it needs them.
-    pub ambient_table: Option<&'a ambient::TableTextures>,
+    /// The model's own persistent data ([`OpticalModel::state`]), if it has any.
+    pub state: Option<&'a dyn ModelState>,
     /// The transfer functions as a 1D-per-row image.
     pub tf: &'a Image,
     /// Whether their η function has an interior extremum (films; the sweep's films).
@@ -57,6 +56,51 @@ pub(crate) struct Inputs<'a> {
     /// label volume ([`crate::volume::Volume::labels`]: no blend between two labels).
     pub volume_sampler: &'a Sampler,
     pub env: EnvInputs<'a>,
+}
+
+impl<'a> Inputs<'a> {
+    /// The model's own state as its type `S`, or an error naming what is missing.
+    pub fn state<S: ModelState>(&self) -> Result<&'a S> {
+        self.state
+            .and_then(|s| s.as_any().downcast_ref::<S>())
+            .ok_or_else(|| anyhow::anyhow!("the model's state is missing or of another model"))
+    }
+}
+
+/// What the renderer owns that a model's state may be made from and kept up to date with.
+pub(crate) struct Shared<'a> {
+    pub ctx: &'a Context,
+    pub info: VolumeInfo,
+    /// The extinction volume, for a model that declared it ([`OpticalModel::extinction`]).
+    pub extinction: Option<&'a Extinction>,
+    pub linear: &'a Sampler,
+}
+
+/// A model's own persistent data, kept across frames and shared by the viewer's slots
+/// (the single-scattering model's transmittance cache, the ambient-scattering model's
+/// tables): made on the model's first frame by [`OpticalModel::state`] and kept up to
+/// date by the two hooks, so that the renderer knows no model's data by name.
+pub(crate) trait ModelState: std::any::Any + Send {
+    /// Outside any recording, before a frame asked for with `opts`: load or make what it
+    /// needs. True when what the passes bind changed (the renderer then remakes them).
+    fn prepare(&mut self, _shared: &Shared, _opts: &RenderOptions) -> Result<bool> {
+        Ok(false)
+    }
+    /// In the frame's recording, before the model's pass: rebuild what changed.
+    fn record_update(
+        &mut self,
+        _rec: &mut Recorder,
+        _shared: &Shared,
+        _opts: &RenderOptions,
+    ) -> Result<()> {
+        Ok(())
+    }
+    /// Device bytes it holds (counted against the budget the extinction volume shares).
+    fn bytes(&self) -> u64 {
+        0
+    }
+    fn as_any(&self) -> &dyn std::any::Any;
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any;
 }
 
 /// What a recorded frame leaves for after its submission.
@@ -103,6 +147,22 @@ pub(crate) struct OpticalModel {
     pub check: fn(&OpticalModel, VolumeInfo, &Camera, &RenderOptions) -> Result<()>,
     /// Its pass for the frames `inputs.opts` asks for.
     pub make_pass: fn(&Inputs) -> Result<Box<dyn ModelPass>>,
+    /// The timestamp scopes of what it rebuilds only when its inputs change (outside the
+    /// frame's "render" scope; see `render::rebuild_scopes`).
+    pub rebuild_scopes: &'static [&'static str],
+    /// Its own persistent data, made on its first frame (after the extinction volume),
+    /// with the device bytes it will take for a volume of this extent (checked against
+    /// the budget first); None: it has none.
+    pub state: Option<ModelStateDecl>,
+}
+
+/// How a model's state is made: [`OpticalModel::state`].
+pub(crate) struct ModelStateDecl {
+    /// What it is, for errors ("the transmittance cache").
+    pub what: &'static str,
+    /// Device bytes for a volume of this extent.
+    pub bytes: fn([u32; 3]) -> u64,
+    pub make: fn(&Shared) -> Result<Box<dyn ModelState>>,
 }
 
 /// The check of a model that has no state buffers (every ray marcher): dumps of them are

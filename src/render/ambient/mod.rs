@@ -31,7 +31,9 @@ use anyhow::{ensure, Result};
 use bytemuck::{Pod, Zeroable};
 
 use super::march::{delegate_to_march, RayMarchPass};
-use super::model::{no_state_buffers, Inputs, ModelPass, OpticalModel, Recorded};
+use super::model::{
+    no_state_buffers, Inputs, ModelPass, ModelState, ModelStateDecl, OpticalModel, Recorded, Shared,
+};
 use super::LightSupport;
 use super::RenderOptions;
 use crate::light::LightSource;
@@ -289,9 +291,7 @@ fn inputs_of<'a>(
     let e = inputs.extinction.ok_or_else(|| {
         anyhow::anyhow!("the ambient-scattering model needs the extinction volume")
     })?;
-    let t = inputs
-        .ambient_table
-        .ok_or_else(|| anyhow::anyhow!("the ambient-scattering model needs its table"))?;
+    let t = inputs.state::<AmbientTables>()?.table()?;
     Ok((e, t))
 }
 
@@ -368,7 +368,92 @@ pub(crate) static AMBIENT: OpticalModel = OpticalModel {
         let o = inputs.opts;
         Ok(Box::new(AmbientPass::new(inputs, o.width, o.height)?))
     },
+    rebuild_scopes: &[EXTINCTION_SCOPE, CACHE_SCOPE],
+    state: Some(ModelStateDecl {
+        what: "the ambient-scattering tables",
+        // The tables are a few MB whatever the volume.
+        bytes: |_| 0,
+        make: |_| Ok(Box::new(AmbientTables::default())),
+    }),
 };
+
+/// The model's state: the tables in use, set by the caller
+/// ([`super::Renderer::set_ambient_table`]) or loaded for the frame's albedo.
+#[derive(Default)]
+pub struct AmbientTables {
+    table: Option<TableTextures>,
+}
+
+impl AmbientTables {
+    fn table(&self) -> Result<&TableTextures> {
+        self.table
+            .as_ref()
+            .ok_or_else(|| anyhow::anyhow!("the ambient-scattering model needs its table"))
+    }
+}
+
+impl ModelState for AmbientTables {
+    /// Load the table for the frame's albedo if the one loaded is not for it (the default
+    /// parameters; built on first use, then read from the disk cache: see
+    /// [`table::load_or_build`]); a table the caller set for another albedo is an error.
+    fn prepare(&mut self, shared: &Shared, opts: &RenderOptions) -> Result<bool> {
+        let albedo = opts.scatter.albedo;
+        if let Some(t) = &self.table {
+            if t.params().albedo == albedo {
+                return Ok(false);
+            }
+            ensure!(
+                !t.is_explicit(),
+                "the ambient-scattering table in use was built for albedo {}, the frame asks \
+                 for {albedo}: build one for it (refrakt precompute ambient --albedo {albedo}) \
+                 or leave the albedo at the table's",
+                t.params().albedo
+            );
+        }
+        let params = TableParams {
+            albedo,
+            ..Default::default()
+        };
+        log::info!("ambient-scattering table for albedo {albedo}: loading or building");
+        let (table, _) = table::load_or_build(&params, None, 0, &|_, _| {})?;
+        self.table = Some(TableTextures::new(shared.ctx, &table, false)?);
+        Ok(true)
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
+        self
+    }
+}
+
+/// The ambient-scattering model's part of the renderer's interface.
+impl super::Renderer {
+    /// Use `table` for the ambient-scattering model's frames from now on (instead of the
+    /// default table for the frame's albedo, built or loaded from the disk cache): frames
+    /// whose albedo differs from the table's are refused.
+    pub fn set_ambient_table(&mut self, table: &AmbientTable) -> Result<()> {
+        table.params.validate()?;
+        let textures = TableTextures::new(self.context(), table, true)?;
+        let state = self.model_state(super::Model::Ambient)?;
+        let tables = state
+            .as_any_mut()
+            .downcast_mut::<AmbientTables>()
+            .expect("the ambient model's state");
+        tables.table = Some(textures);
+        self.remove_passes(super::Model::Ambient);
+        Ok(())
+    }
+
+    /// The parameters of the ambient-scattering table in use, if one is loaded.
+    pub fn ambient_table_params(&self) -> Option<TableParams> {
+        let state = self.existing_model_state(super::Model::Ambient)?;
+        let tables = state.as_any().downcast_ref::<AmbientTables>()?;
+        tables.table.as_ref().map(|t| *t.params())
+    }
+}
 
 impl ModelPass for AmbientPass {
     delegate_to_march!();

@@ -71,6 +71,30 @@ impl AoOptions {
     }
 }
 
+/// The ambient-occlusion model's part of the renderer's interface.
+impl super::Renderer {
+    /// The ambient occlusion the AO model computes (`glsl/ao.glsl`) at `points` (texture
+    /// coordinates of the volume box) with `opts`' radius, of the current transfer
+    /// functions (the extinction volume and its table are made or rebuilt first, in their
+    /// own submission): the model's occlusion, evaluated on the GPU, for checks against
+    /// closed forms.
+    pub fn ambient_occlusion_at(
+        &mut self,
+        points: &[[f32; 3]],
+        opts: &AoOptions,
+    ) -> Result<Vec<f32>> {
+        opts.validate()?;
+        self.ensure_extinction(super::Model::Ao)?;
+        let e = self.extinction.as_mut().expect("made above");
+        if self.extinction_dirty {
+            let (volume, tf) = (&self.volume_tex, &self.tf_image);
+            self.ctx.execute(|rec| e.record_build(rec, volume, tf))?;
+            self.extinction_dirty = false;
+        }
+        e.occlusion_on_gpu(&self.ctx, points, opts.shells())
+    }
+}
+
 /// std140 mirror of `Params` in glsl/ao.comp (ea.comp's block, then the model's).
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -171,6 +195,8 @@ pub(crate) static AO: OpticalModel = OpticalModel {
         let o = inputs.opts;
         Ok(Box::new(AoPass::new(inputs, o.width, o.height)?))
     },
+    rebuild_scopes: &[CACHE_SCOPE],
+    state: None,
 };
 
 impl ModelPass for AoPass {

@@ -42,6 +42,8 @@ pub(crate) static EA: OpticalModel = OpticalModel {
         let o = inputs.opts;
         Ok(Box::new(EaPass::new(inputs, o.width, o.height)?))
     },
+    rebuild_scopes: &[],
+    state: None,
 };
 
 impl ModelPass for EaPass {

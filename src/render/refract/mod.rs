@@ -448,6 +448,8 @@ pub(crate) static REFRACT: OpticalModel = OpticalModel {
         let o = inputs.opts;
         Ok(Box::new(SweepPass::new(inputs, o.width, o.height, o.sweep.light_rays)?))
     },
+    rebuild_scopes: &[],
+    state: None,
 };
 
 impl ModelPass for SweepPass {

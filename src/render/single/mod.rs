@@ -17,7 +17,9 @@ use glam::Vec3;
 
 use super::extinction::Extinction;
 use super::march::{delegate_to_march, RayMarchPass};
-use super::model::{no_state_buffers, Inputs, ModelPass, OpticalModel, Recorded};
+use super::model::{
+    no_state_buffers, Inputs, ModelPass, ModelState, ModelStateDecl, OpticalModel, Recorded, Shared,
+};
 use super::LightSupport;
 use super::{RenderOptions, VolumeInfo};
 use crate::shaders;
@@ -159,9 +161,43 @@ impl SinglePass {
 }
 
 fn transmittance<'a>(inputs: &Inputs<'a>) -> Result<&'a TransmittanceCache> {
-    inputs
-        .transmittance
-        .ok_or_else(|| anyhow::anyhow!("the single-scattering model needs the transmittance cache"))
+    inputs.state::<TransmittanceCache>()
+}
+
+/// The cache is the model's state: made on its first frame, rebuilt in a frame's recording
+/// when the light's direction or the extinction changed.
+impl ModelState for TransmittanceCache {
+    fn record_update(
+        &mut self,
+        rec: &mut Recorder,
+        shared: &Shared,
+        opts: &RenderOptions,
+    ) -> Result<()> {
+        let e = extinction_of(shared)?;
+        let towards = light_towards(opts);
+        if !self.is_current(towards, e) {
+            self.record_build(rec, e, shared.info, towards)?;
+        }
+        Ok(())
+    }
+
+    fn bytes(&self) -> u64 {
+        Self::bytes(self.image.extent())
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
+        self
+    }
+}
+
+fn extinction_of<'a>(shared: &Shared<'a>) -> Result<&'a Extinction> {
+    shared
+        .extinction
+        .ok_or_else(|| anyhow::anyhow!("the single-scattering model needs the extinction volume"))
 }
 
 /// The single-scattering model's declaration (listed in render/registry.rs).
@@ -179,6 +215,15 @@ pub(crate) static SINGLE: OpticalModel = OpticalModel {
         let o = inputs.opts;
         Ok(Box::new(SinglePass::new(inputs, o.width, o.height)?))
     },
+    rebuild_scopes: &[CACHE_SCOPE],
+    state: Some(ModelStateDecl {
+        what: "the transmittance cache",
+        bytes: TransmittanceCache::bytes,
+        make: |shared| {
+            let e = extinction_of(shared)?;
+            Ok(Box::new(TransmittanceCache::new(shared.ctx, e, shared.linear)?))
+        },
+    }),
 };
 
 impl ModelPass for SinglePass {
