@@ -322,7 +322,7 @@ fn bad_variants_fail_at_once_with_one_line_naming_the_problem() {
         ),
         (
             vec!["render", "--model", "ea", "--variant", "region=full"],
-            "--variant is the refractive model's",
+            "--variant only applies to --model refract",
         ),
     ] {
         let o = refrakt(&args);

@@ -1048,3 +1048,56 @@ fn a_background_applies_or_is_refused() {
         "the sky renders as the flat background (the test is void)"
     );
 }
+
+/// Issue 34 item 1: which model takes a flag is the model's own declaration (the
+/// registry), and the error for a flag given with another model names the models that
+/// take it, grouped, so the user learns where it belongs.
+#[test]
+fn a_flag_of_other_models_names_the_models_that_take_it() {
+    let small = [
+        "--volume-size",
+        "8",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "-o",
+        "x.png",
+    ];
+    for (model, flags, needles) in [
+        (
+            "ao",
+            &["--g", "0.3", "--albedo", "0.5"][..],
+            &["--g, --albedo only apply to --model single, ambient, not ao"][..],
+        ),
+        (
+            "single",
+            &["--ao-radius", "3", "--clip", "1,0,0,0"][..],
+            &[
+                "--ao-radius only applies to --model ao",
+                "--clip only applies to --model refract",
+                "not single",
+            ][..],
+        ),
+        (
+            "ea",
+            &["--light", "0,1,1"][..],
+            &["--light only applies to --model ao, single, ambient, refract, not ea"][..],
+        ),
+        (
+            "ambient",
+            &["--ambient-level", "0.1,0.1,0.1"][..],
+            &["--ambient-level only applies to --model refract"][..],
+        ),
+    ] {
+        let mut args = vec!["render", "--model", model];
+        args.extend(flags);
+        args.extend(small);
+        let o = refrakt(&args);
+        let err = stderr(&o);
+        assert!(!o.status.success(), "{args:?} succeeded");
+        for n in needles {
+            assert!(err.contains(n), "{args:?}: expected '{n}' in: {err}");
+        }
+    }
+}

@@ -274,81 +274,63 @@ pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Resu
         );
     }
     s.apply(o);
-    if !s.model.has_phase_function() {
-        let given: Vec<&str> = [
-            ("--g", args.g.is_some()),
-            ("--albedo", args.albedo.is_some()),
-        ]
-        .into_iter()
-        .filter_map(|(flag, given)| given.then_some(flag))
-        .collect();
-        ensure!(
-            given.is_empty(),
-            "{} only appl{} to the scattering models (--model single, ambient), not {}",
-            given.join(", "),
-            if given.len() == 1 { "ies" } else { "y" },
-            s.model.name()
-        );
-    }
-    if s.model != Model::Ao {
-        let given: Vec<&str> = [
-            ("--ao-radius", args.ao_radius.is_some()),
-            ("--ao-diffuse", args.ao_diffuse.is_some()),
-        ]
-        .into_iter()
-        .filter_map(|(flag, given)| given.then_some(flag))
-        .collect();
-        ensure!(
-            given.is_empty(),
-            "{} only appl{} to the ambient-occlusion model (--model ao), not {}",
-            given.join(", "),
-            if given.len() == 1 { "ies" } else { "y" },
-            s.model.name()
-        );
-    }
-    if s.model != Model::Ambient {
-        let given: Vec<&str> = [
-            ("--ambient-radius", args.ambient_radius.is_some()),
-            ("--ambient-table", args.ambient_table.is_some()),
-        ]
-        .into_iter()
-        .filter_map(|(flag, given)| given.then_some(flag))
-        .collect();
-        ensure!(
-            given.is_empty(),
-            "{} only appl{} to the ambient-scattering model (--model ambient), not {}",
-            given.join(", "),
-            if given.len() == 1 { "ies" } else { "y" },
-            s.model.name()
-        );
-    }
-    if s.model != Model::Refract {
-        let mut given = refract_only_flags(args);
-        if s.model.uses_light() {
-            // The AO and scattering models light the volume with the scene's light.
-            given.retain(|f| !matches!(*f, "--light" | "--light-colour"));
-        }
-        given.extend(extra);
-        ensure!(
-            given.is_empty(),
-            "{} {} the refractive model's (--model refract); the {} model has no plane sweep, \
-             refraction or environment{}",
-            given.join(", "),
-            if given.len() == 1 { "is" } else { "are" },
-            s.model.name(),
-            if !s.model.uses_light() {
-                ", and no light"
-            } else {
-                ""
-            }
-        );
-    }
+    refuse_other_models_flags(s.model, args, extra)?;
     Ok(s)
 }
 
-/// The flags given that only the refractive sweep uses (a flag that does not apply is an
-/// error, not silently ignored).
-fn refract_only_flags(args: &SceneArgs) -> Vec<&'static str> {
+/// A flag that belongs to some models (their declarations list it: `Model::flags`),
+/// given with a model that does not take it, is an error naming the models that do: a
+/// flag that does not apply is refused, not silently ignored.
+fn refuse_other_models_flags(model: Model, args: &SceneArgs, extra: &[&str]) -> Result<()> {
+    // (flags, the models that take them), grouped by those models.
+    let mut refused: Vec<(Vec<&str>, Vec<&str>)> = Vec::new();
+    for flag in model_flags_given(args)
+        .into_iter()
+        .chain(extra.iter().copied())
+    {
+        if model.flags().contains(&flag) {
+            continue;
+        }
+        let owners: Vec<&str> = Model::ALL
+            .iter()
+            .filter(|m| m.flags().contains(&flag))
+            .map(|m| m.name())
+            .collect();
+        if owners.is_empty() {
+            continue;
+        }
+        match refused.iter_mut().find(|(_, o)| *o == owners) {
+            Some((flags, _)) => flags.push(flag),
+            None => refused.push((vec![flag], owners)),
+        }
+    }
+    let said: Vec<String> = refused
+        .iter()
+        .map(|(flags, owners)| {
+            format!(
+                "{} only appl{} to --model {}",
+                flags.join(", "),
+                if flags.len() > 1 { "y" } else { "ies" },
+                owners.join(", ")
+            )
+        })
+        .collect();
+    ensure!(
+        said.is_empty(),
+        "{}, not {}{}",
+        said.join("; "),
+        model.name(),
+        if model.uses_light() {
+            ""
+        } else {
+            " (which has no light, plane sweep, refraction or environment)"
+        }
+    );
+    Ok(())
+}
+
+/// The flags given that belong to some models only (which ones: their declarations).
+fn model_flags_given(args: &SceneArgs) -> Vec<&'static str> {
     [
         ("--light", !args.light.is_empty()),
         ("--light-colour", args.light_colour.is_some()),
@@ -364,6 +346,12 @@ fn refract_only_flags(args: &SceneArgs) -> Vec<&'static str> {
         ("--clip", args.clip.is_some()),
         ("--env", args.env.is_some()),
         ("--env-rotation", args.env_rotation.is_some()),
+        ("--g", args.g.is_some()),
+        ("--albedo", args.albedo.is_some()),
+        ("--ao-radius", args.ao_radius.is_some()),
+        ("--ao-diffuse", args.ao_diffuse.is_some()),
+        ("--ambient-radius", args.ambient_radius.is_some()),
+        ("--ambient-table", args.ambient_table.is_some()),
     ]
     .into_iter()
     .filter_map(|(flag, given)| given.then_some(flag))

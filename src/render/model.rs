@@ -147,6 +147,10 @@ pub(crate) struct OpticalModel {
     pub check: fn(&OpticalModel, VolumeInfo, &Camera, &RenderOptions) -> Result<()>,
     /// Its pass for the frames `inputs.opts` asks for.
     pub make_pass: fn(&Inputs) -> Result<Box<dyn ModelPass>>,
+    /// The command-line flags it takes beyond those every model takes (camera, size,
+    /// sampling, tone...): the CLI refuses a flag given with a model that does not list
+    /// it, naming the models that do.
+    pub flags: &'static [&'static str],
     /// The timestamp scopes of what it rebuilds only when its inputs change (outside the
     /// frame's "render" scope; see `render::rebuild_scopes`).
     pub rebuild_scopes: &'static [&'static str],

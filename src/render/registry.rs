@@ -72,6 +72,12 @@ impl Model {
         Model::ALL[(i + 1) % Model::ALL.len()]
     }
 
+    /// The command-line flags the model takes beyond those every model takes (its
+    /// declaration's list).
+    pub fn flags(self) -> &'static [&'static str] {
+        self.declaration().flags
+    }
+
     /// One line for `--help`.
     pub fn summary(self) -> &'static str {
         self.declaration().summary

@@ -368,6 +368,13 @@ pub(crate) static AMBIENT: OpticalModel = OpticalModel {
         let o = inputs.opts;
         Ok(Box::new(AmbientPass::new(inputs, o.width, o.height)?))
     },
+    flags: &[
+        "--light", "--light-colour",
+        "--g",
+        "--albedo",
+        "--ambient-radius",
+        "--ambient-table",
+    ],
     rebuild_scopes: &[EXTINCTION_SCOPE, CACHE_SCOPE],
     state: Some(ModelStateDecl {
         what: "the ambient-scattering tables",

@@ -195,6 +195,7 @@ pub(crate) static AO: OpticalModel = OpticalModel {
         let o = inputs.opts;
         Ok(Box::new(AoPass::new(inputs, o.width, o.height)?))
     },
+    flags: &["--light", "--light-colour", "--ao-radius", "--ao-diffuse"],
     rebuild_scopes: &[CACHE_SCOPE],
     state: None,
 };

@@ -42,6 +42,7 @@ pub(crate) static EA: OpticalModel = OpticalModel {
         let o = inputs.opts;
         Ok(Box::new(EaPass::new(inputs, o.width, o.height)?))
     },
+    flags: &[],
     rebuild_scopes: &[],
     state: None,
 };

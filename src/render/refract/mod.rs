@@ -448,6 +448,24 @@ pub(crate) static REFRACT: OpticalModel = OpticalModel {
         let o = inputs.opts;
         Ok(Box::new(SweepPass::new(inputs, o.width, o.height, o.sweep.light_rays)?))
     },
+    flags: &[
+        "--light",
+        "--light-colour",
+        "--ambient-level",
+        "--softness",
+        "--roughness",
+        "--specular",
+        "--eta-scale",
+        "--light-transport",
+        "--light-rays",
+        "--light-spacing",
+        "--reflections",
+        "--clip",
+        "--env",
+        "--env-rotation",
+        "--variant",
+        "--pass-timings",
+    ],
     rebuild_scopes: &[],
     state: None,
 };

@@ -215,6 +215,7 @@ pub(crate) static SINGLE: OpticalModel = OpticalModel {
         let o = inputs.opts;
         Ok(Box::new(SinglePass::new(inputs, o.width, o.height)?))
     },
+    flags: &["--light", "--light-colour", "--g", "--albedo"],
     rebuild_scopes: &[CACHE_SCOPE],
     state: Some(ModelStateDecl {
         what: "the transmittance cache",
