@@ -57,10 +57,10 @@ impl MarchParams {
     }
 }
 
-/// The host layout of [`MarchParams`] for `spirv::check_block` (the AO model's test puts
-/// its own members after it).
+/// The host layout of [`MarchParams`] for `spirv::check_block` (each model's block puts
+/// its own members after it: [`check_params_block`]).
 #[cfg(test)]
-pub(crate) fn march_layout() -> Vec<(&'static str, usize, usize)> {
+fn march_layout() -> Vec<(&'static str, usize, usize)> {
     crate::host_layout!(MarchParams {
         cam_pos,
         cam_forward,
@@ -71,6 +71,19 @@ pub(crate) fn march_layout() -> Vec<(&'static str, usize, usize)> {
         march,
         size,
     })
+}
+
+/// Checks a ray-marched model's `Params` block in `spirv` against the host's: the
+/// march's members, then `own` (the model's, from `host_layout!`), `size` bytes in all.
+#[cfg(test)]
+pub(crate) fn check_params_block(
+    spirv: &[u8],
+    own: Vec<(&'static str, usize, usize)>,
+    size: usize,
+) {
+    let mut host = march_layout();
+    host.extend(own);
+    crate::vk::spirv::check_block(spirv, "Params", &host, size, true).unwrap();
 }
 
 /// What every ray-marched model's pass has: its parameter block, frame, descriptor set

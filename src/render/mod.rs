@@ -9,6 +9,7 @@
 
 pub mod ambient;
 pub mod ao;
+mod cached;
 mod ea;
 pub mod extinction;
 pub mod field;

@@ -16,16 +16,14 @@
 use anyhow::{ensure, Result};
 use bytemuck::{Pod, Zeroable};
 
+use super::cached::CachedImage;
 use super::extinction::Extinction;
 use super::march::{delegate_to_march, RayMarchPass};
 use super::model::{no_state_buffers, Inputs, ModelPass, OpticalModel, Recorded};
 use super::LightSupport;
 
 use crate::shaders;
-use crate::vk::{
-    self, Access, Binding, ComputePipeline, DescriptorSet, Filter, Image, ImageDesc, ImageKind,
-    Recorder, Sampler, Use,
-};
+use crate::vk::{self, Binding, Filter, ImageDesc, ImageKind, Recorder, Sampler};
 
 /// Options of the ambient-occlusion model.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -121,12 +119,9 @@ pub(super) struct AoPass {
     march: RayMarchPass,
     /// Kept for the cache's set (the table is read with texelFetch through it).
     _nearest: Sampler,
-    /// The occlusion at every voxel centre (`glsl/ao_cache.comp`), with the extinction
+    /// The occlusion at every voxel centre (`glsl/ao_cache.comp`), keyed by the extinction
     /// build and shell count it holds.
-    cache: Image,
-    cache_set: DescriptorSet,
-    cache_pipeline: ComputePipeline,
-    cache_for: Option<(u64, i32)>,
+    cache: CachedImage,
 }
 
 fn extinction<'a>(inputs: &Inputs<'a>) -> Result<&'a Extinction> {
@@ -146,20 +141,12 @@ impl AoPass {
             inputs.volume.extent(),
             1,
         );
-        let cache = Image::new(ctx, desc, "occlusion cache")?;
-        let cache_set = DescriptorSet::new(
+        let cache = CachedImage::new(
             ctx,
-            &[
-                Binding::Texture(sat.image(), &nearest),
-                Binding::StorageImage(&cache),
-            ],
-            "occlusion cache",
-        )?;
-        let cache_pipeline = ComputePipeline::new(
-            ctx,
+            desc,
+            &[Binding::Texture(sat.image(), &nearest)],
             shaders::AO_CACHE_COMP,
-            &cache_set,
-            std::mem::size_of::<CachePush>() as u32,
+            std::mem::size_of::<CachePush>(),
             "occlusion cache",
         )?;
         let march = RayMarchPass::new::<Params>(
@@ -168,15 +155,12 @@ impl AoPass {
             height,
             shaders::AO_COMP,
             "ao",
-            &[Binding::Texture(&cache, inputs.linear)],
+            &[Binding::Texture(cache.image(), inputs.linear)],
         )?;
         Ok(Self {
             march,
             _nearest: nearest,
             cache,
-            cache_set,
-            cache_pipeline,
-            cache_for: None,
         })
     }
 }
@@ -207,29 +191,21 @@ impl ModelPass for AoPass {
         let (info, opts) = (inputs.info, inputs.opts);
         let ambient = extinction(inputs)?;
         let [x, y, z] = info.dims.map(|d| d as i32);
-        let key = (ambient.builds(), opts.ao.shells());
-        if self.cache_for != Some(key) {
-            let sat = ambient.sat()?;
-            let push = CachePush {
-                dims: [x, y, z, key.1],
-                inv_scale: sat.inv_scale(),
-                pad: [0.0; 3],
-            };
-            let uses = [
-                Use::all(sat.image(), Access::Sampled),
-                Use::all(&self.cache, Access::ComputeStorage),
-            ];
-            let [w, h, d] = info.dims;
-            rec.pass(CACHE_SCOPE, &uses, |rec| {
-                rec.dispatch(
-                    &self.cache_pipeline,
-                    &self.cache_set,
-                    bytemuck::bytes_of(&push),
-                    [w.div_ceil(8), h.div_ceil(8), d],
-                )
-            })?;
-            self.cache_for = Some(key);
-        }
+        let builds = ambient.builds();
+        let shells = opts.ao.shells();
+        let sat = ambient.sat()?;
+        let push = CachePush {
+            dims: [x, y, z, shells],
+            inv_scale: sat.inv_scale(),
+            pad: [0.0; 3],
+        };
+        self.cache.record(
+            rec,
+            CACHE_SCOPE,
+            vec![builds as u32, (builds >> 32) as u32, shells as u32],
+            &[sat.image()],
+            bytemuck::bytes_of(&push),
+        )?;
         let towards = opts.light().towards().normalize();
         let c = opts.light().colour;
         let (width, height) = self.march.size();
@@ -240,7 +216,7 @@ impl ModelPass for AoPass {
             dims: [x, y, z, 0],
         };
         self.march
-            .record(rec, inputs, bytemuck::bytes_of(&p), &[&self.cache])
+            .record(rec, inputs, bytemuck::bytes_of(&p), &[self.cache.image()])
     }
 }
 
@@ -266,22 +242,15 @@ mod tests {
 
     #[test]
     fn params_match_the_shaders_block() {
-        let mut host = crate::render::march::march_layout();
-        for (name, offset, size) in crate::host_layout!(Params {
-            light,
-            light_colour,
-            dims,
-        }) {
-            host.push((name, offset, size));
-        }
-        crate::vk::spirv::check_block(
+        crate::render::march::check_params_block(
             shaders::AO_COMP,
-            "Params",
-            &host,
+            crate::host_layout!(Params {
+                light,
+                light_colour,
+                dims,
+            }),
             std::mem::size_of::<Params>(),
-            true,
-        )
-        .unwrap();
+        );
     }
 
     #[test]

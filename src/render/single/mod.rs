@@ -15,6 +15,7 @@ use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
+use super::cached::CachedImage;
 use super::extinction::Extinction;
 use super::march::{delegate_to_march, RayMarchPass};
 use super::model::{
@@ -23,10 +24,7 @@ use super::model::{
 use super::LightSupport;
 use super::{RenderOptions, VolumeInfo};
 use crate::shaders;
-use crate::vk::{
-    self, Access, Binding, ComputePipeline, Context, DescriptorSet, Image, ImageDesc, ImageKind,
-    Recorder, Sampler, Use,
-};
+use crate::vk::{self, Binding, Context, Image, ImageDesc, ImageKind, Recorder, Sampler};
 
 /// The timings scope of the transmittance cache's build.
 pub const CACHE_SCOPE: &str = "transmittance cache";
@@ -39,13 +37,10 @@ struct CachePush {
     half_extent: [f32; 4],
 }
 
-/// The transmittance of the directional light to every voxel centre.
+/// The transmittance of the directional light to every voxel centre, keyed by the light
+/// direction and the extinction build it holds.
 pub struct TransmittanceCache {
-    image: Image,
-    set: DescriptorSet,
-    pipeline: ComputePipeline,
-    /// The light direction and the extinction build it holds, `None` until built.
-    built_for: Option<(Vec3, u64)>,
+    cache: CachedImage,
 }
 
 impl TransmittanceCache {
@@ -57,37 +52,31 @@ impl TransmittanceCache {
     pub fn new(ctx: &Context, extinction: &Extinction, sampler: &Sampler) -> Result<Self> {
         let extent = extinction.image().extent();
         let desc = ImageDesc::computed(ImageKind::D3, vk::Format::R32_SFLOAT, extent, 1);
-        let image = Image::new(ctx, desc, "transmittance cache")?;
-        let set = DescriptorSet::new(
+        let cache = CachedImage::new(
             ctx,
-            &[
-                Binding::Texture(extinction.image(), sampler),
-                Binding::StorageImage(&image),
-            ],
-            "transmittance cache",
-        )?;
-        let pipeline = ComputePipeline::new(
-            ctx,
+            desc,
+            &[Binding::Texture(extinction.image(), sampler)],
             shaders::TRANSMITTANCE_COMP,
-            &set,
-            std::mem::size_of::<CachePush>() as u32,
+            std::mem::size_of::<CachePush>(),
             "transmittance cache",
         )?;
-        Ok(Self {
-            image,
-            set,
-            pipeline,
-            built_for: None,
-        })
+        Ok(Self { cache })
     }
 
-    /// Whether the cache holds the light from `towards` (unit) through `extinction` as it
-    /// is now.
-    pub fn is_current(&self, towards: Vec3, extinction: &Extinction) -> bool {
-        self.built_for == Some((towards, extinction.builds()))
+    /// What a build for the light from `towards` through `extinction` is keyed by.
+    fn key(towards: Vec3, extinction: &Extinction) -> Vec<u32> {
+        let b = extinction.builds();
+        vec![
+            towards.x.to_bits(),
+            towards.y.to_bits(),
+            towards.z.to_bits(),
+            b as u32,
+            (b >> 32) as u32,
+        ]
     }
 
-    /// Rebuild for the light from `towards` (unit, world) through `extinction`.
+    /// Rebuild for the light from `towards` (unit, world) through `extinction`, unless it
+    /// holds that already.
     pub(crate) fn record_build(
         &mut self,
         rec: &mut Recorder,
@@ -95,7 +84,6 @@ impl TransmittanceCache {
         info: VolumeInfo,
         towards: Vec3,
     ) -> Result<()> {
-        let [w, h, d] = self.image.extent();
         let push = CachePush {
             towards: [towards.x, towards.y, towards.z, info.ref_step],
             half_extent: [
@@ -105,24 +93,18 @@ impl TransmittanceCache {
                 0.0,
             ],
         };
-        let uses = [
-            Use::all(extinction.image(), Access::Sampled),
-            Use::all(&self.image, Access::ComputeStorage),
-        ];
-        rec.pass(CACHE_SCOPE, &uses, |rec| {
-            rec.dispatch(
-                &self.pipeline,
-                &self.set,
-                bytemuck::bytes_of(&push),
-                [w.div_ceil(8), h.div_ceil(8), d],
-            )
-        })?;
-        self.built_for = Some((towards, extinction.builds()));
+        self.cache.record(
+            rec,
+            CACHE_SCOPE,
+            Self::key(towards, extinction),
+            &[extinction.image()],
+            bytemuck::bytes_of(&push),
+        )?;
         Ok(())
     }
 
     pub fn image(&self) -> &Image {
-        &self.image
+        self.cache.image()
     }
 }
 
@@ -174,15 +156,11 @@ impl ModelState for TransmittanceCache {
         opts: &RenderOptions,
     ) -> Result<()> {
         let e = extinction_of(shared)?;
-        let towards = light_towards(opts);
-        if !self.is_current(towards, e) {
-            self.record_build(rec, e, shared.info, towards)?;
-        }
-        Ok(())
+        self.record_build(rec, e, shared.info, light_towards(opts))
     }
 
     fn bytes(&self) -> u64 {
-        Self::bytes(self.image.extent())
+        Self::bytes(self.image().extent())
     }
 
     fn as_any(&self) -> &dyn std::any::Any {
@@ -267,18 +245,13 @@ mod tests {
 
     #[test]
     fn params_match_the_shaders_block() {
-        let mut host = crate::render::march::march_layout();
-        host.extend(crate::host_layout!(Params {
-            light,
-            light_colour
-        }));
-        crate::vk::spirv::check_block(
+        crate::render::march::check_params_block(
             shaders::SINGLE_COMP,
-            "Params",
-            &host,
+            crate::host_layout!(Params {
+                light,
+                light_colour
+            }),
             std::mem::size_of::<Params>(),
-            true,
-        )
-        .unwrap();
+        );
     }
 }

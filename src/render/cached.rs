@@ -1,0 +1,74 @@
+//! A volume computed from other images by one compute dispatch and rebuilt only when the
+//! key of what it was built from changes (the "volume in, volume out" caches of the
+//! models: AO's occlusion, single scattering's transmittance, ambient scattering's
+//! extinction and radiance). Shared machinery, so it lives here (issue 34).
+
+use anyhow::Result;
+
+use crate::vk::{
+    Access, Binding, ComputePipeline, Context, DescriptorSet, Image, ImageDesc, Recorder, Use,
+};
+
+/// A compute step that writes one image from its inputs, remembering what it was last
+/// built from so it is rebuilt only when that changes.
+pub(crate) struct CachedImage {
+    image: Image,
+    set: DescriptorSet,
+    pipeline: ComputePipeline,
+    built_for: Option<Vec<u32>>,
+}
+
+impl CachedImage {
+    pub(crate) fn new(
+        ctx: &Context,
+        desc: ImageDesc,
+        inputs: &[Binding<'_>],
+        spirv: &[u8],
+        push_size: usize,
+        name: &str,
+    ) -> Result<Self> {
+        let image = Image::new(ctx, desc, name)?;
+        let mut bindings = inputs.to_vec();
+        bindings.push(Binding::StorageImage(&image));
+        let set = DescriptorSet::new(ctx, &bindings, name)?;
+        let pipeline = ComputePipeline::new(ctx, spirv, &set, push_size as u32, name)?;
+        Ok(Self {
+            image,
+            set,
+            pipeline,
+            built_for: None,
+        })
+    }
+
+    /// Record the build under `scope` if `key` differs from the last build's.
+    pub(crate) fn record(
+        &mut self,
+        rec: &mut Recorder,
+        scope: &str,
+        key: Vec<u32>,
+        reads: &[&Image],
+        push: &[u8],
+    ) -> Result<bool> {
+        if self.built_for.as_ref() == Some(&key) {
+            return Ok(false);
+        }
+        let mut uses: Vec<Use> = reads.iter().map(|i| Use::all(i, Access::Sampled)).collect();
+        uses.push(Use::all(&self.image, Access::ComputeStorage));
+        let [w, h, d] = self.image.extent();
+        rec.pass(scope, &uses, |rec| {
+            rec.dispatch(
+                &self.pipeline,
+                &self.set,
+                push,
+                [w.div_ceil(8), h.div_ceil(8), d],
+            )
+        })?;
+        self.built_for = Some(key);
+        Ok(true)
+    }
+
+    /// The image (R32F or as `desc` said), once built.
+    pub(crate) fn image(&self) -> &Image {
+        &self.image
+    }
+}
