@@ -89,15 +89,12 @@ void add_fixed_shared(uint channel, uint px, float v) {
     atomicAdd(sum_hi[channel][px], w.y + carry);
 }
 
-// Chunk `chunk` of the frame: its tile's candidates from (chunk - the tile's first chunk)
-// * GATHER_CHUNK, at most GATHER_CHUNK of them, summed into the tile's pixels.
-void gather_chunk(uint chunk, ivec2 size) {
-    uint t = gl_LocalInvocationIndex;
+// The last tile whose first chunk is at or before `chunk` (first chunks ascend; the loop
+// runs for any number of tiles up to 2^24, the same for every invocation). Where every
+// tile up to `chunk` is one chunk (the common case), chunk c is tile c's only one (first
+// chunks are at least their tile's index) and the search is skipped.
+uint tile_of_chunk(uint chunk) {
     uint tiles = fine_bins();
-    // The last tile whose first chunk is at or before `chunk` (first chunks ascend; the
-    // loop runs for any number of tiles up to 2^24, the same for every invocation).
-    // Where every tile up to `chunk` is one chunk (the common case), chunk c is tile c's
-    // only one (first chunks are at least their tile's index) and the search is skipped.
     bool direct = chunk < tiles && bins[chunk_start_word() + chunk] == chunk;
     uint lo = direct ? chunk : 0u, hi = direct ? chunk : tiles - 1u;
     for (int s = 0; s < 24; ++s) {
@@ -106,7 +103,70 @@ void gather_chunk(uint chunk, ivec2 size) {
         lo = left ? mid : lo;
         hi = left ? hi : mid - 1u;
     }
-    uint tile_index = lo;
+    return lo;
+}
+
+// One (ray, pixel) pair of the batch: its candidate is the first whose running end
+// exceeds `pair` (candidate_end is non-decreasing; 6 halvings of 64); its deposit at its
+// pixel is added into the tile's sums in shared memory.
+void add_pair(uint pair, uint pairs, ivec2 tile_lo) {
+    uint c_lo = 0u, c_hi = BATCH - 1u;
+    for (int s = 0; s < 6; ++s) {
+        uint mid = (c_lo + c_hi) / 2u;
+        bool right = candidate_end[mid] <= pair;
+        c_lo = right ? mid + 1u : c_lo;
+        c_hi = right ? c_hi : mid;
+    }
+    if (pair < pairs) {
+        uint c = c_lo;
+        uint e = candidate_rect[c];
+        uint width = e >> 16 & 0xffu, height = e >> 24;
+        uint local = pair - (candidate_end[c] - width * height);
+        ivec2 at = ivec2(e & 0xffu, e >> 8 & 0xffu) + ivec2(local % width, local / width);
+        vec3 irr;
+        vec4 dir;
+        deposit_at(shared_deposit(c), vec2(tile_lo + at), pc.unit, irr, dir);
+        uint px = uint(at.y) * GATHER_TILE + uint(at.x);
+        add_fixed_shared(0u, px, irr.r);
+        add_fixed_shared(1u, px, irr.g);
+        add_fixed_shared(2u, px, irr.b);
+        add_fixed_shared(3u, px, dir.x);
+        add_fixed_shared(4u, px, dir.y);
+        add_fixed_shared(5u, px, dir.z);
+        add_fixed_shared(6u, px, dir.w);
+    }
+}
+
+// Invocation t's pixel of the tile: stored when the tile is one chunk, else added into
+// the tile's sums in `bins` for sweep_gather_resolve.comp.
+void store_tile_pixel(uint tile_index, ivec2 tile_lo, bool several_chunks, ivec2 size) {
+    uint t = gl_LocalInvocationIndex;
+    ivec2 local_px = ivec2(t % GATHER_TILE, t / GATHER_TILE);
+    ivec2 pixel = tile_lo + local_px;
+    if (several_chunks) {
+        for (int k = 0; k < SPLAT_GATHER_CHANNELS; ++k) {
+            uint w = tile_sums_word(tile_index, t, uint(k));
+            uint lo_word = sum_lo[k][t];
+            uint old = atomicAdd(bins[w], lo_word);
+            uint carry = old + lo_word < old ? 1u : 0u;
+            atomicAdd(bins[w + 1u], sum_hi[k][t] + carry);
+        }
+    } else if (all(lessThan(pixel, size))) {
+        float c[SPLAT_GATHER_CHANNELS];
+        for (int k = 0; k < SPLAT_GATHER_CHANNELS; ++k) {
+            c[k] = fixed_to_float(uvec2(sum_lo[k][t], sum_hi[k][t])) * pc.unit;
+        }
+        ivec3 at = ivec3(pixel, pc.read_layer);
+        imageStore(irradiance, at, vec4(c[0], c[1], c[2], 0.0));
+        imageStore(irradiance_direction, at, vec4(c[3], c[4], c[5], c[6]));
+    }
+}
+
+// Chunk `chunk` of the frame: its tile's candidates from (chunk - the tile's first chunk)
+// * GATHER_CHUNK, at most GATHER_CHUNK of them, summed into the tile's pixels.
+void gather_chunk(uint chunk, ivec2 size) {
+    uint t = gl_LocalInvocationIndex;
+    uint tile_index = tile_of_chunk(chunk);
     uint first_chunk = bins[chunk_start_word() + tile_index];
     uint chunks = bins[chunk_start_word() + tile_index + 1u] - first_chunk;
     ivec2 tile = ivec2(int(tile_index) % fine_tiles().x, int(tile_index) / fine_tiles().x);
@@ -154,58 +214,11 @@ void gather_chunk(uint chunk, ivec2 size) {
         barrier();
         // 3. The pairs, 64 at a time.
         for (uint p0 = 0u; p0 < pairs; p0 += BATCH) {
-            uint pair = p0 + t;
-            // The first candidate whose running end exceeds `pair` (candidate_end is
-            // non-decreasing; 6 halvings of 64).
-            uint c_lo = 0u, c_hi = BATCH - 1u;
-            for (int s = 0; s < 6; ++s) {
-                uint mid = (c_lo + c_hi) / 2u;
-                bool right = candidate_end[mid] <= pair;
-                c_lo = right ? mid + 1u : c_lo;
-                c_hi = right ? c_hi : mid;
-            }
-            if (pair < pairs) {
-                uint c = c_lo;
-                uint e = candidate_rect[c];
-                uint width = e >> 16 & 0xffu, height = e >> 24;
-                uint local = pair - (candidate_end[c] - width * height);
-                ivec2 at = ivec2(e & 0xffu, e >> 8 & 0xffu) + ivec2(local % width, local / width);
-                vec3 irr;
-                vec4 dir;
-                deposit_at(shared_deposit(c), vec2(tile_lo + at), pc.unit, irr, dir);
-                uint px = uint(at.y) * GATHER_TILE + uint(at.x);
-                add_fixed_shared(0u, px, irr.r);
-                add_fixed_shared(1u, px, irr.g);
-                add_fixed_shared(2u, px, irr.b);
-                add_fixed_shared(3u, px, dir.x);
-                add_fixed_shared(4u, px, dir.y);
-                add_fixed_shared(5u, px, dir.z);
-                add_fixed_shared(6u, px, dir.w);
-            }
+            add_pair(p0 + t, pairs, tile_lo);
         }
         barrier();
     }
-    // Invocation t's pixel: stored when the tile is one chunk, else added into the tile's
-    // sums in `bins` for sweep_gather_resolve.comp.
-    ivec2 local_px = ivec2(t % GATHER_TILE, t / GATHER_TILE);
-    ivec2 pixel = tile_lo + local_px;
-    if (chunks > 1u) {
-        for (int k = 0; k < SPLAT_GATHER_CHANNELS; ++k) {
-            uint w = tile_sums_word(tile_index, t, uint(k));
-            uint lo_word = sum_lo[k][t];
-            uint old = atomicAdd(bins[w], lo_word);
-            uint carry = old + lo_word < old ? 1u : 0u;
-            atomicAdd(bins[w + 1u], sum_hi[k][t] + carry);
-        }
-    } else if (all(lessThan(pixel, size))) {
-        float c[SPLAT_GATHER_CHANNELS];
-        for (int k = 0; k < SPLAT_GATHER_CHANNELS; ++k) {
-            c[k] = fixed_to_float(uvec2(sum_lo[k][t], sum_hi[k][t])) * pc.unit;
-        }
-        ivec3 at = ivec3(pixel, pc.read_layer);
-        imageStore(irradiance, at, vec4(c[0], c[1], c[2], 0.0));
-        imageStore(irradiance_direction, at, vec4(c[3], c[4], c[5], c[6]));
-    }
+    store_tile_pixel(tile_index, tile_lo, chunks > 1u, size);
     barrier();   // the next chunk of this workgroup reuses the shared sums
 }
 

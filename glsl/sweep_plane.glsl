@@ -20,8 +20,9 @@
 //   (face_highlight, eqs. 4.9-4.11), composited (composite_segment, eq. 4.13); then
 //   advance_viewing_ray to the next plane (eq. 4.3: the face step, the graded Snell
 //   step, the thesis' kick);
-// - here: the helpers both share, the forward light rays' texel (light_ray_plane) and
-//   PLANE_MAIN, which reads this pixel's state, runs the steps and writes the state.
+// - here: the helpers both share, the forward light rays' texel (light_ray_plane), the
+//   viewing ray's (viewing_ray_plane: reads its state, runs the steps above, writes it)
+//   and PLANE_MAIN, which runs the pass's steps for one pixel.
 #if !defined(FORWARD_LIGHT) || !defined(PASS)
 #error "define FORWARD_LIGHT and PASS before including sweep_plane.glsl"
 #endif
@@ -273,23 +274,12 @@ void light_ray_plane(ivec2 pixel, uint R) {
 }
 #endif
 
-void PLANE_MAIN() {
-    vec2 size = P.camera.zw;
-    vec2 uv = FRAG_XY / size;
-    uint R = pc.read_layer;
-    float ds = P.planes.y;
-    float ref_step = P.planes.w;
-    ivec2 pixel = ivec2(FRAG_XY);
-
-#if PASS == 1
-    light_ray_plane(pixel, R);   // the light rays (sect. 4.2), forward
-#elif PASS == 0
-    // ---- light propagation (sect. 4.2, 5.2) -------------------------------------------
-    vec3 light, light_dir;
-    backward_light_step(uv, pixel, light, light_dir);
-#endif
 #if PASS != 1
-    // ---- viewing rays (sect. 4.3, 5.2) ------------------------------------------------
+// The viewing ray of this pixel through one plane (sect. 4.3, 5.2): read its state, add
+// the segment from the last plane (eq. 4.13), advance it to the next plane (eq. 4.3) and
+// write its state.
+void viewing_ray_plane(ivec2 pixel, uint R) {
+    float ds = P.planes.y;
     vec4 vp4 = READ_PIXEL(view_position, R, pixel);
     vec4 vd4 = READ_PIXEL(view_direction, R, pixel);
     vec4 CA = READ_PIXEL(colour_opacity, R, pixel);
@@ -349,11 +339,6 @@ void PLANE_MAIN() {
         C += (1.0 - A) * M * environment_radiance(normalize(turned_back));
         A = 1.0;
     }
-
-#if PASS == 0
-    out_light_colour = vec4(light, 0.0);
-    out_light_direction = vec4(light_dir, 0.0);
-#endif
 #if PASS == 2
     if (A >= P.termination_alpha) chain_code = -(float(pc.plane) + 1.0);   // finished
 #endif
@@ -361,6 +346,24 @@ void PLANE_MAIN() {
     out_view_direction = vec4(vd, eta_here);
     out_colour_opacity = vec4(C, A);
     out_medium = vec4(M, chain_code);
+}
+#endif
+
+void PLANE_MAIN() {
+    vec2 uv = FRAG_XY / P.camera.zw;
+    uint R = pc.read_layer;
+    ivec2 pixel = ivec2(FRAG_XY);
+#if PASS == 1
+    light_ray_plane(pixel, R);   // the light rays (sect. 4.2), forward
+#else
+#if PASS == 0
+    // The light through this plane (sect. 4.2, 5.2): the thesis' backward step.
+    vec3 light, light_dir;
+    backward_light_step(uv, pixel, light, light_dir);
+    out_light_colour = vec4(light, 0.0);
+    out_light_direction = vec4(light_dir, 0.0);
+#endif
+    viewing_ray_plane(pixel, R);   // the viewing rays (sect. 4.3), both transports
 #endif
 }
 

@@ -325,6 +325,67 @@ float face_sharpness(vec3 centre, vec3 nn, float hs, float eta_lo, float eta_hi,
     return sharp;
 }
 
+// The face step's turn (advance_viewing_ray, below, says why): the face is found along n_face through the step's
+// centre, and the ray turns once there; returns where it meets the next plane, with its
+// new direction in v_face, the step of eta across the probes in face_step, whether a film
+// lies between them in in_film, and turned_back set where the turn leads back towards the
+// viewer.
+vec3 face_step_turn(vec3 vp, vec3 vd, vec3 q_straight, float eta_b, vec3 n_face,
+                    out vec3 v_face, out float face_step, out bool in_film,
+                    inout vec3 turned_back) {
+    vec3 nn = normalize(n_face);
+    vec3 centre = 0.5 * (vp + q_straight);
+    float hs = 0.5 * abs(dot(q_straight - vp, nn)) + 2.5 * P.planes.w;
+    float v_plus = value_at_tex(to_tex(centre + hs * nn));
+    float v_minus = value_at_tex(to_tex(centre - hs * nn));
+    float e_plus = eta_of(v_plus), e_minus = eta_of(v_minus);
+    face_step = abs(e_plus - e_minus);
+    in_film = film_between(v_minus, v_plus, e_minus, e_plus).x > 0.0;
+    if (e_plus < e_minus) nn = -nn;   // nn points to higher eta
+    float eta_lo = min(e_plus, e_minus), eta_hi = max(e_plus, e_minus);
+    float eta_mid = 0.5 * (eta_lo + eta_hi);
+    // The face step's turn counts only where the step is a face's (w_face > 0 below):
+    // elsewhere the bisection and the four probes after it are left out by their
+    // loops' trip counts, not by a branch (llvmpipe runs both sides of a branch but
+    // leaves a loop once all its lanes are done; docs/NOTES.md, "Work only where a
+    // face is"). The image is the same.
+    bool face_used = face_step > FACE_STEP_LO;
+    vec3 face;
+    float sharp = face_sharpness(centre, nn, hs, eta_lo, eta_hi, eta_mid, face_step,
+                                 face_used, face);
+    // One Snell step from the ray's eta (|v|) to a target: graded, eta at the next
+    // plane, at the step's middle; sharp, the plateau of the side the step ends on,
+    // where the ray meets the face (or at the middle if it does not cross it here: a
+    // no-op on a plateau). Every turn is a Snell step from the ray's own eta about the
+    // local normal, so a ray that mixes the two along a face (tails graded, middle
+    // sharp) still leaves it in Snell's direction.
+    bool beyond = dot(q_straight - face, nn) >= 0.0;
+    float eta_side = beyond ? eta_hi : eta_lo;
+    vec3 x_sharp = centre;
+    if ((length(vd) >= eta_mid) != beyond) {
+        float run = dot(q_straight - vp, nn);
+        float t = abs(run) > 1e-9 ? clamp(dot(face - vp, nn) / run, 0.0, 1.0) : 0.0;
+        x_sharp = mix(vp, q_straight, t);
+    }
+    vec3 x = mix(centre, x_sharp, sharp);
+    vec3 n = surface_gradient(x);
+    vec3 n_turn = dot(n, n) > 1e-12 ? n : nn;
+    v_face = refract_step(vd, mix(eta_b, eta_side, sharp), n_turn);
+    if (v_face.z < MIN_FORWARD * length(v_face)) {
+        if (face_used) count_clamp(2u);
+        // Turned by a face (totally reflected back towards the viewer, at once at a
+        // sharp face, over a few planes through a graded one) into a direction the
+        // front-to-back sweep cannot follow. Clamped, the ray went on sideways and out
+        // through the face it should not pass (a glass wedge's exit face met at 42-45
+        // degrees showed what lies beyond it); the caller ends it with what lies that
+        // way instead.
+        turned_back = face_step >= FACE_STEP_HI ? v_face : vec3(0.0);
+        v_face = limit_direction(v_face);
+    }
+    vec3 d2 = normalize(v_face);
+    return x + d2 * ((q_straight.z - x.z) / d2.z);
+}
+
 // Advance to the next plane, turning on the way (eq. 4.3). v = eta dx/ds.
 //
 // A face of glass is the volume's picture of a sharp interface: eta steps between two
@@ -357,7 +418,6 @@ float face_sharpness(vec3 centre, vec3 nn, float hs, float eta_lo, float eta_hi,
 vec3 advance_viewing_ray(vec3 vp, inout vec3 vd, float eta_here, vec3 grad_eta, vec3 n_box,
                          bool in_box, out vec3 turned_back) {
     float ds = P.planes.y;
-    float ref_step = P.planes.w;
     turned_back = vec3(0.0);
     if (vd.z < MIN_FORWARD * length(vd)) {
         count_clamp(2u);
@@ -384,57 +444,8 @@ vec3 advance_viewing_ray(vec3 vp, inout vec3 vd, float eta_here, vec3 grad_eta, 
     bool pending = abs(length(vd) - eta_here) > 1e-3 * eta_here;
     vec3 n_face = in_box || pending ? n_box : vec3(0.0);
     if (dot(n_face, n_face) > 1e-12) {
-        vec3 nn = normalize(n_face);
-        vec3 centre = 0.5 * (vp + q_straight);
-        float hs = 0.5 * abs(dot(q_straight - vp, nn)) + 2.5 * ref_step;
-        float v_plus = value_at_tex(to_tex(centre + hs * nn));
-        float v_minus = value_at_tex(to_tex(centre - hs * nn));
-        float e_plus = eta_of(v_plus), e_minus = eta_of(v_minus);
-        face_step = abs(e_plus - e_minus);
-        in_film = film_between(v_minus, v_plus, e_minus, e_plus).x > 0.0;
-        if (e_plus < e_minus) nn = -nn;   // nn points to higher eta
-        float eta_lo = min(e_plus, e_minus), eta_hi = max(e_plus, e_minus);
-        float eta_mid = 0.5 * (eta_lo + eta_hi);
-        // The face step's turn counts only where the step is a face's (w_face > 0 below):
-        // elsewhere the bisection and the four probes after it are left out by their
-        // loops' trip counts, not by a branch (llvmpipe runs both sides of a branch but
-        // leaves a loop once all its lanes are done; docs/NOTES.md, "Work only where a
-        // face is"). The image is the same.
-        bool face_used = face_step > FACE_STEP_LO;
-        vec3 face;
-        float sharp = face_sharpness(centre, nn, hs, eta_lo, eta_hi, eta_mid, face_step,
-                                     face_used, face);
-        // One Snell step from the ray's eta (|v|) to a target: graded, eta at the next
-        // plane, at the step's middle; sharp, the plateau of the side the step ends on,
-        // where the ray meets the face (or at the middle if it does not cross it here: a
-        // no-op on a plateau). Every turn is a Snell step from the ray's own eta about the
-        // local normal, so a ray that mixes the two along a face (tails graded, middle
-        // sharp) still leaves it in Snell's direction.
-        bool beyond = dot(q_straight - face, nn) >= 0.0;
-        float eta_side = beyond ? eta_hi : eta_lo;
-        vec3 x_sharp = centre;
-        if ((length(vd) >= eta_mid) != beyond) {
-            float run = dot(q_straight - vp, nn);
-            float t = abs(run) > 1e-9 ? clamp(dot(face - vp, nn) / run, 0.0, 1.0) : 0.0;
-            x_sharp = mix(vp, q_straight, t);
-        }
-        vec3 x = mix(centre, x_sharp, sharp);
-        vec3 n = surface_gradient(x);
-        vec3 n_turn = dot(n, n) > 1e-12 ? n : nn;
-        v_face = refract_step(vd, mix(eta_b, eta_side, sharp), n_turn);
-        if (v_face.z < MIN_FORWARD * length(v_face)) {
-            if (face_used) count_clamp(2u);
-            // Turned by a face (totally reflected back towards the viewer, at once at a
-            // sharp face, over a few planes through a graded one) into a direction the
-            // front-to-back sweep cannot follow. Clamped, the ray went on sideways and out
-            // through the face it should not pass (a glass wedge's exit face met at 42-45
-            // degrees showed what lies beyond it); the caller ends it with what lies that
-            // way instead.
-            turned_back = face_step >= FACE_STEP_HI ? v_face : vec3(0.0);
-            v_face = limit_direction(v_face);
-        }
-        vec3 d2 = normalize(v_face);
-        q_face = x + d2 * ((q_straight.z - x.z) / d2.z);
+        q_face = face_step_turn(vp, vd, q_straight, eta_b, n_face, v_face, face_step, in_film,
+                                turned_back);
     }
     float w_face = smoothstep(FACE_STEP_LO, FACE_STEP_HI, face_step);
     vd = mix(in_film ? vd : v_kick, v_face, w_face);
