@@ -212,9 +212,9 @@ int list_ray(TileList l, uint k) {
 
 // The bins' atomics aggregated per workgroup (sweep_deposit.comp, sweep_bin_fill.comp):
 // the 64 rays of a workgroup are neighbours, and where a caustic focuses they all fall into
-// the same one or two bins, so one atomic per bin and workgroup replaces one per ray (on
-// an H100 the deposits' per-ray count atomics took 66 of 271 ms of the default scene's
-// frame at 768², most of it waiting on the few counters of a focus). A table of
+// the same one or two bins, so one atomic per bin and workgroup replaces one per ray
+// (per-ray atomics waited on the few counters of a focus: docs/NOTES.md, "The splat is
+// bound by bytes" and BENCH.md's H100 pairs). A table of
 // BIN_SLOTS bins in shared memory (open addressing, keys bin + 1, 0 empty): each entry
 // claims its bin's slot and takes its rank among the slot's entries; a bin that finds the
 // table full falls back to its own global atomic.

@@ -4,7 +4,7 @@
 // of the pixels its deposit overlaps (light_splat_fixed.glsl); light_splat_resolve.comp turns
 // the sums into the plane's irradiance. Same deposits as the point sprites
 // (light_splat_sprite.glsl), without rasterising a sprite per ray and blending two RGBA32F
-// attachments (84 % of the forward sweep on an H100, 45 % on lavapipe, measured).
+// attachments (what that cost: docs/NOTES.md, "The sweep as compute").
 #extension GL_GOOGLE_include_directive : require
 #include "sweep_common.glsl"
 #include "sweep_buffers.glsl"

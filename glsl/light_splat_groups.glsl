@@ -1,9 +1,8 @@
 // The grouped point sprites (the `splat=groups` lever, fragment path): the light rays'
 // deposits splatted with one point per 2 x 2 rays instead of one per ray, the deposits
-// computed by a compute pass. On lavapipe the vertex stage runs on one thread, at about
-// 0.13 µs a point whatever the point does, and computing the deposits there cost more
-// than the compute pass on all cores (docs/NOTES.md, "Grouped sprites": 0.61-0.85 x the
-// splat's time). GPUs take the compute sweep; there this lever is untimed.
+// computed by a compute pass: lavapipe runs the vertex stage on one thread, so the
+// deposits are computed on all cores and the points are fewer (docs/NOTES.md, "Grouped
+// sprites", has the figures). GPUs take the compute sweep; there this lever is untimed.
 //
 // Per plane: light_splat_groups.comp computes every ray's deposit into `deposits`
 // (light_gather.glsl, the compute sweep's layout), and for each group g of rays (2 gi +

@@ -42,9 +42,9 @@
 layout(location = 0) SPRITE_VARYING int sprite_group;
 layout(location = 1) SPRITE_VARYING uint sprite_rays;
 #else
-// The boxes of the sprite's rays, as varyings (zero for a ray it does not carry): at 512²
-// fragments that read them from the deposits buffer took 20.6 s of the demo's splat
-// against 14.7 s as varyings (measured).
+// The boxes of the sprite's rays, as varyings (zero for a ray it does not carry): cheaper
+// on lavapipe than fragments reading the deposits buffer (docs/NOTES.md, "Grouped
+// sprites").
 layout(location = 0) SPRITE_VARYING vec4 group_box[4];
 layout(location = 4) SPRITE_VARYING vec4 group_amplitude[4];
 layout(location = 8) SPRITE_VARYING vec4 group_direction[4];
@@ -181,8 +181,7 @@ void main() {
     // A deposit w pixels wide overlaps at most ceil(w) + 1 pixels per axis, all of whose
     // centres lie within (ceil(w) + 1) / 2 of its centre: the smallest sprite that
     // covers them (the fragments compute the exact overlap and drop empty pixels; a
-    // sprite one pixel wider shaded 9 fragments for the typical sub-pixel box instead of
-    // 4, and the splat was 44 % of the forward sweep on lavapipe).
+    // sprite one pixel wider shades 9 fragments for the typical sub-pixel box, not 4).
     vec2 w = d.footprint.zw - d.footprint.xy;
     gl_PointSize = ceil(max(w.x, w.y)) + 1.0;
     vec2 centre = 0.5 * (d.footprint.xy + d.footprint.zw);

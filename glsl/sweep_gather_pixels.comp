@@ -9,13 +9,8 @@
 // candidate of a coarse or the global bin that misses this tile is dropped there). Every
 // loop's trip count is the same for the whole workgroup: llvmpipe runs a loop's body at
 // least once even with every lane masked.
-//
-// Tried and measured (NVIDIA H200, supernova at the thesis' size, forward transport): one
-// ray per invocation adding its deposit to the tile's fixed-point sums in shared memory
-// with integer atomics evaluates each deposit only where it lands, but took 1229 ms a
-// frame against this loop's 690 ms (the deposits of neighbouring rays contend for the
-// same pixels' words, 7 to 14 atomics per pixel); on llvmpipe it was the faster of the
-// two (docs/BENCH.md, "The gather splat, binned").
+// Why a loop over candidates per pixel and not a ray per invocation with shared atomics
+// (contention at a focus, measured on an H200): docs/BENCH.md, "The gather splat, binned".
 #extension GL_GOOGLE_include_directive : require
 #define SWEEP_COMPUTE 1
 #include "sweep_common.glsl"
