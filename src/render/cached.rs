@@ -5,9 +5,7 @@
 
 use anyhow::Result;
 
-use crate::vk::{
-    Access, Binding, ComputePipeline, Context, DescriptorSet, Image, ImageDesc, Recorder, Use,
-};
+use crate::vk::{Binding, ComputePipeline, Context, DescriptorSet, Image, ImageDesc, Recorder};
 
 /// A compute step that writes one image from its inputs, remembering what it was last
 /// built from so it is rebuilt only when that changes.
@@ -46,16 +44,15 @@ impl CachedImage {
         rec: &mut Recorder,
         scope: &str,
         key: Vec<u32>,
-        reads: &[&Image],
         push: &[u8],
     ) -> Result<bool> {
         if self.built_for.as_ref() == Some(&key) {
             return Ok(false);
         }
-        let mut uses: Vec<Use> = reads.iter().map(|i| Use::all(i, Access::Sampled)).collect();
-        uses.push(Use::all(&self.image, Access::ComputeStorage));
+        // The set binds what the build reads and the image it writes: its bindings
+        // declare their uses (Recorder::dispatch).
         let [w, h, d] = self.image.extent();
-        rec.pass(scope, &uses, |rec| {
+        rec.pass(scope, &[], |rec| {
             rec.dispatch(
                 &self.pipeline,
                 &self.set,

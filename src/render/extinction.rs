@@ -10,8 +10,8 @@ use anyhow::Result;
 use super::sat3d::Sat3d;
 use crate::shaders;
 use crate::vk::{
-    self, Access, Binding, ComputePipeline, Context, DescriptorSet, Image, ImageDesc, ImageKind,
-    Recorder, Sampler, Use,
+    self, Binding, ComputePipeline, Context, DescriptorSet, Image, ImageDesc, ImageKind, Recorder,
+    Sampler,
 };
 
 /// The timings scope of the extinction volume's build.
@@ -80,14 +80,11 @@ impl Extinction {
 
     /// Compute the extinction of `volume` through `tf` and rebuild the table (if any) from
     /// it.
-    pub fn record_build(&mut self, rec: &mut Recorder, volume: &Image, tf: &Image) -> Result<()> {
+    pub fn record_build(&mut self, rec: &mut Recorder) -> Result<()> {
         let [w, h, d] = self.extinction.extent();
-        let uses = [
-            Use::all(volume, Access::Sampled),
-            Use::all(tf, Access::Sampled),
-            Use::all(&self.extinction, Access::ComputeStorage),
-        ];
-        rec.pass(EXTINCTION_SCOPE, &uses, |rec| {
+        // The set binds volume, tf and the extinction volume: its bindings declare their
+        // uses (Recorder::dispatch).
+        rec.pass(EXTINCTION_SCOPE, &[], |rec| {
             rec.dispatch(
                 &self.pipeline,
                 &self.set,

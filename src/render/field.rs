@@ -23,8 +23,8 @@ use anyhow::Result;
 
 use crate::shaders;
 use crate::vk::{
-    self, Access, Binding, ComputePipeline, Context, DescriptorSet, Image, ImageDesc, ImageKind,
-    Recorder, Sampler, Use,
+    self, Binding, ComputePipeline, Context, DescriptorSet, Image, ImageDesc, ImageKind, Recorder,
+    Sampler,
 };
 
 pub struct FieldTexture {
@@ -69,19 +69,14 @@ impl FieldTexture {
     }
 
     /// Record a rebuild from `volume` and `tf` (the images it was made with).
-    pub fn record_build(&mut self, rec: &mut Recorder, volume: &Image, tf: &Image) -> Result<()> {
+    pub fn record_build(&mut self, rec: &mut Recorder) -> Result<()> {
         let [w, h, d] = self.image.extent();
-        let (pipeline, set, image) = (&self.pipeline, &self.set, &self.image);
-        rec.pass(
-            "field texture",
-            &[
-                Use::all(volume, Access::Sampled),
-                Use::all(tf, Access::Sampled),
-                Use::all(image, Access::ComputeStorage),
-            ],
-            // The sweep's declared sampled read transitions the result.
-            |rec| rec.dispatch(pipeline, set, &[], [w.div_ceil(8), h.div_ceil(8), d]),
-        )?;
+        let (pipeline, set, _image) = (&self.pipeline, &self.set, &self.image);
+        // The set binds volume, tf and the field: its bindings declare their uses
+        // (Recorder::dispatch); the sweep's declared sampled read transitions the result.
+        rec.pass("field texture", &[], |rec| {
+            rec.dispatch(pipeline, set, &[], [w.div_ceil(8), h.div_ceil(8), d])
+        })?;
         self.builds += 1;
         Ok(())
     }

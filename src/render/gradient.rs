@@ -21,8 +21,8 @@ use anyhow::Result;
 
 use crate::shaders;
 use crate::vk::{
-    self, Access, Binding, ComputePipeline, Context, DescriptorSet, Image, ImageDesc, ImageKind,
-    Sampler, Timings, Use,
+    self, Binding, ComputePipeline, Context, DescriptorSet, Image, ImageDesc, ImageKind, Sampler,
+    Timings,
 };
 
 /// Standard deviation of the smoothing, in voxels.
@@ -102,28 +102,21 @@ impl GradientVolume {
         let [w, h, d] = volume.extent();
         let groups = [w.div_ceil(8), h.div_ceil(8), d];
         let timings = ctx.execute(|rec| {
-            rec.pass(
-                "gradient volume",
-                &[Use::all(volume, Access::Sampled)],
-                |rec| {
-                    for (axis, (set, (src, dst))) in sets.iter().zip(pairs).enumerate() {
-                        // By hand: the ping-pong images swap roles per axis inside one
-                        // pass, which a pass's declared Uses (one state each) cannot say.
-                        rec.transition_many(&[
-                            (src, 0..1, Access::Sampled),
-                            (dst, 0..1, Access::ComputeStorage),
-                        ]);
-                        let push = Push {
-                            axis: axis as i32,
-                            sigma: SIGMA,
-                            radius: (3.0 * SIGMA).ceil() as i32,
-                        };
-                        rec.dispatch(&pipeline, set, bytemuck::bytes_of(&push), groups)?;
-                    }
-                    // The sweep's declared sampled read transitions the result.
-                    Ok(())
-                },
-            )
+            // The images swap roles per axis: each axis's set declares its source sampled
+            // and its destination storage, and its dispatch takes them there
+            // (Recorder::dispatch).
+            rec.pass("gradient volume", &[], |rec| {
+                for (axis, set) in sets.iter().enumerate() {
+                    let push = Push {
+                        axis: axis as i32,
+                        sigma: SIGMA,
+                        radius: (3.0 * SIGMA).ceil() as i32,
+                    };
+                    rec.dispatch(&pipeline, set, bytemuck::bytes_of(&push), groups)?;
+                }
+                // The sweep's declared sampled read transitions the result.
+                Ok(())
+            })
         })?;
         Ok((Self { image }, timings))
     }

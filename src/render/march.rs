@@ -9,7 +9,7 @@ use bytemuck::{Pod, Zeroable};
 
 use super::model::{Inputs, Recorded};
 use super::{FrameTarget, RenderOptions};
-use crate::vk::{Access, Binding, Buffer, ComputePipeline, DescriptorSet, Image, Recorder, Use};
+use crate::vk::{Binding, Buffer, ComputePipeline, DescriptorSet, Recorder};
 
 /// std140 mirror of `Params` in glsl/ea.comp: what the shared march (glsl/march.glsl)
 /// reads, also the head of the AO model's block.
@@ -171,19 +171,13 @@ impl RayMarchPass {
         rec: &mut Recorder,
         inputs: &Inputs,
         params: &[u8],
-        extra: &[&Image],
     ) -> Result<Recorded> {
         let (info, opts) = (inputs.info, inputs.opts);
         rec.update_uniform(&self.params, params)?;
-        let mut uses = vec![
-            Use::all(inputs.volume, Access::Sampled),
-            Use::all(inputs.tf, Access::Sampled),
-            Use::all(inputs.preint, Access::Sampled),
-            Use::all(&self.output.image, Access::ComputeStorage),
-        ];
-        uses.extend(extra.iter().map(|i| Use::all(i, Access::Sampled)));
+        // The set binds the volume, tf, preintegration table, output and what the model
+        // adds: its bindings declare their uses (Recorder::dispatch).
         let groups = [self.width.div_ceil(8), self.height.div_ceil(8), 1];
-        rec.pass(&self.scope, &uses, |rec| {
+        rec.pass(&self.scope, &[], |rec| {
             rec.dispatch(&self.pipeline, &self.set, &[], groups)
         })?;
         Ok(Recorded {

@@ -325,10 +325,8 @@ impl Renderer {
         let (Some(field), true) = (self.field.as_mut(), self.field_dirty) else {
             return Ok(Timings::default());
         };
-        let (volume, tf) = (&self.volume_tex, &self.tf_image);
-        let t = self
-            .ctx
-            .execute(|rec| field.record_build(rec, volume, tf))?;
+        let (_volume, _tf) = (&self.volume_tex, &self.tf_image);
+        let t = self.ctx.execute(|rec| field.record_build(rec))?;
         self.field_dirty = false;
         Ok(t)
     }
@@ -689,11 +687,11 @@ impl Renderer {
             self.tf_dirty = false;
         }
         if let (Some(field), true) = (self.field.as_mut(), self.field_dirty) {
-            field.record_build(rec, &self.volume_tex, &self.tf_image)?;
+            field.record_build(rec)?;
             self.field_dirty = false;
         }
         if let (Some(e), true) = (self.extinction.as_mut(), self.extinction_dirty) {
-            e.record_build(rec, &self.volume_tex, &self.tf_image)?;
+            e.record_build(rec)?;
             self.extinction_dirty = false;
         }
         if let Some(state) = self.states.get_mut(&model) {

@@ -15,8 +15,8 @@ use anyhow::Result;
 use crate::shaders;
 use crate::transfer::{TransferFunctions, MAX_POINTS_PER_FUNCTION};
 use crate::vk::{
-    self, Access, Binding, Buffer, ComputePipeline, Context, DescriptorSet, Image, ImageDesc,
-    ImageKind, Memory, Recorder, Use,
+    self, Binding, Buffer, ComputePipeline, Context, DescriptorSet, Image, ImageDesc, ImageKind,
+    Memory, Recorder,
 };
 
 /// Entries per axis: `PREINT_SIZE`, defined once for Rust and the shaders.
@@ -86,10 +86,10 @@ impl PreintegrationTable {
     pub fn record_build(&mut self, rec: &mut Recorder, tf: &TransferFunctions) -> Result<()> {
         self.control_points
             .write(0, bytemuck::cast_slice(&tf.control_points()))?;
-        let (pipeline, set, image) = (&self.pipeline, &self.set, &self.image);
+        let (pipeline, set, _image) = (&self.pipeline, &self.set, &self.image);
         rec.pass(
             "preintegration",
-            &[Use::all(image, Access::ComputeStorage)],
+            &[], // the set's storage binding declares the table's write
             |rec| {
                 let groups = TABLE_SIZE.div_ceil(16);
                 // Its consumers declare their sampled reads (vk::Use), which transition it.

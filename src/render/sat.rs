@@ -7,7 +7,7 @@ use bytemuck::{Pod, Zeroable};
 
 use crate::environment::{EnvironmentMap, SatReadback};
 use crate::shaders;
-use crate::vk::{self, Access, Binding, ComputePipeline, Context, DescriptorSet, Image, Use};
+use crate::vk::{self, Binding, ComputePipeline, Context, DescriptorSet, Image};
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
@@ -53,18 +53,11 @@ impl SummedAreaTable {
         )?;
         let mean = map.mean();
         let timings = ctx.execute(|rec| {
-            let uses = [
-                Use::all(map_image, Access::ComputeStorage),
-                Use::all(&table, Access::ComputeStorage),
-            ];
-            rec.pass("environment SAT", &uses, |rec| {
+            // The set's bindings declare the images' uses: each dispatch is ordered after
+            // the one before it that wrote the table (Recorder::dispatch).
+            rec.pass("environment SAT", &[], |rec| {
                 // Rows (one invocation per row), then columns reading what the rows wrote.
                 for (pass, lines) in [(0u32, map.height), (1, map.width)] {
-                    if pass == 1 {
-                        // By hand: a declared Use orders the pass's start only, and this
-                        // write-after-write lies between two dispatches inside it.
-                        rec.transition_all(&table, Access::ComputeStorage);
-                    }
                     let push = SatPush {
                         mean,
                         pass_index: pass,

@@ -57,8 +57,8 @@ use bytemuck::{Pod, Zeroable};
 
 use crate::shaders;
 use crate::vk::{
-    self, Access, Binding, Buffer, ComputePipeline, Context, DescriptorSet, Filter, Image,
-    ImageDesc, ImageKind, Memory, Recorder, Sampler, Timings, Use,
+    self, Binding, Buffer, ComputePipeline, Context, DescriptorSet, Filter, Image, ImageDesc,
+    ImageKind, Memory, Recorder, Sampler, Timings,
 };
 
 /// The timings scope of the build.
@@ -226,18 +226,11 @@ impl Sat3d {
             [w.div_ceil(GROUP), d, 1],
             [w.div_ceil(GROUP), h, 1],
         ];
-        let (table, set, pipeline) = (&self.table, &self.set, &self.pipeline);
-        let uses = [
-            Use::all(field, Access::Sampled),
-            Use::all(table, Access::ComputeStorage),
-        ];
-        rec.pass(SCOPE, &uses, |rec| {
+        let (_table, set, pipeline) = (&self.table, &self.set, &self.pipeline);
+        // The set binds `field` (sampled) and the table (storage): each scan's dispatch is
+        // ordered after the previous one's writes by the barriers those bindings declare.
+        rec.pass(SCOPE, &[], |rec| {
             for (axis, groups) in groups.into_iter().enumerate() {
-                if axis > 0 {
-                    // Each scan reads what the previous one wrote. By hand: a declared
-                    // Use orders the pass's start only, not its dispatches.
-                    rec.transition_all(table, Access::ComputeStorage);
-                }
                 let push = ScanPush {
                     axis: axis as i32,
                     scale: 2f32.powi(exponent),
@@ -365,7 +358,7 @@ impl Sat3d {
         ctx.execute(|rec| {
             rec.pass(
                 "3D SAT probe",
-                &[Use::all(&self.table, Access::Sampled)],
+                &[], // the set's bindings declare the table's sampled read
                 |rec| {
                     rec.dispatch(
                         &pipeline,

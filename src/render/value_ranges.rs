@@ -22,8 +22,8 @@ use anyhow::Result;
 use super::limits::VALUE_BRICK;
 use crate::shaders;
 use crate::vk::{
-    self, Access, Binding, ComputePipeline, Context, DescriptorSet, Image, ImageDesc, ImageKind,
-    Sampler, Timings, Use,
+    self, Binding, ComputePipeline, Context, DescriptorSet, Image, ImageDesc, ImageKind, Sampler,
+    Timings,
 };
 
 pub struct ValueRanges {
@@ -78,21 +78,14 @@ impl ValueRanges {
         )?;
         let groups = grid.map(|g| g.div_ceil(4));
         let timings = ctx.execute(|rec| {
-            rec.pass(
-                "value ranges",
-                &[Use::all(volume, Access::Sampled)],
-                |rec| {
-                    rec.transition_many(&[(&bricks, 0..1, Access::ComputeStorage)]);
-                    rec.dispatch(&brick_pipeline, &brick_set, &[], groups)?;
-                    rec.transition_many(&[
-                        (&bricks, 0..1, Access::ComputeStorage),
-                        (&dilated, 0..1, Access::ComputeStorage),
-                    ]);
-                    rec.dispatch(&dilate_pipeline, &dilate_set, &[], groups)?;
-                    // The sweep's declared sampled read transitions the result.
-                    Ok(())
-                },
-            )
+            // The sets' bindings declare every image's use: the dilation is ordered after
+            // the bricks' writes (Recorder::dispatch).
+            rec.pass("value ranges", &[], |rec| {
+                rec.dispatch(&brick_pipeline, &brick_set, &[], groups)?;
+                rec.dispatch(&dilate_pipeline, &dilate_set, &[], groups)?;
+                // The sweep's declared sampled read transitions the result.
+                Ok(())
+            })
         })?;
         Ok((Self { bricks, dilated }, timings))
     }

@@ -6,6 +6,9 @@
 use anyhow::{Context as _, Result};
 use ash::vk;
 
+use std::ops::Range;
+
+use super::resources::TrackedImage;
 use super::{Access, Buffer, Context, Image, LayerView, Sampler};
 
 /// One binding of a descriptor set, in binding order (binding i = slice index i).
@@ -31,6 +34,39 @@ pub struct DescriptorSet {
     pub(crate) layout: vk::DescriptorSetLayout,
     pool: vk::DescriptorPool,
     pub(crate) raw: vk::DescriptorSet,
+    /// The images the set binds and the use each binding declares: a dispatch with the
+    /// set takes them there first ([`crate::vk::Recorder::dispatch`]).
+    pub(crate) images: Vec<BoundImage>,
+    name: String,
+}
+
+/// An image (or layers of one) a set binds, and how its binding uses it.
+pub(crate) struct BoundImage {
+    pub(crate) image: TrackedImage,
+    pub(crate) layers: Range<u32>,
+    pub(crate) access: Access,
+}
+
+impl Binding<'_> {
+    /// The image this binding reads or writes, the layers, and the use its descriptor
+    /// declares (a sampled binding's layout, a storage image's GENERAL read and write).
+    fn image_use(&self) -> Option<BoundImage> {
+        let all = |img: &Image| 0..img.desc().layers;
+        let (image, layers, access) = match *self {
+            Binding::Texture(img, _) => (img.tracked(), all(img), Access::Sampled),
+            Binding::LayerTexture(view, _, access) => {
+                (view.image.clone(), view.layer..view.layer + 1, access)
+            }
+            Binding::ArrayTexture(img, _, access) => (img.tracked(), all(img), access),
+            Binding::StorageImage(img) => (img.tracked(), all(img), Access::ComputeStorage),
+            Binding::Uniform(_) | Binding::Storage(_) => return None,
+        };
+        Some(BoundImage {
+            image,
+            layers,
+            access,
+        })
+    }
 }
 
 impl DescriptorSet {
@@ -93,6 +129,8 @@ impl DescriptorSet {
             layout,
             pool,
             raw,
+            images: bindings.iter().filter_map(Binding::image_use).collect(),
+            name: name.to_owned(),
         };
         set.write(bindings);
         ctx.set_name(raw, name);
@@ -165,6 +203,12 @@ impl DescriptorSet {
             .collect();
         // SAFETY: the set is not in use by pending work while being written.
         unsafe { self.ctx.device().update_descriptor_sets(&writes, &[]) };
+    }
+}
+
+impl DescriptorSet {
+    pub(crate) fn name(&self) -> &str {
+        &self.name
     }
 }
 

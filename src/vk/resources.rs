@@ -4,7 +4,7 @@
 //! barrier is derived in one place ([`crate::vk::Recorder::transition`]) from what the next
 //! use declares, rather than written by hand at every call site.
 
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex, Weak};
 
 use anyhow::{bail, Context as _, Result};
 use ash::vk;
@@ -217,7 +217,9 @@ pub struct Image {
     pub(crate) view: vk::ImageView,
     allocation: Option<Allocation>,
     pub(crate) desc: ImageDesc,
-    pub(crate) layer_state: Mutex<Vec<Access>>,
+    /// Each layer's last declared use. Shared (weakly) with the descriptor sets that bind
+    /// the image, so a dispatch can derive its barriers from the set's bindings.
+    pub(crate) layer_state: Arc<Mutex<Vec<Access>>>,
     name: String,
     /// Unique for the process, never reused (unlike Vulkan handles).
     id: u64,
@@ -309,7 +311,7 @@ impl Image {
             view,
             allocation: Some(allocation),
             desc,
-            layer_state: Mutex::new(vec![Access::Undefined; layers]),
+            layer_state: Arc::new(Mutex::new(vec![Access::Undefined; layers])),
             name: name.to_owned(),
             id: next_image_id(),
             owned: true,
@@ -341,11 +343,19 @@ impl Image {
                 layers: 1,
                 usage,
             },
-            layer_state: Mutex::new(vec![Access::Undefined]),
+            layer_state: Arc::new(Mutex::new(vec![Access::Undefined])),
             name: name.to_owned(),
             id: next_image_id(),
             owned: false,
         })
+    }
+
+    pub(crate) fn tracked(&self) -> TrackedImage {
+        TrackedImage {
+            raw: self.raw,
+            name: self.name.clone(),
+            state: Arc::downgrade(&self.layer_state),
+        }
     }
 
     /// An identity that is never reused in this process, for caches keyed by image (a
@@ -394,6 +404,7 @@ impl Image {
             ctx: self.ctx.clone(),
             raw: view,
             layer,
+            image: self.tracked(),
         })
     }
 }
@@ -445,6 +456,18 @@ pub struct LayerView {
     ctx: Context,
     pub(crate) raw: vk::ImageView,
     pub layer: u32,
+    /// The image the view shows, for the barriers of a set that binds the view.
+    pub(crate) image: TrackedImage,
+}
+
+/// What a descriptor set keeps of an image it binds, to derive the image's barriers at a
+/// dispatch: its handle, name and (weakly) its layers' state. The set does not keep the
+/// image alive; a dispatch whose set binds an image destroyed since is refused.
+#[derive(Clone)]
+pub(crate) struct TrackedImage {
+    pub(crate) raw: vk::Image,
+    pub(crate) name: String,
+    pub(crate) state: Weak<Mutex<Vec<Access>>>,
 }
 
 impl Drop for LayerView {

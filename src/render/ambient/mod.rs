@@ -427,7 +427,6 @@ impl ModelPass for AmbientPass {
             rec,
             EXTINCTION_SCOPE,
             ext_key.clone(),
-            &[sat.image()],
             bytemuck::bytes_of(&push),
         )?;
         let (n, at, colours) = lights(opts);
@@ -447,13 +446,8 @@ impl ModelPass for AmbientPass {
                 .copied(),
         );
         cache_key.push(table.scattered.id() as u32);
-        self.radiance.record(
-            rec,
-            CACHE_SCOPE,
-            cache_key,
-            &[self.extinction.image(), &table.transmission],
-            bytemuck::bytes_of(&cache_push),
-        )?;
+        self.radiance
+            .record(rec, CACHE_SCOPE, cache_key, bytemuck::bytes_of(&cache_push))?;
         let (width, height) = self.march.size();
         let p = Params {
             march: super::march::MarchParams::new(inputs, width, height),
@@ -463,16 +457,7 @@ impl ModelPass for AmbientPass {
             table: table.dims(),
             counts: [n as u32, 0, 0, 0],
         };
-        self.march.record(
-            rec,
-            inputs,
-            bytemuck::bytes_of(&p),
-            &[
-                self.extinction.image(),
-                self.radiance.image(),
-                &table.scattered,
-            ],
-        )
+        self.march.record(rec, inputs, bytemuck::bytes_of(&p))
     }
 }
 

@@ -85,8 +85,8 @@ impl super::Renderer {
         self.ensure_extinction(super::Model::Ao)?;
         let e = self.extinction.as_mut().expect("made above");
         if self.extinction_dirty {
-            let (volume, tf) = (&self.volume_tex, &self.tf_image);
-            self.ctx.execute(|rec| e.record_build(rec, volume, tf))?;
+            let (_volume, _tf) = (&self.volume_tex, &self.tf_image);
+            self.ctx.execute(|rec| e.record_build(rec))?;
             self.extinction_dirty = false;
         }
         e.occlusion_on_gpu(&self.ctx, points, opts.shells())
@@ -203,7 +203,6 @@ impl ModelPass for AoPass {
             rec,
             CACHE_SCOPE,
             vec![builds as u32, (builds >> 32) as u32, shells as u32],
-            &[sat.image()],
             bytemuck::bytes_of(&push),
         )?;
         let towards = opts.light().towards().normalize();
@@ -215,8 +214,7 @@ impl ModelPass for AoPass {
             light_colour: [c[0], c[1], c[2], 0.0],
             dims: [x, y, z, 0],
         };
-        self.march
-            .record(rec, inputs, bytemuck::bytes_of(&p), &[self.cache.image()])
+        self.march.record(rec, inputs, bytemuck::bytes_of(&p))
     }
 }
 

@@ -53,7 +53,7 @@ impl ModelPass for EaPass {
     fn record(&mut self, rec: &mut Recorder, inputs: &Inputs) -> Result<Recorded> {
         let (width, height) = self.march.size();
         let p = MarchParams::new(inputs, width, height);
-        self.march.record(rec, inputs, bytemuck::bytes_of(&p), &[])
+        self.march.record(rec, inputs, bytemuck::bytes_of(&p))
     }
 }
 

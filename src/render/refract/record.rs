@@ -247,7 +247,7 @@ impl SweepPass {
                 }
                 // The setup covers the screen and the ray images (rays_per_pixel times taller).
                 let setup_groups = [ray_image[0].div_ceil(8), ray_image[1].div_ceil(8), 1];
-                rec.dispatch(&self.setup, &self.setup_set, &[], setup_groups)?;
+                rec.dispatch_explicit(&self.setup, &self.setup_set, &[], setup_groups)?;
                 // Both layers become sampled: every draw's set names both (see module docs).
                 // (The compute planes declare their storage uses themselves.)
                 if !compute {
@@ -410,7 +410,7 @@ impl SweepPass {
                                         BufferUse::Draws,
                                         BufferUse::Compute,
                                     );
-                                    rec.dispatch(
+                                    rec.dispatch_explicit(
                                         &fp.group_deposits,
                                         &self.sweep_set,
                                         bytemuck::bytes_of(&splat_push),
@@ -467,7 +467,7 @@ impl SweepPass {
                                 rec.compute_storage_barrier(&self.splat_sums);
                                 let rays = grid_dims[0] * grid_dims[1];
                                 let splat_push = [i, write, push.depth.to_bits(), unit.to_bits()];
-                                rec.dispatch(
+                                rec.dispatch_explicit(
                                     &fp.splat_compute,
                                     &self.sweep_set,
                                     bytemuck::bytes_of(&splat_push),
@@ -482,7 +482,7 @@ impl SweepPass {
                                     (&self.irradiance[1].image, 0..2, Access::ComputeStorage),
                                 ]);
                                 let resolve_push = [write, self.width, self.height, unit.to_bits()];
-                                rec.dispatch(
+                                rec.dispatch_explicit(
                                     &f.splat_resolve,
                                     &self.splat_resolve_set,
                                     bytemuck::bytes_of(&resolve_push),
@@ -547,7 +547,7 @@ impl SweepPass {
         uses.push(Use::all(&self.output.image, Access::ComputeStorage));
         if last_batch {
             rec.pass("composite", &uses, |rec| {
-                rec.dispatch(
+                rec.dispatch_explicit(
                     &self.composite,
                     &self.composite_set,
                     &last.to_le_bytes(),

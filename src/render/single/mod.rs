@@ -97,7 +97,6 @@ impl TransmittanceCache {
             rec,
             CACHE_SCOPE,
             Self::key(towards, extinction),
-            &[extinction.image()],
             bytemuck::bytes_of(&push),
         )?;
         Ok(())
@@ -210,7 +209,7 @@ impl ModelPass for SinglePass {
 
     fn record(&mut self, rec: &mut Recorder, inputs: &Inputs) -> Result<Recorded> {
         let opts = inputs.opts;
-        let cache = transmittance(inputs)?;
+        let _cache = transmittance(inputs)?;
         let towards = light_towards(opts);
         let c = opts.light().colour;
         let (width, height) = self.march.size();
@@ -219,8 +218,7 @@ impl ModelPass for SinglePass {
             light: [towards.x, towards.y, towards.z, opts.scatter.g],
             light_colour: [c[0], c[1], c[2], opts.scatter.albedo],
         };
-        self.march
-            .record(rec, inputs, bytemuck::bytes_of(&p), &[cache.image()])
+        self.march.record(rec, inputs, bytemuck::bytes_of(&p))
     }
 }
 

@@ -403,8 +403,48 @@ impl Recorder<'_> {
         Ok(())
     }
 
-    /// Bind a compute pipeline with its set, push constants, and dispatch `groups`.
+    /// Bind a compute pipeline with its set, push constants, and dispatch `groups`, after
+    /// the barriers the set's images need: each bound image (layers) goes to the use its
+    /// binding declares (a storage image: read and written; a texture: sampled), from the
+    /// state its previous use left. So a pass of dispatches declares each image once, in
+    /// its bindings, and a dispatch reading what the one before it wrote is ordered after
+    /// it. Errors if the set binds an image destroyed since the set was made.
     pub fn dispatch(
+        &mut self,
+        pipeline: &ComputePipeline,
+        set: &DescriptorSet,
+        push: &[u8],
+        groups: [u32; 3],
+    ) -> Result<()> {
+        let mut barriers = Vec::new();
+        for bound in &set.images {
+            let Some(state) = bound.image.state.upgrade() else {
+                bail!(
+                    "descriptor set '{}' binds image '{}', destroyed since the set was made",
+                    set.name(),
+                    bound.image.name
+                );
+            };
+            tracked_barriers(
+                bound.image.raw,
+                &state,
+                bound.layers.clone(),
+                bound.access,
+                &mut barriers,
+            );
+        }
+        if !barriers.is_empty() {
+            let dep = vk::DependencyInfo::default().image_memory_barriers(&barriers);
+            // SAFETY: recording; the barriers reference images that are alive (upgraded).
+            unsafe { self.device().cmd_pipeline_barrier2(self.cmd, &dep) };
+        }
+        self.dispatch_explicit(pipeline, set, push, groups)
+    }
+
+    /// [`Recorder::dispatch`] without the derived barriers: for the plane sweep, whose
+    /// per-plane barriers are explicit (they change roles layer by layer, and its sets
+    /// bind both layers of the ping-pong images).
+    pub fn dispatch_explicit(
         &mut self,
         pipeline: &ComputePipeline,
         set: &DescriptorSet,
@@ -428,7 +468,19 @@ fn image_barriers<'a>(
     to: Access,
     out: &mut Vec<vk::ImageMemoryBarrier2<'a>>,
 ) {
-    let mut state = image.layer_state.lock().unwrap();
+    tracked_barriers(image.raw, &image.layer_state, layers, to, out);
+}
+
+/// The barriers taking `layers` of the image `raw`, whose layers' state is `state`, to
+/// `to` (barriers::plan_transitions), with `state` updated.
+fn tracked_barriers<'a>(
+    raw: vk::Image,
+    state: &std::sync::Mutex<Vec<Access>>,
+    layers: Range<u32>,
+    to: Access,
+    out: &mut Vec<vk::ImageMemoryBarrier2<'a>>,
+) {
+    let mut state = state.lock().unwrap();
     for (range, from) in plan_transitions(&mut state, layers, to) {
         out.push(
             vk::ImageMemoryBarrier2::default()
@@ -440,7 +492,7 @@ fn image_barriers<'a>(
                 .new_layout(to.layout())
                 .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
                 .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-                .image(image.raw)
+                .image(raw)
                 .subresource_range(color_range(range.start, range.end - range.start)),
         );
     }
