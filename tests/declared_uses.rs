@@ -8,8 +8,8 @@ mod common;
 use common::with_context;
 use refrakt::shaders;
 use refrakt::vk::{
-    usage, Binding, ComputePipeline, DescriptorSet, Filter, Format, Image, ImageDesc, ImageKind,
-    ImageUsageFlags, Sampler,
+    usage, Binding, Buffer, ComputePipeline, DescriptorSet, Filter, Format, Image, ImageDesc,
+    ImageKind, ImageUsageFlags, Memory, Sampler,
 };
 
 fn volume(ctx: &refrakt::vk::Context, usage: ImageUsageFlags, name: &str) -> Image {
@@ -93,6 +93,42 @@ fn a_dispatch_whose_set_binds_a_destroyed_image_is_refused() {
         assert!(
             text.contains("stale set")
                 && text.contains("gone volume")
+                && text.contains("destroyed"),
+            "{text}"
+        );
+    });
+}
+
+/// The same for a storage buffer: the set's storage bindings are what a dispatch waits on,
+/// and a destroyed one is refused by name.
+#[test]
+fn a_dispatch_whose_set_binds_a_destroyed_buffer_is_refused() {
+    with_context(|ctx| {
+        let table = volume(ctx, usage::SAMPLED, "table");
+        let sampler = Sampler::new(ctx, Filter::Nearest, "nearest").unwrap();
+        let buffer = |name: &str| Buffer::new(ctx, 64, usage::STORAGE_BUFFER, Memory::Gpu, name);
+        let boxes = buffer("boxes").unwrap();
+        let averages = buffer("averages that went").unwrap();
+        let set = DescriptorSet::new(
+            ctx,
+            &[
+                Binding::Texture(&table, &sampler),
+                Binding::Storage(&boxes),
+                Binding::Storage(&averages),
+            ],
+            "probe set",
+        )
+        .unwrap();
+        let pipeline =
+            ComputePipeline::new(ctx, shaders::SAT3D_PROBE_COMP, &set, 32, "probe").unwrap();
+        drop(averages);
+        let err = ctx
+            .execute(|rec| rec.dispatch(&pipeline, &set, &[0; 32], [1, 1, 1]))
+            .unwrap_err();
+        let text = format!("{err:#}");
+        assert!(
+            text.contains("probe set")
+                && text.contains("buffer 'averages that went'")
                 && text.contains("destroyed"),
             "{text}"
         );

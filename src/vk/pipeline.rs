@@ -8,7 +8,7 @@ use ash::vk;
 
 use std::ops::Range;
 
-use super::resources::TrackedImage;
+use super::resources::{TrackedBuffer, TrackedImage};
 use super::{Access, Buffer, Context, Image, LayerView, Sampler};
 
 /// One binding of a descriptor set, in binding order (binding i = slice index i).
@@ -37,6 +37,8 @@ pub struct DescriptorSet {
     /// The images the set binds and the use each binding declares: a dispatch with the
     /// set takes them there first ([`crate::vk::Recorder::dispatch`]).
     pub(crate) images: Vec<BoundImage>,
+    /// The storage buffers the set binds (read and written by its dispatches).
+    pub(crate) storage_buffers: Vec<TrackedBuffer>,
     name: String,
 }
 
@@ -130,6 +132,13 @@ impl DescriptorSet {
             pool,
             raw,
             images: bindings.iter().filter_map(Binding::image_use).collect(),
+            storage_buffers: bindings
+                .iter()
+                .filter_map(|b| match b {
+                    Binding::Storage(buf) => Some(buf.tracked()),
+                    _ => None,
+                })
+                .collect(),
             name: name.to_owned(),
         };
         set.write(bindings);

@@ -35,6 +35,19 @@ pub struct Buffer {
     pub(crate) raw: vk::Buffer,
     allocation: Option<Allocation>,
     size: u64,
+    name: String,
+    /// Held while the buffer lives: the descriptor sets that bind it keep a weak handle,
+    /// so a dispatch can refuse a set whose buffer was destroyed.
+    pub(crate) alive: Arc<()>,
+}
+
+/// What a descriptor set keeps of a storage buffer it binds, to derive its barrier at a
+/// dispatch (see [`TrackedImage`]).
+#[derive(Clone)]
+pub(crate) struct TrackedBuffer {
+    pub(crate) raw: vk::Buffer,
+    pub(crate) name: String,
+    pub(crate) alive: Weak<()>,
 }
 
 /// Memory for one resource from the context's allocator (its own block when the
@@ -97,7 +110,17 @@ impl Buffer {
             raw,
             allocation: Some(allocation),
             size,
+            name: name.to_owned(),
+            alive: Arc::new(()),
         })
+    }
+
+    pub(crate) fn tracked(&self) -> TrackedBuffer {
+        TrackedBuffer {
+            raw: self.raw,
+            name: self.name.clone(),
+            alive: Arc::downgrade(&self.alive),
+        }
     }
 
     /// A device-local uniform buffer for one `T` (std140 layout is the caller's business),

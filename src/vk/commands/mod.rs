@@ -404,11 +404,15 @@ impl Recorder<'_> {
     }
 
     /// Bind a compute pipeline with its set, push constants, and dispatch `groups`, after
-    /// the barriers the set's images need: each bound image (layers) goes to the use its
-    /// binding declares (a storage image: read and written; a texture: sampled), from the
-    /// state its previous use left. So a pass of dispatches declares each image once, in
-    /// its bindings, and a dispatch reading what the one before it wrote is ordered after
-    /// it. Errors if the set binds an image destroyed since the set was made.
+    /// the barriers the set's images and storage buffers need: each bound image (layers)
+    /// goes to the use its binding declares (a storage image: read and written; a
+    /// texture: sampled), from the state its previous use left; each bound storage buffer
+    /// waits for every earlier command's writes and accesses (buffers carry no tracked
+    /// state, so the source scope is all commands: a conservative barrier, recorded
+    /// once per dispatch and buffer, in one batch with the images'). So a pass of
+    /// dispatches declares each resource once, in its bindings, and a dispatch reading
+    /// what the one before it wrote is ordered after it. Errors if the set binds an image
+    /// or buffer destroyed since the set was made.
     pub fn dispatch(
         &mut self,
         pipeline: &ComputePipeline,
@@ -433,9 +437,28 @@ impl Recorder<'_> {
                 &mut barriers,
             );
         }
-        if !barriers.is_empty() {
-            let dep = vk::DependencyInfo::default().image_memory_barriers(&barriers);
-            // SAFETY: recording; the barriers reference images that are alive (upgraded).
+        let mut buffer_barriers = Vec::new();
+        for bound in &set.storage_buffers {
+            if bound.alive.upgrade().is_none() {
+                bail!(
+                    "descriptor set '{}' binds buffer '{}', destroyed since the set was made",
+                    set.name(),
+                    bound.name
+                );
+            }
+            buffer_barriers.push(raw_buffer_barrier(
+                bound.raw,
+                vk::PipelineStageFlags2::ALL_COMMANDS,
+                vk::AccessFlags2::MEMORY_WRITE,
+                vk::PipelineStageFlags2::COMPUTE_SHADER,
+                vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE,
+            ));
+        }
+        if !barriers.is_empty() || !buffer_barriers.is_empty() {
+            let dep = vk::DependencyInfo::default()
+                .image_memory_barriers(&barriers)
+                .buffer_memory_barriers(&buffer_barriers);
+            // SAFETY: recording; the barriers reference images and buffers that are alive.
             unsafe { self.device().cmd_pipeline_barrier2(self.cmd, &dep) };
         }
         self.dispatch_explicit(pipeline, set, push, groups)
@@ -576,6 +599,16 @@ fn buffer_barrier(
     dst_stage: vk::PipelineStageFlags2,
     dst_access: vk::AccessFlags2,
 ) -> vk::BufferMemoryBarrier2<'static> {
+    raw_buffer_barrier(buffer.raw, src_stage, src_access, dst_stage, dst_access)
+}
+
+fn raw_buffer_barrier(
+    buffer: vk::Buffer,
+    src_stage: vk::PipelineStageFlags2,
+    src_access: vk::AccessFlags2,
+    dst_stage: vk::PipelineStageFlags2,
+    dst_access: vk::AccessFlags2,
+) -> vk::BufferMemoryBarrier2<'static> {
     vk::BufferMemoryBarrier2::default()
         .src_stage_mask(src_stage)
         .src_access_mask(src_access)
@@ -583,7 +616,7 @@ fn buffer_barrier(
         .dst_access_mask(dst_access)
         .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
         .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .buffer(buffer.raw)
+        .buffer(buffer)
         .offset(0)
         .size(vk::WHOLE_SIZE)
 }
