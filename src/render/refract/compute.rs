@@ -40,7 +40,7 @@
 //!
 //! The backward transport is one dispatch per plane with one barrier before it.
 
-use super::pass::gather_tiles;
+use super::pipelines::gather_tiles;
 use super::*;
 use crate::render::limits::GATHER_CHUNK;
 use crate::vk::Area;

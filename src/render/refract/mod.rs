@@ -626,11 +626,15 @@ mod compute;
 mod levers;
 mod params;
 mod pass;
+mod pipelines;
 mod record;
 mod region;
+mod traffic;
 
 use compute::ComputeFrame;
 pub use levers::{Deposit, Gather, Levers, Region, Splat, SweepPath};
 pub(crate) use params::EnvInputs;
 use params::*;
-pub(crate) use pass::{Features, StateImage, SweepPass, TrafficInputs};
+pub(crate) use pass::{StateImage, SweepPass};
+pub(crate) use pipelines::Features;
+pub(crate) use traffic::TrafficInputs;
