@@ -32,15 +32,34 @@ pub const ORBIT_DEG_PER_FRAME: f32 = 0.5;
 pub const THESIS_VIEWPORT: u32 = 768;
 pub const THESIS_SAMPLE_DISTANCE: f32 = 1.0;
 
+/// What every timing mode over the thesis' rows is given: the scale of viewport and
+/// volumes, measured and warm-up frames per row (and variant or model), the rows (empty:
+/// all), the folder of the originals and fetched scans, and whether to show progress.
 #[derive(Clone, Debug)]
-pub struct ThesisSettings {
+pub struct Timing {
     pub scale: f64,
     pub frames: u32,
     pub warmup: u32,
     pub rows: Vec<String>,
-    pub baselines: bool,
     pub data_dir: PathBuf,
     pub progress: bool,
+}
+
+impl Timing {
+    /// The progress bar's message for frame `k` of a row (warm-up frames first).
+    pub fn frame_message(&self, row: &str, k: u32) -> String {
+        if k < self.warmup {
+            format!("{row}: warm-up {}/{}", k + 1, self.warmup)
+        } else {
+            format!("{row}: frame {}/{}", k - self.warmup + 1, self.frames)
+        }
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct ThesisSettings {
+    pub timing: Timing,
+    pub baselines: bool,
     /// The sweep's levers every row uses (the floor baseline too).
     pub levers: Levers,
     /// The sweep's light transport for every row, replacing the scenes' own (`forward`,
@@ -450,17 +469,17 @@ fn transport_record(t: &[LightTransport]) -> String {
 
 /// Runs the thesis protocol on every selected row.
 pub fn thesis(ctx: &Context, s: &ThesisSettings) -> Result<Report> {
-    ensure!(s.frames >= 1, "--frames must be at least 1");
-    let rows = select_rows(&s.rows)?;
+    ensure!(s.timing.frames >= 1, "--frames must be at least 1");
+    let rows = select_rows(&s.timing.rows)?;
     let variants = if s.baselines { 4 } else { 1 };
-    let total = rows.len() as u64 * (s.warmup + s.frames) as u64 * variants;
-    let pb = progress_bar(total, s.progress);
-    let side = scaled_side(s.scale);
+    let total = rows.len() as u64 * (s.timing.warmup + s.timing.frames) as u64 * variants;
+    let pb = progress_bar(total, s.timing.progress);
+    let side = scaled_side(s.timing.scale);
     let mut out = Vec::new();
     let mut transports = Vec::new();
     for d in rows {
         pb.set_message(format!("{}: preparing the volume", d.name));
-        let (row, mut renderer) = prepare_row(ctx, d, s.scale, &s.data_dir)?;
+        let (row, mut renderer) = prepare_row(ctx, d, s.timing.scale, &s.timing.data_dir)?;
         let PreparedRow {
             scene,
             original,
@@ -489,8 +508,8 @@ pub fn thesis(ctx: &Context, s: &ThesisSettings) -> Result<Report> {
             &mut renderer,
             &variants,
             &scene.camera,
-            s.warmup,
-            s.frames,
+            s.timing.warmup,
+            s.timing.frames,
             &pb,
         )?
         .into_iter();
@@ -544,9 +563,9 @@ pub fn thesis(ctx: &Context, s: &ThesisSettings) -> Result<Report> {
         schema: SCHEMA.into(),
         meta: meta(ctx),
         settings: SettingsRecord {
-            scale: s.scale,
-            frames: s.frames,
-            warmup: s.warmup,
+            scale: s.timing.scale,
+            frames: s.timing.frames,
+            warmup: s.timing.warmup,
             baselines: s.baselines,
             sample_distance: THESIS_SAMPLE_DISTANCE,
             orbit_deg_per_frame: ORBIT_DEG_PER_FRAME,

@@ -37,13 +37,8 @@ pub const SCAN_ROWS: [(&str, &str); 2] = [("lung-ct", "Lung CT"), ("mri-head", "
 
 #[derive(Clone, Debug)]
 pub struct ModelsSettings {
-    pub scale: f64,
-    pub frames: u32,
-    pub warmup: u32,
-    /// Rows by name (thesis stand-ins and [`SCAN_ROWS`]); empty = all.
-    pub rows: Vec<String>,
-    pub data_dir: PathBuf,
-    pub progress: bool,
+    /// Rows by name: thesis stand-ins and [`SCAN_ROWS`].
+    pub timing: Timing,
     /// The ambient-scattering model's table (for the default albedo); `None`: each
     /// renderer loads the cached one (built on first use).
     pub ambient_table: Option<crate::render::ambient::table::AmbientTable>,
@@ -401,20 +396,20 @@ fn frames_per_row(s: &ModelsSettings) -> u64 {
         .iter()
         .map(|m| 2 + m.uses_light() as u64 + m.has_phase_function() as u64)
         .sum();
-    (s.warmup + s.frames) as u64 * Model::ALL.len() as u64 + changes
+    (s.timing.warmup + s.timing.frames) as u64 * Model::ALL.len() as u64 + changes
 }
 
 /// Times every model of [`Model::ALL`] on every selected row.
 pub fn models(ctx: &Context, s: &ModelsSettings) -> Result<ModelsReport> {
-    ensure!(s.frames >= 1, "--frames must be at least 1");
-    standins::scaled_dims([1, 1, 1], s.scale).context("--scale")?;
-    let specs = select_models_rows(&s.rows)?;
+    ensure!(s.timing.frames >= 1, "--frames must be at least 1");
+    standins::scaled_dims([1, 1, 1], s.timing.scale).context("--scale")?;
+    let specs = select_models_rows(&s.timing.rows)?;
     let ea = Model::ALL.iter().position(|m| *m == Model::Ea).unwrap_or(0);
-    let side = models_side(s.scale);
+    let side = models_side(s.timing.scale);
     let mut skipped = Vec::new();
     let mut timed = Vec::new();
     for spec in specs {
-        match missing(&spec, &s.data_dir) {
+        match missing(&spec, &s.timing.data_dir) {
             Some(reason) => skipped.push(SkippedRow {
                 dataset: spec.name.to_string(),
                 reason,
@@ -422,7 +417,7 @@ pub fn models(ctx: &Context, s: &ModelsSettings) -> Result<ModelsReport> {
             None => timed.push(spec),
         }
     }
-    let pb = progress_bar(timed.len() as u64 * frames_per_row(s), s.progress);
+    let pb = progress_bar(timed.len() as u64 * frames_per_row(s), s.timing.progress);
     for k in &skipped {
         pb.println(format!("skipping {}: {}", k.dataset, k.reason));
     }
@@ -430,7 +425,8 @@ pub fn models(ctx: &Context, s: &ModelsSettings) -> Result<ModelsReport> {
     let mut out = Vec::new();
     for spec in timed {
         pb.set_message(format!("{}: preparing the volume", spec.name));
-        let (row, mut renderer) = prepare_builtin(ctx, spec.name, s.scale, side, &s.data_dir)?;
+        let (row, mut renderer) =
+            prepare_builtin(ctx, spec.name, s.timing.scale, side, &s.timing.data_dir)?;
         if let Some(t) = &s.ambient_table {
             renderer.set_ambient_table(t)?;
         }
@@ -438,15 +434,9 @@ pub fn models(ctx: &Context, s: &ModelsSettings) -> Result<ModelsReport> {
         opts.termination_alpha = MODELS_TERMINATION_ALPHA;
         let mut times = vec![(Vec::new(), Vec::new()); nm];
         let mut steps = vec![0u32; nm];
-        for k in 0..s.warmup + s.frames {
-            let warm = k < s.warmup;
-            pb.set_message(format!(
-                "{}: {} {}/{}",
-                spec.name,
-                if warm { "warm-up" } else { "frame" },
-                if warm { k + 1 } else { k - s.warmup + 1 },
-                if warm { s.warmup } else { s.frames }
-            ));
+        for k in 0..s.timing.warmup + s.timing.frames {
+            let warm = k < s.timing.warmup;
+            pb.set_message(s.timing.frame_message(spec.name, k));
             let camera = orbit(&row.scene.camera, k);
             for (i, m) in Model::ALL.iter().enumerate() {
                 let f = renderer.render(*m, &camera, &opts)?;
@@ -464,11 +454,12 @@ pub fn models(ctx: &Context, s: &ModelsSettings) -> Result<ModelsReport> {
         // application showing that model alone would have): a shared renderer rebuilds
         // every model's data in whichever frame comes first after a change.
         drop(renderer);
-        let camera = orbit(&row.scene.camera, s.warmup + s.frames);
+        let camera = orbit(&row.scene.camera, s.timing.warmup + s.timing.frames);
         let mut changes = Vec::new();
         for m in Model::ALL {
             pb.set_message(format!("{}: {} changes", spec.name, m.name()));
-            let (_, mut renderer) = prepare_builtin(ctx, spec.name, s.scale, side, &s.data_dir)?;
+            let (_, mut renderer) =
+                prepare_builtin(ctx, spec.name, s.timing.scale, side, &s.timing.data_dir)?;
             if let Some(t) = &s.ambient_table {
                 renderer.set_ambient_table(t)?;
             }
@@ -557,9 +548,9 @@ pub fn models(ctx: &Context, s: &ModelsSettings) -> Result<ModelsReport> {
         schema: MODELS_SCHEMA.into(),
         meta: meta(ctx),
         settings: ModelsSettingsRecord {
-            scale: s.scale,
-            frames: s.frames,
-            warmup: s.warmup,
+            scale: s.timing.scale,
+            frames: s.timing.frames,
+            warmup: s.timing.warmup,
             viewport: side,
             sample_distance: THESIS_SAMPLE_DISTANCE,
             termination_alpha: MODELS_TERMINATION_ALPHA,

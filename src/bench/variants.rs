@@ -11,14 +11,9 @@ pub const VARIANTS_SCHEMA: &str = "refrakt-bench-variants/1";
 
 #[derive(Clone, Debug)]
 pub struct VariantsSettings {
-    pub scale: f64,
-    pub frames: u32,
-    pub warmup: u32,
-    pub rows: Vec<String>,
+    pub timing: Timing,
     /// The variants to time, in this order; empty = [`default_variants`].
     pub variants: Vec<Levers>,
-    pub data_dir: PathBuf,
-    pub progress: bool,
     /// As [`ThesisSettings::light_transport`].
     pub light_transport: Option<LightTransport>,
 }
@@ -201,8 +196,8 @@ pub fn check_variants(list: &[Levers]) -> Result<()> {
 
 /// Times the variants interleaved on every selected row and compares their images.
 pub fn variants(ctx: &Context, s: &VariantsSettings) -> Result<VariantsReport> {
-    ensure!(s.frames >= 1, "--frames must be at least 1");
-    let rows = select_rows(&s.rows)?;
+    ensure!(s.timing.frames >= 1, "--frames must be at least 1");
+    let rows = select_rows(&s.timing.rows)?;
     let list = if s.variants.is_empty() {
         default_variants()
     } else {
@@ -217,14 +212,14 @@ pub fn variants(ctx: &Context, s: &VariantsSettings) -> Result<VariantsReport> {
     let reference = list.iter().position(|l| *l == Levers::REFERENCE);
     let nv = list.len();
     let image_frames = nv + reference.is_none() as usize;
-    let per_row = (s.warmup + s.frames) as u64 * nv as u64 + image_frames as u64;
-    let pb = progress_bar(rows.len() as u64 * per_row, s.progress);
+    let per_row = (s.timing.warmup + s.timing.frames) as u64 * nv as u64 + image_frames as u64;
+    let pb = progress_bar(rows.len() as u64 * per_row, s.timing.progress);
     let mut order = 0u64;
     let mut out = Vec::new();
     let mut transports = Vec::new();
     for d in rows {
         pb.set_message(format!("{}: preparing the volume", d.name));
-        let (mut row, mut renderer) = prepare_row(ctx, d, s.scale, &s.data_dir)?;
+        let (mut row, mut renderer) = prepare_row(ctx, d, s.timing.scale, &s.timing.data_dir)?;
         if let Some(t) = s.light_transport {
             row.opts.sweep.light_transport = t;
         }
@@ -240,15 +235,9 @@ pub fn variants(ctx: &Context, s: &VariantsSettings) -> Result<VariantsReport> {
             .collect();
         let mut collectors: Vec<Collector> = (0..nv).map(|_| Collector::default()).collect();
         let mut orders = vec![(Vec::new(), Vec::new()); nv];
-        for k in 0..s.warmup + s.frames {
-            let warm = k < s.warmup;
-            pb.set_message(format!(
-                "{}: {} {}/{}",
-                d.name,
-                if warm { "warm-up" } else { "frame" },
-                if warm { k + 1 } else { k - s.warmup + 1 },
-                if warm { s.warmup } else { s.frames }
-            ));
+        for k in 0..s.timing.warmup + s.timing.frames {
+            let warm = k < s.timing.warmup;
+            pb.set_message(s.timing.frame_message(d.name, k));
             let camera = orbit(&row.scene.camera, k);
             for v in 0..nv {
                 let f = renderer.render(Model::Refract, &camera, &opts[v])?;
@@ -337,9 +326,9 @@ pub fn variants(ctx: &Context, s: &VariantsSettings) -> Result<VariantsReport> {
         schema: VARIANTS_SCHEMA.into(),
         meta: meta(ctx),
         settings: VariantsSettingsRecord {
-            scale: s.scale,
-            frames: s.frames,
-            warmup: s.warmup,
+            scale: s.timing.scale,
+            frames: s.timing.frames,
+            warmup: s.timing.warmup,
             sample_distance: THESIS_SAMPLE_DISTANCE,
             orbit_deg_per_frame: ORBIT_DEG_PER_FRAME,
             rows: out.iter().map(|r| r.dataset.clone()).collect(),

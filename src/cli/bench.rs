@@ -25,6 +25,50 @@ fn check_reports(reports: &[(&str, Option<&Path>, &str)]) -> Result<()> {
     refrakt::files::check_outputs(&outputs, &[])
 }
 
+/// The settings every timing mode shares, checked before minutes of measuring: the scale,
+/// the frame counts (`defaults`: frames and warm-up where the flags are not given), and
+/// the report files with `more` of the mode's own.
+fn timed(
+    t: &TimedRows,
+    [frames, warmup]: [u32; 2],
+    more: &[(&str, Option<&Path>, &str)],
+) -> Result<refrakt::bench::Timing> {
+    standins::scaled_dims([1, 1, 1], t.scale).context("--scale")?;
+    let frames = t.frames.unwrap_or(frames);
+    ensure!(frames >= 1, "--frames must be at least 1");
+    let mut reports = vec![
+        ("--csv", t.csv.as_deref(), "csv"),
+        ("--json", t.json.as_deref(), "json"),
+    ];
+    reports.extend_from_slice(more);
+    check_reports(&reports)?;
+    Ok(refrakt::bench::Timing {
+        scale: t.scale,
+        frames,
+        warmup: t.warmup.unwrap_or(warmup),
+        rows: t.rows.clone(),
+        data_dir: t.data_dir.clone().unwrap_or_else(scene::data_dir),
+        progress: !t.quiet,
+    })
+}
+
+/// How one report file is written.
+type WriteReport<R> = fn(&R, &Path) -> Result<()>;
+
+/// Writes what the report files of a timing mode ask for (`write` per flag), printing
+/// where each went.
+fn write_reports<R>(report: &R, files: &[(Option<&Path>, WriteReport<R>)]) -> Result<()> {
+    let mut first = true;
+    for (path, write) in files {
+        if let Some(p) = path {
+            write(report, p)?;
+            println!("{}wrote {}", if first { "\n" } else { "" }, p.display());
+            first = false;
+        }
+    }
+    Ok(())
+}
+
 pub fn generate(args: &GenerateArgs) -> Result<ExitCode> {
     let rows = refrakt::bench::select_rows(&args.names)?;
     let dir = standins::cache_dir();
@@ -52,115 +96,78 @@ pub fn generate(args: &GenerateArgs) -> Result<ExitCode> {
 }
 
 pub fn bench_thesis(desc: &ContextDesc, args: &ThesisArgs) -> Result<ExitCode> {
-    standins::scaled_dims([1, 1, 1], args.scale).context("--scale")?;
-    ensure!(args.frames >= 1, "--frames must be at least 1");
-    refrakt::bench::select_rows(&args.rows).context("--rows")?;
-    check_reports(&[
-        ("--csv", args.csv.as_deref(), "csv"),
-        ("--json", args.json.as_deref(), "json"),
-        ("--plot", args.plot.as_deref(), "svg"),
-    ])?;
+    let t = &args.timed;
+    refrakt::bench::select_rows(&t.rows).context("--rows")?;
+    // The thesis timed 100 frames per row.
+    let timing = timed(t, [100, 3], &[("--plot", args.plot.as_deref(), "svg")])?;
     let ctx = Context::new(desc)?;
     let settings = refrakt::bench::ThesisSettings {
-        scale: args.scale,
-        frames: args.frames,
-        warmup: args.warmup,
-        rows: args.rows.clone(),
+        timing,
         baselines: args.baselines,
-        data_dir: args.data_dir.clone().unwrap_or_else(scene::data_dir),
-        progress: !args.quiet,
         levers: args.variant.unwrap_or_default(),
-        light_transport: args.light_transport,
+        light_transport: args.transport.light_transport,
     };
     let report = refrakt::bench::thesis(&ctx, &settings)?;
     print!("{}", refrakt::bench::markdown(&report));
-    if let Some(p) = &args.csv {
-        refrakt::bench::write_csv(&report, p)?;
-        println!("\nwrote {}", p.display());
-    }
-    if let Some(p) = &args.json {
-        refrakt::bench::write_json(&report, p)?;
-        println!("wrote {}", p.display());
-    }
-    if let Some(p) = &args.plot {
-        refrakt::bench::plot_svg(&report, p)?;
-        println!("wrote {}", p.display());
-    }
+    write_reports(
+        &report,
+        &[
+            (t.csv.as_deref(), refrakt::bench::write_csv),
+            (t.json.as_deref(), refrakt::bench::write_json),
+            (args.plot.as_deref(), refrakt::bench::plot_svg),
+        ],
+    )?;
     finish(ctx)
 }
 
 pub fn bench_variants(desc: &ContextDesc, args: &VariantsArgs) -> Result<ExitCode> {
-    standins::scaled_dims([1, 1, 1], args.scale).context("--scale")?;
-    ensure!(args.frames >= 1, "--frames must be at least 1");
-    refrakt::bench::select_rows(&args.rows).context("--rows")?;
+    let t = &args.timed;
+    refrakt::bench::select_rows(&t.rows).context("--rows")?;
     refrakt::bench::check_variants(&args.variant).context("--variant")?;
-    check_reports(&[
-        ("--csv", args.csv.as_deref(), "csv"),
-        ("--json", args.json.as_deref(), "json"),
-    ])?;
+    let timing = timed(t, [20, 2], &[])?;
     let ctx = Context::new(desc)?;
     let settings = refrakt::bench::VariantsSettings {
-        scale: args.scale,
-        frames: args.frames,
-        warmup: args.warmup,
-        rows: args.rows.clone(),
+        timing,
         variants: args.variant.clone(),
-        data_dir: args.data_dir.clone().unwrap_or_else(scene::data_dir),
-        progress: !args.quiet,
-        light_transport: args.light_transport,
+        light_transport: args.transport.light_transport,
     };
     let report = refrakt::bench::variants(&ctx, &settings)?;
     print!("{}", refrakt::bench::variants_markdown(&report));
-    if let Some(p) = &args.csv {
-        refrakt::bench::write_variants_csv(&report, p)?;
-        println!("\nwrote {}", p.display());
-    }
-    if let Some(p) = &args.json {
-        refrakt::bench::write_json(&report, p)?;
-        println!("wrote {}", p.display());
-    }
+    write_reports(
+        &report,
+        &[
+            (t.csv.as_deref(), refrakt::bench::write_variants_csv),
+            (t.json.as_deref(), refrakt::bench::write_json),
+        ],
+    )?;
     finish(ctx)
 }
 
 pub fn bench_models(desc: &ContextDesc, args: &ModelsArgs) -> Result<ExitCode> {
-    standins::scaled_dims([1, 1, 1], args.scale).context("--scale")?;
-    ensure!(args.frames >= 1, "--frames must be at least 1");
-    refrakt::bench::select_models_rows(&args.rows).context("--rows")?;
-    check_reports(&[
-        ("--csv", args.csv.as_deref(), "csv"),
-        ("--json", args.json.as_deref(), "json"),
-        ("--svg", args.svg.as_deref(), "svg"),
-    ])?;
+    let t = &args.timed;
+    refrakt::bench::select_models_rows(&t.rows).context("--rows")?;
+    let timing = timed(t, [20, 2], &[("--svg", args.svg.as_deref(), "svg")])?;
     let ctx = Context::new(desc)?;
     let settings = refrakt::bench::ModelsSettings {
-        scale: args.scale,
-        frames: args.frames,
-        warmup: args.warmup,
-        rows: args.rows.clone(),
-        data_dir: args.data_dir.clone().unwrap_or_else(scene::data_dir),
-        progress: !args.quiet,
+        timing,
         ambient_table: {
             let albedo = refrakt::render::ScatterOptions::default().albedo;
-            let (t, line) =
-                super::ambient::table_for(args.ambient_table.as_deref(), albedo, args.quiet)?;
+            let (table, line) =
+                super::ambient::table_for(args.ambient_table.as_deref(), albedo, t.quiet)?;
             println!("{line}");
-            Some(t)
+            Some(table)
         },
     };
     let report = refrakt::bench::models(&ctx, &settings)?;
     print!("{}", refrakt::bench::models_markdown(&report));
-    if let Some(p) = &args.csv {
-        refrakt::bench::write_models_csv(&report, p)?;
-        println!("\nwrote {}", p.display());
-    }
-    if let Some(p) = &args.json {
-        refrakt::bench::write_json(&report, p)?;
-        println!("wrote {}", p.display());
-    }
-    if let Some(p) = &args.svg {
-        refrakt::bench::plot_models_svg(&report, p)?;
-        println!("wrote {}", p.display());
-    }
+    write_reports(
+        &report,
+        &[
+            (t.csv.as_deref(), refrakt::bench::write_models_csv),
+            (t.json.as_deref(), refrakt::bench::write_json),
+            (args.svg.as_deref(), refrakt::bench::plot_models_svg),
+        ],
+    )?;
     finish(ctx)
 }
 

@@ -4,6 +4,7 @@
 pub mod ambient;
 pub mod args;
 pub mod bench;
+pub mod bench_args;
 pub mod info;
 pub mod photons;
 pub mod precompute;

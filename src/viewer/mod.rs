@@ -248,6 +248,7 @@ pub fn run(
 }
 
 mod app;
+mod draw;
 mod panel;
 pub mod preview;
 mod render_loop;
