@@ -579,12 +579,14 @@ pub fn thesis(ctx: &Context, s: &ThesisSettings) -> Result<Report> {
 
 mod compare;
 mod models;
+mod models_report;
 mod scaling;
 mod variants;
 mod writers;
 
 pub use compare::*;
 pub use models::*;
+pub use models_report::*;
 pub use scaling::*;
 pub use variants::*;
 pub use writers::*;

@@ -10,4 +10,5 @@ pub mod photons;
 pub mod precompute;
 pub mod render;
 pub mod scene_args;
+pub mod scene_flags;
 pub mod view;

@@ -24,7 +24,9 @@ pub mod refract;
 mod registry;
 pub mod sat;
 pub mod sat3d;
+mod shared;
 pub mod single;
+mod target;
 mod tonemap;
 pub mod upload;
 pub mod value_ranges;
@@ -53,6 +55,8 @@ pub use refract::{
     Splat, StateBuffer, SweepOptions, SweepPath, SweepStats, MAX_ETA_SCALE, MAX_LIGHT_RAYS,
     MAX_LIGHT_SPACING,
 };
+use target::Environment;
+pub(crate) use target::FrameTarget;
 pub use tonemap::ToneMapPass;
 
 /// The timestamp scopes of what the renderer itself rebuilds only when its inputs change
@@ -131,67 +135,6 @@ pub enum Slot {
     /// The viewer's previews while the view changes, one slot per rung of its ladder
     /// (`viewer::preview`), so that a change of rung rebuilds nothing it has built before.
     Preview(u8),
-}
-
-/// The environment map on the GPU with its summed-area table. A 2 × 1 black map stands in
-/// when there is none, so the composite's descriptor set is always complete.
-struct Environment {
-    map: EnvironmentMap,
-    image: Image,
-    sat: SummedAreaTable,
-    enabled: bool,
-}
-
-impl Environment {
-    fn new(ctx: &Context, map: Option<&EnvironmentMap>) -> Result<(Self, Timings)> {
-        let enabled = map.is_some();
-        let map = match map {
-            Some(m) => m.clone(),
-            None => EnvironmentMap::constant(2, [0.0; 3])?,
-        };
-        let image = upload::environment_texture(ctx, &map)?;
-        let (sat, timings) = SummedAreaTable::build(ctx, &map, &image)?;
-        Ok((
-            Self {
-                map,
-                image,
-                sat,
-                enabled,
-            },
-            timings,
-        ))
-    }
-}
-
-/// The RGBA32F image a pass writes its frame into, and the host buffer it is copied to.
-pub(crate) struct FrameTarget {
-    pub image: Image,
-    readback: Buffer,
-    pixels: usize,
-}
-
-impl FrameTarget {
-    pub fn new(ctx: &Context, width: u32, height: u32, name: &str) -> Result<Self> {
-        let format = vk::Format::R32G32B32A32_SFLOAT;
-        let desc = ImageDesc::computed(ImageKind::D2, format, [width, height, 1], 1);
-        let image = Image::new(ctx, desc, name)?;
-        let readback = Buffer::readback(ctx, image.layer_bytes()?, &format!("{name} readback"))?;
-        Ok(Self {
-            image,
-            readback,
-            pixels: width as usize * height as usize,
-        })
-    }
-
-    /// Record the copy of the finished frame to the host.
-    pub fn record_copy(&self, rec: &mut Recorder) {
-        rec.copy_image_to_buffer(&self.image, 0, &self.readback);
-    }
-
-    /// The frame, once the submission that recorded the copy has completed.
-    pub fn pixels(&self) -> Result<Vec<[f32; 4]>> {
-        self.readback.read_values(self.pixels)
-    }
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -510,166 +453,6 @@ impl Renderer {
     /// Drop `model`'s passes in both slots (their descriptor sets name inputs that change).
     fn remove_passes(&mut self, model: Model) {
         self.passes.retain(|(m, _), _| *m != model);
-    }
-
-    /// Build the gradient volume if `model` needs it and it is not there yet: its own
-    /// submission, waited for (once per volume; a caller's open recording is unaffected,
-    /// it is submitted later).
-    fn ensure_gradient(&mut self, model: Model) -> Result<()> {
-        if !model.declaration().gradient
-            || self.gradient_status != gradient::GradientStatus::Unbuilt
-        {
-            return Ok(());
-        }
-        let (ranges, t) =
-            value_ranges::ValueRanges::build(&self.ctx, &self.volume_tex, &self.linear)?;
-        self.value_ranges = Some(ranges);
-        self.gradient_timings = t;
-        let (needed, device_budget) =
-            gradient::GradientVolume::memory(&self.ctx, self.volume_tex.extent());
-        let budget = self.gradient_budget.unwrap_or(device_budget);
-        if needed > budget {
-            self.gradient_status = gradient::GradientStatus::TooLarge { needed, budget };
-            return Ok(());
-        }
-        let (g, t) = gradient::GradientVolume::build(&self.ctx, &self.volume_tex, &self.linear)?;
-        self.gradient = Some(g);
-        self.gradient_status = gradient::GradientStatus::Built;
-        self.gradient_timings.extend(t);
-        Ok(())
-    }
-
-    /// Make the field texture the first time a frame of `model` asks for it (the sweep's
-    /// `field` lever), once: beside the gradient volume (8 bytes per voxel once built) in
-    /// the same budget; built in the frame's recording.
-    fn ensure_field(&mut self, model: Model, opts: &RenderOptions) -> Result<()> {
-        if !model.declaration().gradient || !opts.sweep.levers.field || self.field_checked {
-            return Ok(());
-        }
-        self.field_checked = true;
-        let extent = self.volume_tex.extent();
-        let (gradient_build, device_budget) = gradient::GradientVolume::memory(&self.ctx, extent);
-        let budget = self.gradient_budget.unwrap_or(device_budget);
-        let gradient = if self.gradient.is_some() {
-            gradient_build / 2
-        } else {
-            0
-        };
-        if gradient + field::FieldTexture::bytes(extent) <= budget {
-            self.field = Some(field::FieldTexture::new(
-                &self.ctx,
-                &self.volume_tex,
-                &self.tf_image,
-                &self.linear,
-            )?);
-            self.field_dirty = true;
-            // The pass's descriptor set names the volume in the field's place: make it anew.
-            self.remove_passes(model);
-        }
-        Ok(())
-    }
-
-    /// Make the extinction volume and its 3D SAT the first time a frame of `model` needs
-    /// them (the ambient models); built in the frame's recording. Refused with the sizes
-    /// when they do not fit the device's budget (the gradient volume's).
-    fn ensure_extinction(&mut self, model: Model) -> Result<()> {
-        let declared = model.declaration();
-        let Some(with_sat) = declared.extinction else {
-            return Ok(());
-        };
-        let has_sat = self.extinction.as_ref().is_some_and(|e| e.sat().is_ok());
-        // The model's own state is made from the extinction volume (the transmittance
-        // cache) and shares its budget.
-        let new_state = declared
-            .state
-            .as_ref()
-            .filter(|_| !self.states.contains_key(&model));
-        if self.extinction.is_some() && (has_sat || !with_sat) && new_state.is_none() {
-            return Ok(());
-        }
-        let extent = self.volume_tex.extent();
-        let (_, device_budget) = gradient::GradientVolume::memory(&self.ctx, extent);
-        let budget = self.gradient_budget.unwrap_or(device_budget);
-        let state_bytes = new_state.map_or(0, |s| (s.bytes)(extent));
-        let needed = extinction::Extinction::bytes(extent, with_sat || has_sat)
-            + self.states.values().map(|s| s.bytes()).sum::<u64>()
-            + state_bytes;
-        ensure!(
-            needed <= budget,
-            "the {} model needs {} MiB for the extinction volume{} ({}x{}x{} voxels); the \
-             device budget is {} MiB: use a smaller volume (--scale)",
-            model.name(),
-            needed >> 20,
-            match new_state {
-                _ if with_sat => " and its summed-area table".to_string(),
-                Some(s) if state_bytes > 0 => format!(" and {}", s.what),
-                _ => String::new(),
-            },
-            extent[0],
-            extent[1],
-            extent[2],
-            budget >> 20
-        );
-        if self.extinction.is_none() {
-            self.extinction = Some(extinction::Extinction::new(
-                &self.ctx,
-                &self.volume_tex,
-                &self.tf_image,
-                &self.linear,
-            )?);
-            self.extinction_dirty = true;
-        }
-        let extinction = self.extinction.as_mut().expect("made above");
-        if with_sat && !has_sat {
-            extinction.add_sat(&self.ctx)?;
-            self.extinction_dirty = true;
-        }
-        Ok(())
-    }
-
-    /// `model`'s own state ([`model::OpticalModel::state`]), made now if it has none yet
-    /// (after the extinction volume it may be made from); an error for a model without
-    /// state.
-    fn model_state(&mut self, model: Model) -> Result<&mut Box<dyn model::ModelState>> {
-        let Some(decl) = &model.declaration().state else {
-            bail!("the {} model keeps no state", model.name());
-        };
-        if !self.states.contains_key(&model) {
-            let shared = model::Shared {
-                ctx: &self.ctx,
-                info: self.volume_info,
-                extinction: self.extinction.as_ref(),
-                linear: &self.linear,
-            };
-            let state = (decl.make)(&shared)?;
-            self.states.insert(model, state);
-        }
-        Ok(self.states.get_mut(&model).expect("made above"))
-    }
-
-    /// `model`'s state if it has been made.
-    fn existing_model_state(&self, model: Model) -> Option<&dyn model::ModelState> {
-        self.states.get(&model).map(|s| s.as_ref())
-    }
-
-    /// Make `model`'s state on its first frame and prepare it for a frame of `opts`
-    /// (outside the recording); its passes are remade when what they bind changed.
-    fn ensure_state(&mut self, model: Model, opts: &RenderOptions) -> Result<()> {
-        if model.declaration().state.is_none() {
-            return Ok(());
-        }
-        self.model_state(model)?;
-        let shared = model::Shared {
-            ctx: &self.ctx,
-            info: self.volume_info,
-            extinction: self.extinction.as_ref(),
-            linear: &self.linear,
-        };
-        let state = self.states.get_mut(&model).expect("made above");
-        if state.prepare(&shared, opts)? {
-            self.remove_passes(model);
-        }
-        Ok(())
     }
 
     /// The recording shared by `render` and `record`; arguments already checked.
