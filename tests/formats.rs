@@ -1618,3 +1618,59 @@ fn real_lung1_nifti_matches_nrrd() {
 fn real_lung1_raw_matches_nrrd() {
     assert_same_as_lung1("formats/lung1_512x512x48_int16.raw", false);
 }
+
+/// "How to add a format" (docs/ARCHITECTURE.md) held honest: every format of the
+/// registry (`formats::FORMATS`) has its row in docs/FORMATS.md's table naming each of
+/// its extensions, a file so named is a volume file, and an unknown name's error lists
+/// every extension. A format added to the registry without its documentation, or
+/// documented without being registered, fails here.
+#[test]
+fn every_registered_format_is_documented_and_recognised() {
+    use refrakt::volume::formats::{known_extensions, Format, FORMATS};
+    let doc =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/FORMATS.md"))
+            .unwrap();
+    let table: Vec<&str> = doc.lines().filter(|l| l.starts_with("| ")).collect();
+    for f in FORMATS {
+        let row = table
+            .iter()
+            .find(|l| l.starts_with(&format!("| {} |", f.name)))
+            .unwrap_or_else(|| panic!("docs/FORMATS.md has no row for {}", f.name));
+        for ext in f.extensions {
+            assert!(
+                row.contains(&format!("`{ext}`")),
+                "{}: {ext} not in its row",
+                f.name
+            );
+            // Not read: a name is enough (any case).
+            let path = PathBuf::from(format!("volume{}", ext.to_uppercase()));
+            assert!(is_volume_file(&path), "{}", path.display());
+            assert_eq!(Format::of(&path).map(|g| g.name), Some(f.name));
+        }
+    }
+    // Every format row of the table is registered (the DICOM series is read from a
+    // directory, not by name).
+    let header = table
+        .iter()
+        .position(|l| l.starts_with("| format |"))
+        .unwrap();
+    for row in table[header + 2..]
+        .iter()
+        .take_while(|l| !l.contains("DICOM series"))
+    {
+        let name = row.split('|').nth(1).unwrap().trim();
+        assert!(
+            FORMATS.iter().any(|f| f.name == name),
+            "docs/FORMATS.md documents '{name}', which formats::FORMATS does not register"
+        );
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(dir.path(), "volume.xyz", b"not a volume");
+    let err = format!(
+        "{:#}",
+        load_volume(&path, &LoadOptions::default()).unwrap_err()
+    );
+    for ext in known_extensions() {
+        assert!(err.contains(ext), "{err}");
+    }
+}

@@ -165,14 +165,7 @@ fn load_inner(path: &Path, opts: &LoadOptions) -> Result<Volume> {
         ensure!(!path.is_dir(), "is a directory, not a raw file");
         // A layout describes a headerless file: a file with a header of its own would be
         // read as bytes, its header taken for voxels.
-        let headered = match Format::of(path) {
-            Some(Format::Nrrd) => Some("an NRRD"),
-            Some(Format::Nifti) => Some("a NIfTI"),
-            Some(Format::MetaImage) => Some("a MetaImage"),
-            Some(Format::Vti) => Some("a VTK image (.vti)"),
-            Some(Format::Raw) | None => None,
-        };
-        if let Some(kind) = headered {
+        if let Some(kind) = Format::of(path).and_then(|f| f.header) {
             bail!(
                 "is {kind} file, whose header gives its size and voxel type: a raw layout \
                  (--dims and --type, or dims and type in a scene) is for headerless raw \
@@ -184,11 +177,7 @@ fn load_inner(path: &Path, opts: &LoadOptions) -> Result<Volume> {
         dicom::load_series(path, opts)?
     } else {
         match Format::of(path) {
-            Some(Format::Raw) => raw::load_named(path, opts)?,
-            Some(Format::Nrrd) => nrrd::load(path, opts)?,
-            Some(Format::Nifti) => nifti::load(path, opts)?,
-            Some(Format::MetaImage) => metaimage::load(path, opts)?,
-            Some(Format::Vti) => vti::load(path, opts)?,
+            Some(format) => (format.load)(path, opts)?,
             None if path
                 .extension()
                 .is_some_and(|e| e.eq_ignore_ascii_case("dcm")) =>
@@ -196,8 +185,8 @@ fn load_inner(path: &Path, opts: &LoadOptions) -> Result<Volume> {
                 bail!("a single DICOM file: load the directory that holds its series")
             }
             None => bail!(
-                "unknown volume format (known: .raw, .nrrd, .nhdr, .nii, .nii.gz, .mhd, \
-                 .mha, .vti, or a directory holding a DICOM series)"
+                "unknown volume format (known: {}, or a directory holding a DICOM series)",
+                known_extensions().join(", ")
             ),
         }
     };
@@ -272,13 +261,63 @@ fn check_limits_texel(
     Ok(())
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Format {
-    Raw,
-    Nrrd,
-    Nifti,
-    MetaImage,
-    Vti,
+/// A file format a volume is read from, by its name's ending (DICOM series, read from a
+/// directory, are not in this list: see [`load_volume`]). To add a format: a module
+/// here with its `load`, one entry in [`FORMATS`], a row in docs/FORMATS.md's table
+/// (`tests/formats.rs` checks that every extension here has one, and that the entry
+/// loads what it names), and its tests in tests/formats.rs.
+#[derive(Clone, Copy, Debug)]
+pub struct Format {
+    /// As docs/FORMATS.md names it.
+    pub name: &'static str,
+    /// File-name endings, lower case, with the dot (a name must be longer than it).
+    pub extensions: &'static [&'static str],
+    /// "is <header> file": what a raw layout given for such a file is refused as (a
+    /// file with a header of its own); None for headerless raw files.
+    pub header: Option<&'static str>,
+    load: fn(&Path, &LoadOptions) -> Result<Volume>,
+}
+
+/// Every format read by its file name, in the order the names are tried.
+pub const FORMATS: [Format; 5] = [
+    Format {
+        name: "raw",
+        extensions: &[".raw"],
+        header: None,
+        load: raw::load_named,
+    },
+    Format {
+        name: "NRRD",
+        extensions: &[".nrrd", ".nhdr"],
+        header: Some("an NRRD"),
+        load: nrrd::load,
+    },
+    Format {
+        name: "NIfTI-1",
+        extensions: &[".nii", ".nii.gz"],
+        header: Some("a NIfTI"),
+        load: nifti::load,
+    },
+    Format {
+        name: "MetaImage",
+        extensions: &[".mhd", ".mha"],
+        header: Some("a MetaImage"),
+        load: metaimage::load,
+    },
+    Format {
+        name: "VTK XML ImageData",
+        extensions: &[".vti"],
+        header: Some("a VTK image (.vti)"),
+        load: vti::load,
+    },
+];
+
+/// Every file-name ending [`FORMATS`] reads, in order.
+pub fn known_extensions() -> Vec<&'static str> {
+    FORMATS
+        .iter()
+        .flat_map(|f| f.extensions.iter().copied())
+        .collect()
 }
 
 /// The JSON files beside a raw file that may state its spacing (see `raw`).
@@ -288,26 +327,18 @@ pub fn raw_sidecars(path: &Path) -> Vec<std::path::PathBuf> {
 
 /// True for a path named like a raw file (`.raw`, any case).
 pub fn is_raw(path: &Path) -> bool {
-    matches!(Format::of(path), Some(Format::Raw))
+    Format::of(path).is_some_and(|f| f.header.is_none())
 }
 
 impl Format {
-    fn of(path: &Path) -> Option<Format> {
+    /// The format whose ending the path's file name has (any case).
+    pub fn of(path: &Path) -> Option<Format> {
         let name = path.file_name()?.to_string_lossy().to_ascii_lowercase();
-        let ext = |e: &str| name.len() > e.len() && name.ends_with(e);
-        if ext(".raw") {
-            Some(Format::Raw)
-        } else if ext(".nrrd") || ext(".nhdr") {
-            Some(Format::Nrrd)
-        } else if ext(".nii") || ext(".nii.gz") {
-            Some(Format::Nifti)
-        } else if ext(".mhd") || ext(".mha") {
-            Some(Format::MetaImage)
-        } else if ext(".vti") {
-            Some(Format::Vti)
-        } else {
-            None
-        }
+        let ends = |e: &&str| name.len() > e.len() && name.ends_with(*e);
+        FORMATS
+            .iter()
+            .find(|f| f.extensions.iter().any(ends))
+            .copied()
     }
 }
 
