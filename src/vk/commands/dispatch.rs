@@ -131,13 +131,7 @@ impl Recorder<'_> {
         push: &[u8],
         groups: [u32; 3],
     ) -> Result<()> {
-        self.bind_with_set(vk::PipelineBindPoint::COMPUTE, &pipeline.core, set);
-        self.push_constants(&pipeline.core, push)?;
-        // SAFETY: recording with a compute pipeline bound.
-        unsafe {
-            self.device()
-                .cmd_dispatch(self.cmd, groups[0], groups[1], groups[2])
-        };
-        Ok(())
+        self.bind_compute(pipeline, set);
+        self.dispatch_bound(pipeline, push, groups)
     }
 }
