@@ -183,7 +183,7 @@ impl RayMarchPass {
         Ok(Recorded {
             max_steps: super::steps_for(info.half_extent, info.ref_step, opts.sample_distance)
                 as u32,
-            sweep: None,
+            readback: None,
         })
     }
 }

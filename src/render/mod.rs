@@ -55,8 +55,8 @@ pub use refract::{
     Splat, StateBuffer, SweepOptions, SweepPath, SweepStats, MAX_ETA_SCALE, MAX_LIGHT_RAYS,
     MAX_LIGHT_SPACING,
 };
-use target::Environment;
 pub(crate) use target::FrameTarget;
+use target::{EnvInputs, Environment};
 pub use tonemap::ToneMapPass;
 
 /// The timestamp scopes of what the renderer itself rebuilds only when its inputs change
@@ -370,15 +370,12 @@ impl Renderer {
             Some(observe) => ctx.execute_observed(record, observe)?,
             None => ctx.execute(record)?,
         };
-        let mut recorded: Recorded = recorded.expect("recorded by execute");
-        if let Some(s) = recorded.sweep.as_mut() {
-            s.read_clamps()?;
-        }
+        let recorded: Recorded = recorded.expect("recorded by execute");
         let target = self.target(model, Slot::Main)?;
         let (width, height) = (opts.width, opts.height);
-        let dumps = match &recorded.sweep {
-            Some(s) => s.read_dumps(width, height)?,
-            None => Vec::new(),
+        let (sweep, dumps) = match recorded.readback {
+            Some(r) => r.read(width, height)?,
+            None => (None, Vec::new()),
         };
         Ok(Frame {
             width,
@@ -387,7 +384,7 @@ impl Renderer {
             timings,
             max_steps: recorded.max_steps,
             dumps,
-            sweep: recorded.sweep.map(|s| s.stats),
+            sweep,
         })
     }
 
@@ -433,7 +430,7 @@ impl Renderer {
         Ok(RecordedFrame {
             image: &self.target(model, slot)?.image,
             max_steps: r.max_steps,
-            sweep: r.sweep.map(|s| s.stats),
+            sweep: r.readback.and_then(|r| r.unread()),
         })
     }
 
@@ -504,7 +501,7 @@ impl Renderer {
             preint: self.preint.image(),
             linear: &self.linear,
             volume_sampler: &self.volume_sampler,
-            env: refract::EnvInputs {
+            env: EnvInputs {
                 map: &self.env.image,
                 sat: &self.env.sat.table,
                 mean: self.env.sat.mean,

@@ -19,8 +19,9 @@
 use anyhow::{bail, ensure, Result};
 
 use super::extinction::Extinction;
-use super::refract::{EnvInputs, SweepRecording};
+use super::target::EnvInputs;
 use super::{Camera, FrameTarget, LightSupport, Model, RenderOptions, VolumeInfo};
+use super::{Dump, SweepStats};
 use crate::vk::{Context, Image, Recorder, Sampler};
 
 /// The renderer's GPU resources, as every model sees them, and the frame asked for.
@@ -107,8 +108,20 @@ pub(crate) trait ModelState: std::any::Any + Send {
 pub(crate) struct Recorded {
     /// Samples along the longest ray (ray marchers) or planes (the sweep).
     pub max_steps: u32,
-    /// The sweep's statistics and the buffers its dumps and counters are read back from.
-    pub sweep: Option<SweepRecording>,
+    /// What the model's frame leaves to read back (the sweep's statistics, counters and
+    /// dumps); None for a model that leaves nothing.
+    pub readback: Option<Box<dyn FrameReadback>>,
+}
+
+/// What a model's frame leaves to read once its submission has completed, behind a
+/// trait so that the renderer does not know the model's recording by type.
+pub(crate) trait FrameReadback: Send {
+    /// The frame's statistics and state dumps, read from the buffers the recording
+    /// copied them into (`width` × `height`: the frame's size).
+    fn read(self: Box<Self>, width: u32, height: u32) -> Result<(Option<SweepStats>, Vec<Dump>)>;
+    /// The statistics as recorded, reading nothing back (the viewer's frames, whose
+    /// submissions are still in flight).
+    fn unread(self: Box<Self>) -> Option<SweepStats>;
 }
 
 /// One model's images and pipelines, made for one output size.

@@ -5,6 +5,16 @@ use super::*;
 
 /// The environment map on the GPU with its summed-area table. A 2 × 1 black map stands in
 /// when there is none, so the composite's descriptor set is always complete.
+/// The environment as a model's passes see it: the map, its summed-area table, its mean
+/// and whether to use them at all (otherwise the constant background). Any model may
+/// read it; today the sweep's composite does.
+pub(crate) struct EnvInputs<'a> {
+    pub map: &'a Image,
+    pub sat: &'a Image,
+    pub mean: [f32; 4],
+    pub enabled: bool,
+}
+
 pub(super) struct Environment {
     pub(super) map: EnvironmentMap,
     pub(super) image: Image,

@@ -28,7 +28,7 @@ use anyhow::{bail, ensure, Result};
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
-use super::model::{Inputs, ModelPass, OpticalModel, Recorded};
+use super::model::{FrameReadback, Inputs, ModelPass, OpticalModel, Recorded};
 use super::LightSupport;
 use super::{Camera, FrameTarget, RenderOptions, VolumeInfo};
 use crate::shaders;
@@ -269,7 +269,7 @@ impl ModelPass for SweepPass {
         let recording = self.record_sweep(rec, inputs)?;
         Ok(Recorded {
             max_steps: recording.stats.planes.count,
-            sweep: Some(recording),
+            readback: Some(Box::new(recording)),
         })
     }
 
@@ -286,6 +286,22 @@ pub(crate) struct SweepRecording {
     /// Where the clamp counters are copied to; `None` for frames that are not read back
     /// (the viewer's): the copy would outlive this recording's buffer.
     clamp_readback: Option<Buffer>,
+}
+
+impl FrameReadback for SweepRecording {
+    fn read(
+        mut self: Box<Self>,
+        width: u32,
+        height: u32,
+    ) -> Result<(Option<SweepStats>, Vec<Dump>)> {
+        self.read_clamps()?;
+        let dumps = self.read_dumps(width, height)?;
+        Ok((Some(self.stats), dumps))
+    }
+
+    fn unread(self: Box<Self>) -> Option<SweepStats> {
+        Some(self.stats)
+    }
 }
 
 impl SweepRecording {
@@ -423,7 +439,6 @@ mod traffic;
 use compute::ComputeFrame;
 pub use levers::{Deposit, Gather, Levers, Region, Splat, SweepPath};
 pub use options::*;
-pub(crate) use params::EnvInputs;
 use params::*;
 pub(crate) use pass::{StateImage, SweepPass};
 pub(crate) use pipelines::Features;

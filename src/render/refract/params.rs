@@ -36,15 +36,6 @@ pub(crate) struct EnvParams {
     pub(crate) mean: [f32; 4],
 }
 
-/// The environment as the composite sees it: the map, its summed-area table and whether
-/// to use them at all (otherwise the constant background).
-pub(crate) struct EnvInputs<'a> {
-    pub map: &'a Image,
-    pub sat: &'a Image,
-    pub mean: [f32; 4],
-    pub enabled: bool,
-}
-
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 pub(crate) struct PlanePush {
