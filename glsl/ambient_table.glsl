@@ -1,4 +1,4 @@
-// The ambient-scattering model's preintegrated tables (render/ambient/table.rs), read side:
+// The ambient-scattering model's preintegrated tables (render/ambient/table/), read side:
 // node-centred axes, so texel i of an axis of n nodes sits at texture coordinate
 // (i + 0.5) / n and linear filtering interpolates between nodes:
 //   theta_i = pi i / (n_theta - 1),  s_k = (1 + s_max)^(k / (n_s - 1)) - 1,

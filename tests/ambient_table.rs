@@ -1,4 +1,4 @@
-//! The ambient-scattering light-transport table (src/render/ambient/table.rs): limits,
+//! The ambient-scattering light-transport table (src/render/ambient/table/): limits,
 //! symmetries and energy, an independent forward photon tracer, reproducibility, the disk
 //! cache and `refrakt precompute ambient`. CPU only; small tables.
 

@@ -2,10 +2,10 @@
 //! is to write a table, fails when it cannot and never replaces a file that is not a
 //! table unless asked (`--force`).
 //!
-//! * The ambient table (src/render/ambient/table.rs) carries a CRC-32 in its header: a
+//! * The ambient table (src/render/ambient/table/) carries a CRC-32 in its header: a
 //!   corrupt cached table is reported in one line and rebuilt (equal to a clean build);
 //!   one given by path (`--ambient-table FILE`) is an error and is left alone.
-//! * A cached stand-in (src/volume/standins.rs) stays a plain `.raw` with a `.check` file
+//! * A cached stand-in (src/volume/standins/) stays a plain `.raw` with a `.check` file
 //!   beside it: a raw file that does not match it (bytes set to 255, zeroed, flipped,
 //!   truncated), a missing check file or one of another generator is reported in one line
 //!   and regenerated; the image equals a clean run's byte for byte.
