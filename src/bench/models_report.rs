@@ -129,28 +129,26 @@ pub fn models_markdown(r: &ModelsReport) -> String {
 pub fn write_models_csv(r: &ModelsReport, path: &Path) -> Result<()> {
     // Written into memory, then to the file atomically (crate::files).
     let mut w = csv::Writer::from_writer(Vec::new());
-    w.write_record([
-        "schema",
-        "dataset",
-        "model",
-        "kind",
-        "frame",
-        "ms",
-        "res_x",
-        "res_y",
-        "res_z",
-        "viewport",
-        "planes",
-        "scale",
-        "sample_distance",
-        "termination_alpha",
-        "device",
-        "driver",
-        "vulkan",
-        "refrakt_version",
-        "git_commit",
-        "date",
-    ])?;
+    w.write_record(
+        [
+            "schema",
+            "dataset",
+            "model",
+            "kind",
+            "frame",
+            "ms",
+            "res_x",
+            "res_y",
+            "res_z",
+            "viewport",
+            "planes",
+            "scale",
+            "sample_distance",
+            "termination_alpha",
+        ]
+        .iter()
+        .chain(&META_HEADER),
+    )?;
     for row in &r.rows {
         for m in &row.models {
             let frames = m

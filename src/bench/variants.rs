@@ -443,30 +443,28 @@ pub fn variants_markdown(r: &VariantsReport) -> String {
 pub fn write_variants_csv(r: &VariantsReport, path: &Path) -> Result<()> {
     // Written into memory, then to the file atomically (crate::files).
     let mut w = csv::Writer::from_writer(Vec::new());
-    w.write_record([
-        "schema",
-        "dataset",
-        "variant",
-        "levers",
-        "frame",
-        "warmup",
-        "order",
-        "frame_ms",
-        "sweep_ms",
-        "res_x",
-        "res_y",
-        "res_z",
-        "viewport",
-        "planes",
-        "scale",
-        "sample_distance",
-        "device",
-        "driver",
-        "vulkan",
-        "refrakt_version",
-        "git_commit",
-        "date",
-    ])?;
+    w.write_record(
+        [
+            "schema",
+            "dataset",
+            "variant",
+            "levers",
+            "frame",
+            "warmup",
+            "order",
+            "frame_ms",
+            "sweep_ms",
+            "res_x",
+            "res_y",
+            "res_z",
+            "viewport",
+            "planes",
+            "scale",
+            "sample_distance",
+        ]
+        .iter()
+        .chain(&META_HEADER),
+    )?;
     for row in &r.rows {
         for v in &row.variants {
             let warm = v

@@ -201,6 +201,17 @@ pub(crate) fn size_columns(
     ]
 }
 
+/// The CSV header of the device and build columns every report ends its rows with
+/// ([`meta_columns`]).
+pub(crate) const META_HEADER: [&str; 6] = [
+    "device",
+    "driver",
+    "vulkan",
+    "refrakt_version",
+    "git_commit",
+    "date",
+];
+
 /// CSV columns of the device and build: device, driver, vulkan, refrakt_version,
 /// git_commit, date.
 pub(crate) fn meta_columns(meta: &Meta) -> [String; 6] {
