@@ -236,3 +236,61 @@ fn the_photon_tracer_refuses_a_point_light() {
         "{err}"
     );
 }
+
+/// "How to add a kind of light" (docs/ARCHITECTURE.md) held honest. The match below has an
+/// arm per `LightSource` variant, so a new kind does not compile here until it is given
+/// its `--light` syntax and its `[[light]]` keys (add an example of it to `kinds` too);
+/// each kind then reads from both to the same light, and every model either takes it as
+/// its main light or refuses it by name.
+#[test]
+fn every_kind_of_light_reads_from_both_syntaxes_and_every_model_answers_it() {
+    use refrakt::render::{Model, Renderer};
+    let kinds = [
+        LightSource::Directional {
+            towards: Vec3::new(0.0, 1.0, 0.5),
+        },
+        LightSource::Point {
+            position: Vec3::new(0.5, 1.0, 0.5),
+        },
+    ];
+    let v = refrakt::volume::procedural::sphere(16, 0.3, 1.0).unwrap();
+    let tf = common::constant_tf([0.8, 0.8, 0.8], 0.5);
+    let camera = common::face_on(3.0, 30.0);
+    common::with_context(|ctx| {
+        let renderer = Renderer::new(ctx, &v, &tf).unwrap();
+        for source in kinds {
+            let (flag, keys, point) = match source {
+                LightSource::Directional { towards: t } => (
+                    format!("dir:{},{},{}", t.x, t.y, t.z),
+                    format!("towards = [{:?}, {:?}, {:?}]", t.x, t.y, t.z),
+                    false,
+                ),
+                LightSource::Point { position: p } => (
+                    format!("point:{},{},{}", p.x, p.y, p.z),
+                    format!("position = [{:?}, {:?}, {:?}]", p.x, p.y, p.z),
+                    true,
+                ),
+            };
+            let (parsed, _) = LightSource::parse_with_colour(&flag).unwrap();
+            assert_eq!(parsed, source, "--light {flag}");
+            let lights = lights_of(&format!("{VOLUME}[[light]]\n{keys}\n")).unwrap();
+            assert_eq!(lights[0].source, source, "[[light]] {keys}");
+            for model in Model::ALL {
+                let mut opts = common::frame_options(32, 32, 1.0);
+                opts.lights = vec![lights[0]];
+                let support = model.light_support();
+                let answer = renderer.check(model, &camera, &opts);
+                if support.max == 0 || !point || support.point {
+                    answer.unwrap_or_else(|e| panic!("{} refused {flag}: {e:#}", model.name()));
+                } else {
+                    let err = format!("{:#}", answer.expect_err(model.name()));
+                    assert!(
+                        err.contains(model.name()) && err.contains("point light"),
+                        "{}: {err}",
+                        model.name()
+                    );
+                }
+            }
+        }
+    });
+}
