@@ -120,30 +120,28 @@ pub fn markdown(r: &Report) -> String {
 pub fn write_csv(r: &Report, path: &Path) -> Result<()> {
     // Written into memory, then to the file atomically (crate::files).
     let mut w = csv::Writer::from_writer(Vec::new());
-    w.write_record([
-        "schema",
-        "dataset",
-        "variant",
-        "frame",
-        "warmup",
-        "frame_ms",
-        "res_x",
-        "res_y",
-        "res_z",
-        "viewport",
-        "planes",
-        "scale",
-        "sample_distance",
-        "thesis_ms",
-        "thesis_gpu",
-        "device",
-        "driver",
-        "vulkan",
-        "refrakt_version",
-        "git_commit",
-        "date",
-        "levers",
-    ])?;
+    w.write_record(
+        [
+            "schema",
+            "dataset",
+            "variant",
+            "frame",
+            "warmup",
+            "frame_ms",
+            "res_x",
+            "res_y",
+            "res_z",
+            "viewport",
+            "planes",
+            "scale",
+            "sample_distance",
+            "thesis_ms",
+            "thesis_gpu",
+        ]
+        .iter()
+        .chain(&META_HEADER)
+        .chain(&["levers"]),
+    )?;
     for row in &r.rows {
         for v in row.variants() {
             let all = v

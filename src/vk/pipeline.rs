@@ -147,6 +147,10 @@ impl DescriptorSet {
         Ok(set)
     }
 
+    pub(crate) fn name(&self) -> &str {
+        &self.name
+    }
+
     fn write(&self, bindings: &[Binding<'_>]) {
         let image_infos: Vec<[vk::DescriptorImageInfo; 1]> = bindings
             .iter()
@@ -212,12 +216,6 @@ impl DescriptorSet {
             .collect();
         // SAFETY: the set is not in use by pending work while being written.
         unsafe { self.ctx.device().update_descriptor_sets(&writes, &[]) };
-    }
-}
-
-impl DescriptorSet {
-    pub(crate) fn name(&self) -> &str {
-        &self.name
     }
 }
 
