@@ -19,11 +19,19 @@ layout(push_constant) uniform Push {
     uint pad;
 } pc;
 
-shared bool listed[SPLAT_GROUP_WORKGROUP];
+// What each group of the workgroup is listed as: 0 not at all, 1 one sprite, 2 its rays.
+shared uint listed[SPLAT_GROUP_WORKGROUP];
+
+// Whether a footprint (lo.xy, hi.xy, pixels) overlaps the image: one that does not
+// deposits on no pixel, so its group is not drawn (a point's vertex costs llvmpipe about
+// as much as its fragments; most of the rays lie off the image, docs/NOTES.md).
+bool on_image(vec2 lo, vec2 hi) {
+    return all(greaterThan(hi, vec2(0.0))) && all(lessThan(lo, P.camera.zw));
+}
 
 void main() {
     int g = int(gl_GlobalInvocationID.x);
-    bool list = false;
+    uint list = 0u;
     if (g < group_count()) {
         vec2 lo = vec2(1e30), hi = vec2(-1e30);
         bool any_deposit = false;
@@ -43,21 +51,32 @@ void main() {
         vec2 w = hi - lo;
         bool fits = any_deposit && max(w.x, w.y) <= float(SPLAT_GROUP_SPAN);
         sprite_groups[g] = fits ? vec4(lo, hi) : vec4(0.0);
-        list = any_deposit && !fits;
+        bool seen = any_deposit && on_image(lo, hi);
+        list = !seen ? 0u : (fits ? 1u : 2u);
     }
     uint t = gl_LocalInvocationID.x;
     listed[t] = list;
     barrier();
     if (t == 0u) {
-        // In the groups' order, so the frame does not depend on which invocation ran first.
+        // In the groups' order, so the frame does not depend on which invocation ran
+        // first: the groups drawn as one sprite from the workgroup's first slot on, then
+        // the groups whose rays are drawn one by one.
         uint first = gl_WorkGroupID.x * SPLAT_GROUP_WORKGROUP;
-        uint n = 0u;
+        uint sprites = 0u;
         for (uint k = 0u; k < SPLAT_GROUP_WORKGROUP; ++k) {
-            if (listed[k]) {
-                sprite_fallback[first + n] = first + k;
-                n += 1u;
+            if (listed[k] == 1u) {
+                sprite_fallback[first + sprites] = first + k;
+                sprites += 1u;
             }
         }
-        sprite_draws[gl_WorkGroupID.x] = uvec4(4u * n, 1u, 4u * first, 0u);
+        uint rays = 0u;
+        for (uint k = 0u; k < SPLAT_GROUP_WORKGROUP; ++k) {
+            if (listed[k] == 2u) {
+                sprite_fallback[first + sprites + rays] = first + k;
+                rays += 1u;
+            }
+        }
+        sprite_draws[gl_WorkGroupID.x] = uvec4(4u * rays, 1u, 4u * (first + sprites), 0u);
+        sprite_draws[gl_NumWorkGroups.x + gl_WorkGroupID.x] = uvec4(sprites, 1u, first, 0u);
     }
 }

@@ -9,11 +9,12 @@
 // {0, 1}, 2 gj + {0, 1}) the union of their footprints in sprite_groups[g] when it fits
 // within SPLAT_GROUP_SPAN pixels a side (else zero: a group whose rays land apart, at a
 // silhouette or a fold, would need a point wider than a device may draw). Each of its
-// workgroups lists its other groups that deposit anything, in order, and writes one
-// indirect draw of 4 vertices per listed group. The splat's render pass then draws one
-// point per group (pc.pad = 0) and the indirect draws (pc.pad = 1), a point per listed
-// ray. Every pixel receives the same deposits as with a sprite per ray; only the order of
-// the float sums differs (a group's four are added before the blend).
+// workgroups lists, in order, its groups that fit one sprite and its other groups, leaving
+// out those whose deposits miss the image, and writes an indirect draw for each list. The
+// splat's render pass then draws the sprites (pc.pad = 0), a point per listed group, and
+// the rays (pc.pad = 1), a point per ray of a group in the second list. Every pixel
+// receives the same deposits as with a sprite per ray; only the order of the float sums
+// differs (a group's four are added before the blend).
 #ifndef REFRAKT_LIGHT_SPLAT_GROUPS_GLSL
 #define REFRAKT_LIGHT_SPLAT_GROUPS_GLSL
 
@@ -31,13 +32,15 @@
 layout(std430, set = 0, binding = 23) GROUP_BUFFER SpriteGroups {
     vec4 sprite_groups[];
 };
-// Per workgroup w of light_splat_groups.comp: its listed groups from
-// SPLAT_GROUP_WORKGROUP * w on.
+// Per workgroup w of light_splat_groups.comp, from slot SPLAT_GROUP_WORKGROUP * w on: its
+// groups drawn as one sprite each, then its groups drawn as their rays, each list in the
+// groups' order (a group whose deposits miss the image is in neither).
 layout(std430, set = 0, binding = 24) GROUP_BUFFER SpriteFallback {
     uint sprite_fallback[];
 };
-// Per workgroup w: VkDrawIndirectCommand (vertexCount = 4 * its listed groups,
-// instanceCount = 1, firstVertex = 4 * SPLAT_GROUP_WORKGROUP * w, firstInstance = 0).
+// VkDrawIndirectCommand per workgroup w of W: [w] its groups' rays (vertexCount = 4 * the
+// groups, firstVertex = 4 * their first slot), [W + w] its sprites (vertexCount = the
+// groups, firstVertex = their first slot); instanceCount = 1, firstInstance = 0.
 layout(std430, set = 0, binding = 25) GROUP_BUFFER SpriteDraws {
     uvec4 sprite_draws[];
 };

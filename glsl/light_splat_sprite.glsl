@@ -55,7 +55,7 @@ layout(push_constant) uniform Push {
     uint plane;
     uint read_layer;
     float depth;
-    uint pad;   // 0: the draw of one point per group; 1: the indirect draws, one per ray
+    uint pad;   // 0: the indirect draws of a point per group; 1: of a point per ray
 } pc;
 
 void main() {
@@ -65,7 +65,9 @@ void main() {
     uint sprite_rays;
 #endif
     if (pc.pad == 0u) {
-        g = gl_VertexIndex;
+        // The indirect draw of workgroup w lists its sprites from slot
+        // SPLAT_GROUP_WORKGROUP * w on (light_splat_groups.glsl).
+        g = int(sprite_fallback[gl_VertexIndex]);
         fp = sprite_groups[g];
         sprite_rays = 15u;
     } else {

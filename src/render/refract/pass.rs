@@ -308,7 +308,7 @@ impl SweepPass {
         plane_bindings.push(Binding::Storage(&bin_list));
         // 23-25: the grouped sprites (the `splat=groups` lever, glsl/light_splat_groups.glsl;
         // the deposits above): per group of 2 x 2 rays its footprint, per workgroup of
-        // SPLAT_GROUP_WORKGROUP groups its listed groups and one indirect draw. A grid of
+        // SPLAT_GROUP_WORKGROUP groups its listed groups and two indirect draws. A grid of
         // C rays has at most C / 2 + 1 groups (ceil(c / 2) ceil(r / 2) with c r <= C).
         let groups = capacity / 2 + 1;
         let group_workgroups = groups.div_ceil(SPLAT_GROUP_WORKGROUP as u64);
@@ -328,7 +328,7 @@ impl SweepPass {
         )?;
         let sprite_draws = Buffer::new(
             ctx,
-            group_workgroups * 16,
+            2 * group_workgroups * 16,
             vk::usage::STORAGE_BUFFER | vk::usage::INDIRECT_BUFFER,
             vk::Memory::Gpu,
             "light splat groups' indirect draws",

@@ -434,13 +434,15 @@ impl SweepPass {
                                     ],
                                 )?;
                                 if groups_on {
-                                    // One point per group, then the groups' indirect draws
-                                    // of one point per ray (push constant `pad` 0 and 1).
+                                    // The indirect draws of one point per group, then of
+                                    // one point per ray (push constant `pad` 0 and 1):
+                                    // each workgroup's two lists, in order.
                                     rec.bind_pipeline(&fp.splat_groups);
-                                    rec.draw(
+                                    rec.draw_indirect(
                                         &fp.splat_groups,
                                         bytemuck::bytes_of(&splat_push),
-                                        groups,
+                                        &self.sprite_draws,
+                                        workgroups..2 * workgroups,
                                     )?;
                                     let leftover_push = PlanePush {
                                         pad: 1,
@@ -450,7 +452,7 @@ impl SweepPass {
                                         &fp.splat_groups,
                                         bytemuck::bytes_of(&leftover_push),
                                         &self.sprite_draws,
-                                        workgroups,
+                                        0..workgroups,
                                     )?;
                                 } else {
                                     rec.bind_pipeline(&fp.splat);

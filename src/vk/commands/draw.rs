@@ -213,21 +213,21 @@ impl Recorder<'_> {
         Ok(())
     }
 
-    /// Draw `draws` indirect draws whose VkDrawIndirectCommand (16 bytes each) a shader
-    /// wrote into `commands` from offset 0, in order, with `pipeline` (bound) and push
-    /// constants `push`: one call where the device has `multiDrawIndirect`, else one call
-    /// per draw. The buffer needs INDIRECT_BUFFER usage.
+    /// Draw the indirect draws `draws` (indices of 16-byte VkDrawIndirectCommands a shader
+    /// wrote into `commands`), in order, with `pipeline` (bound) and push constants `push`:
+    /// one call where the device has `multiDrawIndirect`, else one call per draw. The
+    /// buffer needs INDIRECT_BUFFER usage.
     pub fn draw_indirect(
         &mut self,
         pipeline: &GraphicsPipeline,
         push: &[u8],
         commands: &Buffer,
-        draws: u32,
+        draws: std::ops::Range<u32>,
     ) -> Result<()> {
-        let needed = draws as u64 * 16;
+        let needed = draws.end as u64 * 16;
         if needed > commands.size() {
             bail!(
-                "{draws} indirect draws need {needed} bytes, the buffer has {}",
+                "indirect draws {draws:?} need {needed} bytes, the buffer has {}",
                 commands.size()
             );
         }
@@ -238,9 +238,9 @@ impl Recorder<'_> {
         } else {
             1
         };
-        let mut first = 0;
-        while first < draws {
-            let n = per_call.min(draws - first);
+        let mut first = draws.start;
+        while first < draws.end {
+            let n = per_call.min(draws.end - first);
             // SAFETY: recording inside a render pass compatible with the bound pipeline;
             // the commands lie within the buffer (checked above); n is 1 or within the
             // device's maxDrawIndirectCount with multiDrawIndirect enabled.
