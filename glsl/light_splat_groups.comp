@@ -16,7 +16,7 @@ layout(push_constant) uniform Push {
     uint plane;
     uint read_layer;   // the layer the rays were just written to
     float depth;       // this plane's depth
-    uint pad;
+    uint pad;          // the first workgroup this plane deposits (render/refract/ray_rows.rs)
 } pc;
 
 // What each group of the workgroup is listed as: 0 not at all, 1 one sprite, 2 its rays.
@@ -30,7 +30,8 @@ bool on_image(vec2 lo, vec2 hi) {
 }
 
 void main() {
-    int g = int(gl_GlobalInvocationID.x);
+    uint workgroup = gl_WorkGroupID.x + pc.pad;
+    int g = int(workgroup * SPLAT_GROUP_WORKGROUP + gl_LocalInvocationID.x);
     uint list = 0u;
     if (g < group_count()) {
         vec2 lo = vec2(1e30), hi = vec2(-1e30);
@@ -61,7 +62,7 @@ void main() {
         // In the groups' order, so the frame does not depend on which invocation ran
         // first: the groups drawn as one sprite from the workgroup's first slot on, then
         // the groups whose rays are drawn one by one.
-        uint first = gl_WorkGroupID.x * SPLAT_GROUP_WORKGROUP;
+        uint first = workgroup * SPLAT_GROUP_WORKGROUP;
         uint sprites = 0u;
         for (uint k = 0u; k < SPLAT_GROUP_WORKGROUP; ++k) {
             if (listed[k] == 1u) {
@@ -76,7 +77,8 @@ void main() {
                 rays += 1u;
             }
         }
-        sprite_draws[gl_WorkGroupID.x] = uvec4(4u * rays, 1u, 4u * (first + sprites), 0u);
-        sprite_draws[gl_NumWorkGroups.x + gl_WorkGroupID.x] = uvec4(sprites, 1u, first, 0u);
+        uint workgroups = (uint(group_count()) + SPLAT_GROUP_WORKGROUP - 1u) / SPLAT_GROUP_WORKGROUP;
+        sprite_draws[workgroup] = uvec4(4u * rays, 1u, 4u * (first + sprites), 0u);
+        sprite_draws[workgroups + workgroup] = uvec4(sprites, 1u, first, 0u);
     }
 }

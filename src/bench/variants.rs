@@ -520,6 +520,7 @@ mod tests {
                 let l = Levers {
                     region,
                     clear: bits & 16 != 0,
+                    needed_rays: bits % 3 != 1,
                     field: bits & 1 != 0,
                     arrays: bits & 2 != 0,
                     specialize: bits & 4 != 0,

@@ -192,6 +192,13 @@ pub struct Levers {
     /// is the `splat` lever's).
     #[serde(default = "pairs")]
     pub gather: Gather,
+    /// `rays=needed`: each plane moves only the light rays' grid rows needed by then
+    /// (they met the box or the viewing rays' light); a row joins with one straight step
+    /// from the launch plane (render/refract/ray_rows.rs). The fragment path's grouped
+    /// sprites only; elsewhere every ray moves on every plane. The same rays within
+    /// float rounding (and, with softness, within 3e-7 of a penumbra's tail).
+    #[serde(default = "on")]
+    pub needed_rays: bool,
 }
 
 fn pairs() -> Gather {
@@ -222,6 +229,7 @@ impl Default for Levers {
             clear: true,
             deposit: Deposit::Boxes,
             gather: Gather::Pairs,
+            needed_rays: true,
         }
     }
 }
@@ -238,12 +246,14 @@ impl Levers {
         clear: false,
         deposit: Deposit::Boxes,
         gather: Gather::Pixels,
+        needed_rays: false,
     };
 
     /// The keys of [`Levers::parse`], with their values, for help texts.
     pub const SYNTAX: &'static str =
         "region=full|rect, field=off|on, arrays=off|on, specialize=off|on, splat=raster|groups|compute, \
-         sweep=auto|fragment|compute, clear=off|on, deposit=cells|boxes, gather=pairs|pixels";
+         sweep=auto|fragment|compute, clear=off|on, deposit=cells|boxes, gather=pairs|pixels, \
+         rays=all|needed";
 
     /// `default`, `reference`, or comma-separated `key=value` pairs applied to the
     /// default (e.g. `region=full,field=off`); a pair may also follow `reference,` to
@@ -315,6 +325,13 @@ impl Levers {
                         _ => bail!("gather={value}: expected pairs or pixels"),
                     }
                 }
+                "rays" => {
+                    levers.needed_rays = match value {
+                        "all" => false,
+                        "needed" => true,
+                        _ => bail!("rays={value}: expected all or needed"),
+                    }
+                }
                 "sweep" => {
                     levers.sweep = match value {
                         "auto" => SweepPath::Auto,
@@ -347,6 +364,7 @@ impl Levers {
             |l: &mut Levers| l.arrays = !l.arrays,
             |l: &mut Levers| l.specialize = !l.specialize,
             |l: &mut Levers| l.clear = !l.clear,
+            |l: &mut Levers| l.needed_rays = !l.needed_rays,
             |l: &mut Levers| {
                 l.splat = match l.splat {
                     Splat::Raster | Splat::Groups => Splat::Compute,
@@ -378,7 +396,7 @@ impl fmt::Display for Levers {
         write!(
             f,
             "region={},field={},arrays={},specialize={},splat={},sweep={},clear={},deposit={},\
-             gather={}",
+             gather={},rays={}",
             match self.region {
                 Region::Full => "full",
                 Region::Rect => "rect",
@@ -394,7 +412,8 @@ impl fmt::Display for Levers {
             self.sweep.name(),
             on(self.clear),
             self.deposit.name(),
-            self.gather.name()
+            self.gather.name(),
+            if self.needed_rays { "needed" } else { "all" }
         )
     }
 }
@@ -426,6 +445,7 @@ mod tests {
                     field: bits & 1 != 0,
                     arrays: bits & 2 != 0,
                     specialize: bits & 4 != 0,
+                    needed_rays: bits % 11 < 5,
                     splat: if bits & 8 != 0 {
                         Splat::Compute
                     } else if bits % 3 == 0 {
@@ -465,6 +485,7 @@ mod tests {
             ("sweep=vertex", "auto, fragment or compute"),
             ("deposit=points", "cells or boxes"),
             ("gather=rays", "pairs or pixels"),
+            ("rays=some", "all or needed"),
             ("field=maybe", "on or off"),
             ("speed=11", "unknown lever 'speed'"),
             ("field", "not key=value"),
@@ -479,8 +500,8 @@ mod tests {
     fn each_flipped_differs_in_exactly_one_lever() {
         let base = Levers::default();
         let flipped = base.each_flipped();
-        // Five on/off levers and the region, and from `auto` both explicit paths.
-        assert_eq!(flipped.len(), 8);
+        // Six on/off levers and the region, and from `auto` both explicit paths.
+        assert_eq!(flipped.len(), 9);
         for v in flipped {
             let diffs = [
                 v.region != base.region,
@@ -490,6 +511,7 @@ mod tests {
                 v.splat != base.splat,
                 v.sweep != base.sweep,
                 v.clear != base.clear,
+                v.needed_rays != base.needed_rays,
             ];
             assert_eq!(diffs.iter().filter(|d| **d).count(), 1, "{v}");
         }

@@ -432,6 +432,7 @@ mod options;
 mod params;
 mod pass;
 mod pipelines;
+mod ray_rows;
 mod record;
 mod region;
 mod traffic;

@@ -273,6 +273,31 @@ impl SweepPass {
             ),
         };
 
+        // The light rays each plane moves and deposits (ray_rows.rs, the `rays` lever): on
+        // the fragment path with grouped sprites; elsewhere every ray, every plane.
+        let plane_rays =
+            (groups_on && sweep.levers.needed_rays && ray_image[1] < 1 << 16).then(|| {
+                super::ray_rows::light_ray_rows(
+                    &super::ray_rows::View {
+                        view_to_tex,
+                        planes: &planes,
+                        ref_step: info.ref_step,
+                        tan_half,
+                        size: [self.width, self.height],
+                        regions: &regions,
+                    },
+                    &super::ray_rows::RayGrid {
+                        grid,
+                        dims: grid_dims,
+                        light: light_view,
+                    },
+                    // A box is at most 2 transport.w wide, centred on its ray.
+                    p.transport[3] + 1.0,
+                    (diffusion_w, diffusion_stride),
+                    SPLAT_GROUP_WORKGROUP,
+                )
+            });
+
         rec.begin_scope("sweep");
         let baseline = sweep.floor || sweep.skeleton;
         if compute {
@@ -362,18 +387,54 @@ impl SweepPass {
                         if timed {
                             rec.begin_scope("sweep: light rays");
                         }
-                        // 1. The light rays advance to plane i (over the ray images).
-                        rec.begin_render_pass(
-                            &self.light_pass,
-                            &self.light_framebuffers[write as usize],
-                            &[(light_images[0], write), (light_images[1], write)],
-                        )?;
-                        // Only the rows that hold rays.
+                        // 1. The light rays advance to plane i (over the ray images):
+                        // the texel rows that hold rays, or those of the grid rows this
+                        // plane moves (ray_rows.rs); `pad` gives the previous plane's, the
+                        // rows still in their launch state outside them.
                         let rows = (grid_dims[0] * grid_dims[1]).div_ceil(ray_image[0]);
-                        rec.set_viewport(ray_image[0], rows.clamp(1, ray_image[1]));
-                        rec.draw_fullscreen(plane_pipeline, bytemuck::bytes_of(&push))?;
-                        rec.end_render_pass();
-                        rec.set_viewport(self.width, self.height);
+                        let rows = rows.clamp(1, ray_image[1]);
+                        let texel_rows = |r: super::ray_rows::Rows| {
+                            let lo = r.lo * grid_dims[0] / ray_image[0];
+                            (
+                                lo,
+                                (r.end * grid_dims[0])
+                                    .div_ceil(ray_image[0])
+                                    .clamp(lo, rows),
+                            )
+                        };
+                        let (moved, before) = match &plane_rays {
+                            Some(p) => (
+                                texel_rows(p[i as usize].moved),
+                                match i {
+                                    0 => (0, 0),
+                                    _ => texel_rows(p[i as usize - 1].moved),
+                                },
+                            ),
+                            None => ((0, rows), (0, rows)),
+                        };
+                        let light_push = PlanePush {
+                            pad: before.0 | before.1 << 16,
+                            ..push
+                        };
+                        if moved.1 > moved.0 {
+                            let area = Area {
+                                x: 0,
+                                y: moved.0,
+                                width: ray_image[0],
+                                height: moved.1 - moved.0,
+                            };
+                            rec.begin_render_pass_in(
+                                &self.light_pass,
+                                &self.light_framebuffers[write as usize],
+                                &[(light_images[0], write), (light_images[1], write)],
+                                area,
+                            )?;
+                            rec.set_viewport(ray_image[0], rows);
+                            rec.set_scissor(area);
+                            rec.draw_fullscreen(plane_pipeline, bytemuck::bytes_of(&light_push))?;
+                            rec.end_render_pass();
+                            rec.set_viewport(self.width, self.height);
+                        }
                         if timed {
                             rec.end_scope();
                             rec.begin_scope("sweep: splat");
@@ -395,13 +456,22 @@ impl SweepPass {
                                 // plane's sprites read them.
                                 let groups = grid_dims[0].div_ceil(2) * grid_dims[1].div_ceil(2);
                                 let workgroups = groups.div_ceil(SPLAT_GROUP_WORKGROUP);
+                                // The workgroups this plane deposits (ray_rows.rs): `pad`
+                                // gives the first.
+                                let (first_wg, end_wg) = match &plane_rays {
+                                    Some(p) => {
+                                        let w = p[i as usize].workgroups;
+                                        (w.lo, w.end.max(w.lo))
+                                    }
+                                    None => (0, workgroups),
+                                };
                                 let group_buffers = [
                                     &self.deposits,
                                     &self.sprite_groups,
                                     &self.sprite_fallback,
                                     &self.sprite_draws,
                                 ];
-                                if groups_on {
+                                if groups_on && end_wg > first_wg {
                                     if timed {
                                         rec.begin_scope("sweep: splat: deposits");
                                     }
@@ -410,11 +480,15 @@ impl SweepPass {
                                         BufferUse::Draws,
                                         BufferUse::Compute,
                                     );
+                                    let deposits_push = PlanePush {
+                                        pad: first_wg,
+                                        ..splat_push
+                                    };
                                     rec.dispatch_explicit(
                                         &fp.group_deposits,
                                         &self.sweep_set,
-                                        bytemuck::bytes_of(&splat_push),
-                                        [workgroups, 1, 1],
+                                        bytemuck::bytes_of(&deposits_push),
+                                        [end_wg - first_wg, 1, 1],
                                     )?;
                                     rec.buffer_handover(
                                         &group_buffers,
@@ -442,7 +516,7 @@ impl SweepPass {
                                         &fp.splat_groups,
                                         bytemuck::bytes_of(&splat_push),
                                         &self.sprite_draws,
-                                        workgroups..2 * workgroups,
+                                        workgroups + first_wg..workgroups + end_wg,
                                     )?;
                                     let leftover_push = PlanePush {
                                         pad: 1,
@@ -452,7 +526,7 @@ impl SweepPass {
                                         &fp.splat_groups,
                                         bytemuck::bytes_of(&leftover_push),
                                         &self.sprite_draws,
-                                        0..workgroups,
+                                        first_wg..end_wg,
                                     )?;
                                 } else {
                                     rec.bind_pipeline(&fp.splat);

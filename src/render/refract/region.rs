@@ -51,22 +51,7 @@ pub(crate) fn plane_regions(
     aspect: f32,
     size: [u32; 2],
 ) -> (Vec<Area>, f64) {
-    let tex_to_view = view_to_tex.inverse();
-    let corners: Vec<Vec3> = (0..8)
-        .map(|k| {
-            let t = Vec3::new((k & 1) as f32, ((k >> 1) & 1) as f32, ((k >> 2) & 1) as f32);
-            tex_to_view.transform_point3(t)
-        })
-        .collect();
-    let edges: Vec<(Vec3, Vec3)> = (0..8usize)
-        .flat_map(|a| {
-            [1usize, 2, 4]
-                .into_iter()
-                .filter(move |bit| a & bit == 0)
-                .map(move |bit| (a, a | bit))
-        })
-        .map(|(a, b)| (corners[a], corners[b]))
-        .collect();
+    let box_edges = BoxEdges::new(view_to_tex);
     let [w, h] = [size[0] as f32, size[1] as f32];
     let to_pixel = |p: Vec3| {
         let x = (p.x / (p.z * tan_half * aspect) * 0.5 + 0.5) * w;
@@ -91,20 +76,7 @@ pub(crate) fn plane_regions(
         // around its points: the box counts that far ahead.
         let eps = 1e-3 * planes.spacing;
         let z_hi = planes.depth(i) + planes.spacing + reach + eps;
-        // Vertices of box ∩ {z_lo ≤ z ≤ z_hi}: the corners inside the slab and the edges'
-        // crossings of its two faces.
-        let mut points: Vec<Vec3> = corners
-            .iter()
-            .copied()
-            .filter(|c| c.z >= z_lo && c.z <= z_hi)
-            .collect();
-        for &(a, b) in &edges {
-            for z in [z_lo, z_hi] {
-                if (a.z - z) * (b.z - z) < 0.0 {
-                    points.push(a + (b - a) * ((z - a.z) / (b.z - a.z)));
-                }
-            }
-        }
+        let points = box_edges.slab_points(z_lo, z_hi);
         for p in points.into_iter().filter(|p| p.z > 0.0) {
             let (x, y) = to_pixel(p);
             grown = Some(match grown {
@@ -144,6 +116,53 @@ pub(crate) fn plane_regions(
         covered / out.len() as f64
     };
     (out, mean)
+}
+
+/// The volume box in view space: its corners and edges.
+pub(crate) struct BoxEdges {
+    corners: [Vec3; 8],
+    edges: Vec<(Vec3, Vec3)>,
+}
+
+impl BoxEdges {
+    /// `view_to_tex` maps view space to the box's texture coordinates [0, 1]³.
+    pub(crate) fn new(view_to_tex: Mat4) -> Self {
+        let tex_to_view = view_to_tex.inverse();
+        let corners: [Vec3; 8] = std::array::from_fn(|k| {
+            let t = Vec3::new((k & 1) as f32, ((k >> 1) & 1) as f32, ((k >> 2) & 1) as f32);
+            tex_to_view.transform_point3(t)
+        });
+        let edges = (0..8usize)
+            .flat_map(|a| {
+                [1usize, 2, 4]
+                    .into_iter()
+                    .filter(move |bit| a & bit == 0)
+                    .map(move |bit| (a, a | bit))
+            })
+            .map(|(a, b)| (corners[a], corners[b]))
+            .collect();
+        BoxEdges { corners, edges }
+    }
+
+    /// The vertices of box ∩ {z_lo ≤ z ≤ z_hi}: the corners inside the slab and the
+    /// edges' crossings of its two faces (the box is convex: their bounding rectangle is
+    /// the slab's part of the box's).
+    pub(crate) fn slab_points(&self, z_lo: f32, z_hi: f32) -> Vec<Vec3> {
+        let mut points: Vec<Vec3> = self
+            .corners
+            .iter()
+            .copied()
+            .filter(|c| c.z >= z_lo && c.z <= z_hi)
+            .collect();
+        for &(a, b) in &self.edges {
+            for z in [z_lo, z_hi] {
+                if (a.z - z) * (b.z - z) < 0.0 {
+                    points.push(a + (b - a) * ((z - a.z) / (b.z - a.z)));
+                }
+            }
+        }
+        points
+    }
 }
 
 #[cfg(test)]
