@@ -16,6 +16,12 @@
 #ifndef SPRITE_GROUPS
 #define SPRITE_GROUPS 0
 #endif
+// SPRITE_FROM_LIST 1 (light_splat_group_rays.vert): one ray's sprite, the ray taken from
+// the grouped sprites' list of groups too wide for one sprite and its deposit from the
+// deposits buffer (light_splat_groups.glsl).
+#ifndef SPRITE_FROM_LIST
+#define SPRITE_FROM_LIST 0
+#endif
 #if !SPRITE_CELLS
 #define DEPOSIT_BOXES_ONLY 1
 #endif
@@ -23,7 +29,7 @@
 #include "sweep_buffers.glsl"
 #include "sweep_rays.glsl"
 #include "light_splat_ray.glsl"
-#if SPRITE_GROUPS
+#if SPRITE_GROUPS || SPRITE_FROM_LIST
 #define DEPOSITS_READONLY 1
 #include "light_gather.glsl"
 #include "light_splat_groups.glsl"
@@ -164,7 +170,23 @@ layout(push_constant) uniform Push {
 void main() {
     RayDeposit d;
     gl_PointSize = 1.0;
+#if SPRITE_FROM_LIST
+    // The indirect draw of workgroup w starts at vertex 4 * SPLAT_GROUP_WORKGROUP * w
+    // (light_splat_groups.glsl); 4 vertices per listed group, one per ray.
+    int per = 4 * int(SPLAT_GROUP_WORKGROUP);
+    int wg = gl_VertexIndex / per, v = gl_VertexIndex % per;
+    int g = int(sprite_fallback[int(SPLAT_GROUP_WORKGROUP) * wg + v / 4]);
+    ivec2 c = group_ray(g, v % 4);
+    bool listed = ray_exists(c);
+    if (listed) {
+        d = load_deposit(ray_index(c));
+    } else {
+        clear_deposit(d);
+    }
+    if (!listed || !deposits_anything(d.footprint)) {
+#else
     if (!ray_deposit(gl_VertexIndex, pc.read_layer, pc.depth, d)) {
+#endif
         gl_Position = vec4(-4.0, -4.0, 0.0, 1.0);   // nothing to deposit: clipped
         return;
     }

@@ -208,6 +208,20 @@ impl PlanePipelines {
                         },
                         "light splat groups",
                     )?,
+                    // The boxes' rays of groups too wide for one sprite: three varyings
+                    // instead of the group sprite's twelve (the cells keep the group
+                    // shaders, which read the deposits in the fragments).
+                    splat_group_rays: if cells {
+                        None
+                    } else {
+                        Some(sprites(
+                            [
+                                shaders::LIGHT_SPLAT_GROUP_RAYS_VERT,
+                                shaders::LIGHT_SPLAT_BOXES_FRAG,
+                            ],
+                            "light splat groups' rays",
+                        )?)
+                    },
                 })
             } else {
                 None
@@ -339,6 +353,9 @@ pub(crate) struct ForwardPlanes {
     /// (glsl/light_splat_groups.comp), then the grouped sprites (light_splat_groups.*).
     pub(crate) group_deposits: ComputePipeline,
     pub(crate) splat_groups: GraphicsPipeline,
+    /// The boxes deposit's rays of the groups too wide for one sprite (None: the group
+    /// shaders draw them, `pad` 1).
+    pub(crate) splat_group_rays: Option<GraphicsPipeline>,
 }
 
 /// The forward transport's pipelines that do not depend on the features, on the plane

@@ -522,8 +522,11 @@ impl SweepPass {
                                         pad: 1,
                                         ..splat_push
                                     };
+                                    let leftover =
+                                        fp.splat_group_rays.as_ref().unwrap_or(&fp.splat_groups);
+                                    rec.bind_pipeline(leftover);
                                     rec.draw_indirect(
-                                        &fp.splat_groups,
+                                        leftover,
                                         bytemuck::bytes_of(&leftover_push),
                                         &self.sprite_draws,
                                         first_wg..end_wg,
