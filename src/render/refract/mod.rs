@@ -26,7 +26,7 @@
 
 use anyhow::{bail, ensure, Result};
 use bytemuck::{Pod, Zeroable};
-use glam::{Mat4, Vec3};
+use glam::Vec3;
 
 use super::model::{FrameReadback, Inputs, ModelPass, OpticalModel, Recorded};
 use super::LightSupport;

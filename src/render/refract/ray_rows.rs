@@ -188,7 +188,7 @@ pub(crate) fn light_ray_rows(
 mod tests {
     use super::*;
     use crate::render::refract::params::light_grid;
-    use crate::render::refract::region::plane_regions;
+    use crate::render::refract::region::{plane_regions, view_matrices};
     use crate::render::Camera;
 
     /// Every ray that a straight path puts inside the box at a plane's depth, or into the
@@ -214,16 +214,7 @@ mod tests {
                 ..Default::default()
             };
             let planes = Planes::for_box(&camera, half, 0.03).unwrap();
-            let (eye, forward, right, up) = camera.frame();
-            let view_to_world = Mat4::from_cols(
-                right.extend(0.0),
-                up.extend(0.0),
-                forward.extend(0.0),
-                eye.extend(1.0),
-            );
-            let view_to_tex = Mat4::from_translation(Vec3::splat(0.5))
-                * Mat4::from_scale(0.5 / half)
-                * view_to_world;
+            let (_, view_to_tex) = view_matrices(&camera, half);
             let tan_half = (camera.fov_y.to_radians() * 0.5).tan();
             let size = [side, side];
             let (regions, _) = plane_regions(view_to_tex, &planes, ref_step, tan_half, 1.0, size);

@@ -35,7 +35,7 @@ impl SweepPass {
             self.ensure_planes(ctx, features)?;
         }
         let volume_dims = info.dims;
-        let (eye, forward, right, up) = camera.frame();
+        let (_, forward, right, up) = camera.frame();
         let travel = opts.light().travel();
         let planes = check(info, camera, opts, sweep)?;
         let batch = match sweep.batch {
@@ -52,15 +52,7 @@ impl SweepPass {
             }
         };
         let (first_batch, last_batch) = (batch.start == 0, batch.end == planes.count);
-        let view_to_world = Mat4::from_cols(
-            right.extend(0.0),
-            up.extend(0.0),
-            forward.extend(0.0),
-            eye.extend(1.0),
-        );
-        let view_to_tex = Mat4::from_translation(Vec3::splat(0.5))
-            * Mat4::from_scale(0.5 / info.half_extent)
-            * view_to_world;
+        let (view_to_world, view_to_tex) = super::region::view_matrices(camera, info.half_extent);
         let light_view = Vec3::new(travel.dot(right), travel.dot(up), travel.dot(forward));
         let (clip_n, clip_o) = sweep
             .clip

@@ -118,6 +118,20 @@ pub(crate) fn plane_regions(
     (out, mean)
 }
 
+/// View space (the camera at the origin looking along +z) to world space, and to the box's
+/// texture coordinates [0, 1]³, for a box of half extents `half` centred on the origin.
+pub(crate) fn view_matrices(camera: &crate::render::Camera, half: Vec3) -> (Mat4, Mat4) {
+    let (eye, forward, right, up) = camera.frame();
+    let view_to_world = Mat4::from_cols(
+        right.extend(0.0),
+        up.extend(0.0),
+        forward.extend(0.0),
+        eye.extend(1.0),
+    );
+    let to_tex = Mat4::from_translation(Vec3::splat(0.5)) * Mat4::from_scale(0.5 / half);
+    (view_to_world, to_tex * view_to_world)
+}
+
 /// The volume box in view space: its corners and edges.
 pub(crate) struct BoxEdges {
     corners: [Vec3; 8],
@@ -172,15 +186,7 @@ mod tests {
 
     fn regions(camera: &Camera, half: Vec3, spacing: f32, side: u32) -> (Vec<Area>, Planes) {
         let planes = Planes::for_box(camera, half, spacing).unwrap();
-        let (eye, forward, right, up) = camera.frame();
-        let view_to_world = Mat4::from_cols(
-            right.extend(0.0),
-            up.extend(0.0),
-            forward.extend(0.0),
-            eye.extend(1.0),
-        );
-        let view_to_tex =
-            Mat4::from_translation(Vec3::splat(0.5)) * Mat4::from_scale(0.5 / half) * view_to_world;
+        let (_, view_to_tex) = view_matrices(camera, half);
         let tan_half = (camera.fov_y.to_radians() * 0.5).tan();
         let (r, _) = plane_regions(view_to_tex, &planes, 0.01, tan_half, 1.0, [side, side]);
         (r, planes)
