@@ -575,6 +575,7 @@ mod tests {
                 "arrays=off",
                 "specialize=off",
                 "clear=off",
+                "rays=all",
                 "splat=compute",
                 "sweep=fragment",
                 "sweep=compute",
