@@ -207,7 +207,9 @@ pub struct RenderArgs {
     /// medium, light-rays, light-ray-directions (refract). With the forward light transport
     /// light-colour is the plane's irradiance and light-direction its luminance-weighted
     /// direction sum (weight in alpha); light-rays / light-ray-directions are the rays
-    /// themselves. Files go to --dump-dir as BUFFER-PLANE.exr; each header (and the log)
+    /// themselves (with `--variant rays=needed`, the default on the fragment path, rows a
+    /// plane has not moved yet still hold their launch state, on the launch plane). Files
+    /// go to --dump-dir as BUFFER-PLANE.exr; each header (and the log)
     /// gives the plane's view depth and world-space plane n·p = d and the camera.
     #[arg(help_heading = "Diagnostics", long, value_name = "BUFFER@PLANE,...")]
     pub dump: Option<String>,

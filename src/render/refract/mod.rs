@@ -44,8 +44,9 @@ use crate::vk::{
 /// light as the viewing rays see it (the splatted irradiance, and the luminance-weighted
 /// sum of light directions with the weight in w), and `LightRays` / `LightRayDirections`
 /// the light rays themselves (flux rgb + view x on the plane; v = η dx/ds + view y; ray
-/// r of the grid in [`SweepStats::light_grid`] / [`SweepStats::light_rays`] at texel r).
-/// With the backward transport the latter two are the same images as the former.
+/// r of the grid in [`SweepStats::light_grid`] / [`SweepStats::light_rays`] at texel r;
+/// with `rays=needed` the rows a plane has not moved yet hold their launch state,
+/// ray_rows.rs). With the backward transport the latter two are the same images as the former.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum StateBuffer {
     LightColour,
