@@ -77,7 +77,8 @@ void main() {
                 rays += 1u;
             }
         }
-        uint workgroups = (uint(group_count()) + SPLAT_GROUP_WORKGROUP - 1u) / SPLAT_GROUP_WORKGROUP;
+        uint workgroups =
+            (uint(group_count()) + SPLAT_GROUP_WORKGROUP - 1u) / SPLAT_GROUP_WORKGROUP;
         sprite_draws[workgroup] = uvec4(4u * rays, 1u, 4u * (first + sprites), 0u);
         sprite_draws[workgroups + workgroup] = uvec4(sprites, 1u, first, 0u);
     }
