@@ -219,6 +219,7 @@ fn default_variants_are_the_reference_the_default_and_each_lever_off() {
             "arrays=off",
             "specialize=off",
             "clear=off",
+            "rays=all",
             "splat=compute",
             "sweep=fragment",
             "sweep=compute",
@@ -237,7 +238,7 @@ fn default_variants_are_the_reference_the_default_and_each_lever_off() {
     }
     let row = &r.rows[0];
     assert_eq!(row.dataset, "kiwi");
-    assert_eq!(row.variants.len(), 10);
+    assert_eq!(row.variants.len(), 11);
     assert!(row.variants.iter().all(|v| v.frames_ms.len() == 1));
     assert_eq!(row.variants[0].image.psnr_db, None);
 }
