@@ -85,7 +85,8 @@ fn needed_rays_deposit_the_light_of_every_ray() {
                 // lever's one sub-step, another rounding of the same rays, moves the same
                 // planes by up to 7.5e-4 of the power and 293 pixels (max 7.8e-2).
                 // Without the launch step (rays joining from where they were launched) the
-                // power is 6 % off; without the box in what is needed, 9e-4 and 169 pixels.
+                // power is 6 % off. (That a row joins before its rays meet the box is held
+                // by the unit test in render/refract/ray_rows.rs.)
                 assert!(
                     dp <= 4e-4 && far <= a.len() * 3 / 200 && max <= 1.5e-2,
                     "sd {sd}, softness {softness}, plane {p}: power {dp:.2e} off (bound 4e-4), \

@@ -1,11 +1,11 @@
 //! The light rays each plane moves and deposits (the forward transport on the fragment path
-//! with grouped sprites, under the `region` lever; docs/NOTES.md "Rays not yet needed").
+//! with grouped sprites, under the `rays` lever; docs/NOTES.md "Rays not yet needed").
 //!
 //! The light-ray grid covers every point any plane's view could need light from (traced
 //! back along the light: `params::light_grid`), so on each plane most of its rays lie
 //! outside the view, and many have not met the box yet: on the demo at 256², 12 % of the
 //! rays were on screen at plane 0 and 58 % at the last. A ray that has neither entered
-//! the box nor come where the viewing rays read the light has crossed empty space on a
+//! the box nor come onto the screen has crossed empty space on a
 //! straight line from its launch, carrying its launch flux: its state on any plane is
 //! known without moving it there. So plane k moves only the grid rows that have been
 //! needed by then, widened by a margin, and a row joins on the first plane it is needed,
@@ -15,8 +15,10 @@
 //! A row is needed at plane k when one of its rays, moved straight, lies
 //! - within the box (widened by [`REACH_STEPS`] reference steps: the step's probes read that
 //!   far ahead) anywhere along its step from plane k − 1 to plane k; or
-//! - within the pixels plane k + 1 shades (the region, which reads plane k's irradiance),
-//!   widened by the widest deposit a ray makes.
+//! - on the screen, widened by the widest deposit a ray makes: each plane's irradiance stays
+//!   whole on the screen (what the next plane's viewing rays read lies within it, and so
+//!   does what `--dump light-colour` shows; the region's rectangle alone left a dumped
+//!   plane's power 2.7 % short where the box is smaller than the view, tests/caustics.rs).
 //!
 //! Rows only join: once needed, a row is moved on every later plane, so nothing a ray did
 //! is ever forgotten. Rows are whole rows of the grid (all columns).
@@ -34,7 +36,6 @@ use glam::{Mat4, Vec2, Vec3};
 
 use super::region::{BoxEdges, REACH_STEPS};
 use super::Planes;
-use crate::vk::Area;
 
 /// Standard deviations of the softness' spread that the moved rows reach beyond the
 /// needed ones: a Gaussian's tail beyond 5 sigma holds 2.9e-7 of it.
@@ -84,8 +85,6 @@ pub(crate) struct View<'a> {
     pub(crate) ref_step: f32,
     pub(crate) tan_half: f32,
     pub(crate) size: [u32; 2],
-    /// The pixels each plane shades (region.rs).
-    pub(crate) regions: &'a [Area],
 }
 
 /// One plane's share of the light rays: the workgroups of `light_splat_groups.comp` that
@@ -147,12 +146,11 @@ pub(crate) fn light_ray_rows(
                 .hull(rows_at(z_prev, y0, y1))
                 .hull(rows_at(z, y0, y1));
         }
-        // The pixels that read this plane's irradiance (the next plane's region), widened
-        // by the widest deposit, in view units at this depth (pixel y runs down).
-        let area = view.regions[((k + 1) as usize).min(view.regions.len() - 1)];
+        // The screen, widened by the widest deposit, in view units at this depth (pixel y
+        // runs down).
         let to_y = |py: f32| -(py / h * 2.0 - 1.0) * z * view.tan_half;
-        let y_top = to_y(area.y as f32 - deposit_px);
-        let y_bottom = to_y((area.y + area.height) as f32 + deposit_px);
+        let y_top = to_y(-deposit_px);
+        let y_bottom = to_y(h + deposit_px);
         needed = needed.hull(rows_at(z, y_bottom, y_top));
         if needed.end <= needed.lo {
             out.push(PlaneRays {
@@ -188,11 +186,11 @@ pub(crate) fn light_ray_rows(
 mod tests {
     use super::*;
     use crate::render::refract::params::light_grid;
-    use crate::render::refract::region::{plane_regions, view_matrices};
+    use crate::render::refract::region::view_matrices;
     use crate::render::Camera;
 
-    /// Every ray that a straight path puts inside the box at a plane's depth, or into the
-    /// pixels the next plane shades, is in a moved row on that plane and every later one;
+    /// Every ray that a straight path puts inside the box at a plane's depth, or onto the
+    /// screen, is in a moved row on that plane and every later one;
     /// its group's workgroup deposits there; the moved rows hold the rows of every
     /// deposited group and a neighbour row either side. Checked ray by ray, independently
     /// of the slab construction, for oblique, grazing and overhead light and views.
@@ -217,7 +215,6 @@ mod tests {
             let (_, view_to_tex) = view_matrices(&camera, half);
             let tan_half = (camera.fov_y.to_radians() * 0.5).tan();
             let size = [side, side];
-            let (regions, _) = plane_regions(view_to_tex, &planes, ref_step, tan_half, 1.0, size);
             let light = light.normalize();
             let (grid, dims) = light_grid(&planes, light, tan_half, 1.0, size, 1.0, 4 * 48 * 48);
             let view = View {
@@ -226,7 +223,6 @@ mod tests {
                 ref_step,
                 tan_half,
                 size,
-                regions: &regions,
             };
             let rays = RayGrid { grid, dims, light };
             let wg = 8;
@@ -260,7 +256,6 @@ mod tests {
                     );
                 }
                 let z = planes.depth(k as u32);
-                let area = regions[(k + 1).min(regions.len() - 1)];
                 for j in 0..dims[1] {
                     for i in (0..dims[0]).step_by(3) {
                         let at = |z: f32| {
@@ -277,10 +272,8 @@ mod tests {
                         let p = at(z);
                         let px = (p.x / (z * tan_half) * 0.5 + 0.5) * side as f32;
                         let py = (-p.y / (z * tan_half) * 0.5 + 0.5) * side as f32;
-                        let in_view = px >= area.x as f32
-                            && px <= (area.x + area.width) as f32
-                            && py >= area.y as f32
-                            && py <= (area.y + area.height) as f32;
+                        let s = side as f32;
+                        let in_view = px >= 0.0 && px <= s && py >= 0.0 && py <= s;
                         if !(in_box || in_view) {
                             continue;
                         }

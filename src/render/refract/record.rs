@@ -276,7 +276,6 @@ impl SweepPass {
                         ref_step: info.ref_step,
                         tan_half,
                         size: [self.width, self.height],
-                        regions: &regions,
                     },
                     &super::ray_rows::RayGrid {
                         grid,
