@@ -62,6 +62,7 @@ layout(push_constant) uniform Push {
     uint read_layer;
     float depth;
     uint pad;   // 0: the indirect draws of a point per group; 1: of a point per ray
+    vec2 region[8];   // the viewing rays' polygon (sweep_region.vert), unused here
 } pc;
 
 void main() {
@@ -165,6 +166,7 @@ layout(push_constant) uniform Push {
     uint read_layer;   // the layer the rays were just written to
     float depth;       // this plane's depth
     uint pad;
+    vec2 region[8];    // the viewing rays' polygon (sweep_region.vert), unused here
 } pc;
 
 void main() {

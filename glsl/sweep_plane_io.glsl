@@ -37,6 +37,7 @@ layout(push_constant) uniform Push {
     uint read_layer;
     float depth;   // depth of this plane
     uint pad;
+    vec2 region[8];   // the polygon the plane's draw covers (sweep_region.vert)
 } pc;
 #define FRAG_XY gl_FragCoord.xy
 // The render pass loads the write layer: a discarded pixel keeps what it holds.

@@ -215,6 +215,7 @@ fn default_variants_are_the_reference_the_default_and_each_lever_off() {
             "reference",
             "default",
             "region=full",
+            "region=rect",
             "field=on",
             "arrays=off",
             "specialize=off",
@@ -238,7 +239,7 @@ fn default_variants_are_the_reference_the_default_and_each_lever_off() {
     }
     let row = &r.rows[0];
     assert_eq!(row.dataset, "kiwi");
-    assert_eq!(row.variants.len(), 11);
+    assert_eq!(row.variants.len(), 12);
     assert!(row.variants.iter().all(|v| v.frames_ms.len() == 1));
     assert_eq!(row.variants[0].image.psnr_db, None);
 }
@@ -308,7 +309,7 @@ fn bad_variants_fail_at_once_with_one_line_naming_the_problem() {
         ),
         (
             vec!["render", "--variant", "region=polygon"],
-            "full or rect",
+            "full, rect or octagon",
         ),
         (
             vec![
@@ -317,7 +318,7 @@ fn bad_variants_fail_at_once_with_one_line_naming_the_problem() {
                 "--variant",
                 "default",
                 "--variant",
-                "region=rect",
+                "region=octagon",
             ],
             "same levers",
         ),

@@ -421,6 +421,53 @@ fn bad_sweep_options_are_clear_errors() {
     );
 }
 
+/// A storage buffer binding may not exceed the device's maxStorageBufferRange (128 MiB on
+/// lavapipe): light deposits that would need more are refused with the reason, before the
+/// frame's large images are made, not bound past the limit (which the validation layer
+/// reports and a driver may not honour).
+#[test]
+fn light_deposits_beyond_the_storage_range_are_clear_errors() {
+    let info = refrakt(&["info"]);
+    if !String::from_utf8_lossy(&info.stdout).contains("llvmpipe") {
+        eprintln!("skipped: the sizes below are lavapipe's limit");
+        return;
+    }
+    // 700² × 2 rays × 160 bytes = 157 MB of cells; their boxes (48 bytes) fit.
+    assert_clean_failure(
+        &[
+            "render",
+            "--width",
+            "700",
+            "--height",
+            "700",
+            "--volume-size",
+            "16",
+            "--variant",
+            "deposit=cells",
+            "-o",
+            "x.png",
+        ],
+        "deposit=cells needs 160 bytes of light deposits per light ray",
+    );
+    // 1200² × 8 rays × 48 bytes = 553 MB even as boxes.
+    assert_clean_failure(
+        &[
+            "render",
+            "--width",
+            "1200",
+            "--height",
+            "1200",
+            "--light-rays",
+            "8",
+            "--volume-size",
+            "16",
+            "-o",
+            "x.png",
+        ],
+        "(maxStorageBufferRange): use fewer light rays per pixel",
+    );
+}
+
 #[test]
 fn bad_environment_maps_are_clear_errors() {
     let dir = tempfile::tempdir().unwrap();

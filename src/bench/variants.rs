@@ -515,7 +515,7 @@ mod tests {
 
     #[test]
     fn names_read_back_to_their_levers() {
-        for region in [Region::Full, Region::Rect] {
+        for region in [Region::Full, Region::Rect, Region::Octagon] {
             for bits in 0..32u32 {
                 let l = Levers {
                     region,
@@ -571,6 +571,7 @@ mod tests {
                 "reference",
                 "default",
                 "region=full",
+                "region=rect",
                 "field=on",
                 "arrays=off",
                 "specialize=off",

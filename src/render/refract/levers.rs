@@ -19,6 +19,12 @@ pub enum Region {
     /// outside it has never seen the volume, so its state is still the setup's (a
     /// straight camera ray, the unattenuated light).
     Rect,
+    /// The rectangle cut by the diagonals of the same box points' projection (x + y and
+    /// x − y bounds, region.rs `RegionPolygon`): the fragment path draws that octagon, the
+    /// compute path dispatches over the rectangle (the same pixels as `Rect` there). The
+    /// same argument makes it exact: the octagons only grow, and a pixel outside has
+    /// never seen the box.
+    Octagon,
 }
 
 /// How the forward transport's light rays deposit their flux on a plane (both give the same
@@ -220,7 +226,7 @@ fn on() -> bool {
 impl Default for Levers {
     fn default() -> Self {
         Self {
-            region: Region::Rect,
+            region: Region::Octagon,
             field: false,
             arrays: true,
             specialize: true,
@@ -251,7 +257,7 @@ impl Levers {
 
     /// The keys of [`Levers::parse`], with their values, for help texts.
     pub const SYNTAX: &'static str =
-        "region=full|rect, field=off|on, arrays=off|on, specialize=off|on, splat=raster|groups|compute, \
+        "region=full|rect|octagon, field=off|on, arrays=off|on, specialize=off|on, splat=raster|groups|compute, \
          sweep=auto|fragment|compute, clear=off|on, deposit=cells|boxes, gather=pairs|pixels, \
          rays=all|needed";
 
@@ -296,7 +302,8 @@ impl Levers {
                     levers.region = match value {
                         "full" => Region::Full,
                         "rect" => Region::Rect,
-                        _ => bail!("region={value}: expected full or rect"),
+                        "octagon" => Region::Octagon,
+                        _ => bail!("region={value}: expected full, rect or octagon"),
                     }
                 }
                 "field" => levers.field = on(value)?,
@@ -355,10 +362,15 @@ impl Levers {
         let mut out = Vec::new();
         let mut v = self;
         v.region = match self.region {
-            Region::Full => Region::Rect,
-            Region::Rect => Region::Full,
+            Region::Full => Region::Octagon,
+            Region::Rect | Region::Octagon => Region::Full,
         };
         out.push(v);
+        // The octagon is the rectangle cut: time it against the rectangle too.
+        if self.region == Region::Octagon {
+            v.region = Region::Rect;
+            out.push(v);
+        }
         for flip in [
             |l: &mut Levers| l.field = !l.field,
             |l: &mut Levers| l.arrays = !l.arrays,
@@ -400,6 +412,7 @@ impl fmt::Display for Levers {
             match self.region {
                 Region::Full => "full",
                 Region::Rect => "rect",
+                Region::Octagon => "octagon",
             },
             on(self.field),
             on(self.arrays),
@@ -424,7 +437,7 @@ mod tests {
 
     #[test]
     fn parse_round_trips_and_applies_to_the_default() {
-        let all = [Region::Full, Region::Rect];
+        let all = [Region::Full, Region::Rect, Region::Octagon];
         for region in all {
             for bits in 0..96u32 {
                 let l = Levers {
@@ -480,7 +493,7 @@ mod tests {
     fn bad_variants_say_what_is_wrong() {
         for (spec, needle) in [
             ("", "empty"),
-            ("region=polygon", "full or rect"),
+            ("region=polygon", "full, rect or octagon"),
             ("splat=gather", "raster, groups or compute"),
             ("sweep=vertex", "auto, fragment or compute"),
             ("deposit=points", "cells or boxes"),
@@ -500,8 +513,9 @@ mod tests {
     fn each_flipped_differs_in_exactly_one_lever() {
         let base = Levers::default();
         let flipped = base.each_flipped();
-        // Six on/off levers and the region, and from `auto` both explicit paths.
-        assert_eq!(flipped.len(), 9);
+        // Six on/off levers, the region (full, and the octagon's rectangle), and from
+        // `auto` both explicit paths.
+        assert_eq!(flipped.len(), 10);
         for v in flipped {
             let diffs = [
                 v.region != base.region,

@@ -43,6 +43,9 @@ pub(crate) struct PlanePush {
     pub(crate) read_layer: u32,
     pub(crate) depth: f32,
     pub(crate) pad: u32,
+    /// The polygon the plane's draw covers, in normalised device coordinates
+    /// (glsl/sweep_region.vert; region.rs `RegionPolygon`); the other draws ignore it.
+    pub(crate) region: [[f32; 2]; 8],
 }
 
 /// Push constants of every pipeline of the compute sweep (glsl/sweep_plane_io.glsl): one
@@ -180,13 +183,15 @@ mod tests {
             plane,
             read_layer,
             depth,
-            pad
+            pad,
+            region
         });
         let size = std::mem::size_of::<PlanePush>();
         for spirv in [
             shaders::SWEEP_FRAG,
             shaders::SWEEP_LIGHT_FORWARD_FRAG,
             shaders::SWEEP_VIEW_FORWARD_FRAG,
+            shaders::SWEEP_REGION_VERT,
             shaders::LIGHT_SPLAT_VERT,
             shaders::LIGHT_SPLAT_BOXES_VERT,
             shaders::LIGHT_SPLAT_GROUPS_VERT,

@@ -92,6 +92,9 @@ pub(crate) struct SweepPass {
     /// The compute splat's buffers (glsl/light_gather.glsl): each light ray's deposit (ten
     /// vec4); the tile bins' counts, list offsets and fill cursors; the bins' lists.
     pub(crate) deposits: Buffer,
+    /// Whether the deposits buffer holds every ray's deposit as cells (`deposit=cells`);
+    /// it always holds them as boxes.
+    pub(crate) cells_fit: bool,
     pub(crate) bins: Buffer,
     pub(crate) bin_list: Buffer,
     /// The grouped sprites' buffers (glsl/light_splat_groups.glsl, bindings 23-25).
@@ -127,6 +130,26 @@ impl SweepPass {
             height as u64 * rays_per_pixel as u64,
             ctx.info().name
         );
+        // A deposit takes 3 vec4s as boxes, 10 as cells (light_gather.glsl DEPOSIT_VEC4S).
+        // The buffer is bound whole, and a binding may not exceed the device's
+        // maxStorageBufferRange (128 MiB on lavapipe: the cells of 2 rays per pixel reach
+        // it at 648²): the boxes must fit, the cells may be refused per frame.
+        let capacity = width as u64 * height as u64 * rays_per_pixel as u64;
+        let range = ctx.info().limits.max_storage_buffer_range as u64;
+        let [boxes_bytes, cells_bytes] = [capacity * 48, capacity * 160];
+        // The compute splat's bin lists (below) are bound whole too.
+        let boxes_bytes = boxes_bytes.max(capacity * gather_entries_per_ray() * 4);
+        ensure!(
+            boxes_bytes <= range,
+            "{rays_per_pixel} light rays per pixel at {width}x{height} need {} MiB of light \
+             deposits; device '{}' binds at most {} MiB as one storage buffer \
+             (maxStorageBufferRange): use fewer light rays per pixel (--light-rays) or a \
+             smaller image",
+            boxes_bytes.div_ceil(1 << 20),
+            ctx.info().name,
+            range >> 20
+        );
+        let cells_fit = cells_bytes <= range;
         let max_attachments = ctx.info().limits.max_color_attachments;
         if max_attachments < 6 {
             bail!(
@@ -281,10 +304,9 @@ impl SweepPass {
         // sized for the ray images' capacity C: C deposits; a ray is listed in at most four
         // bins, so 4 C list entries; the bins' words (gather_words).
         use crate::render::limits::SPLAT_GROUP_WORKGROUP;
-        let capacity = ray_size[0] as u64 * ray_size[1] as u64;
         let deposits = Buffer::new(
             ctx,
-            capacity * 160,
+            cells_bytes.min(range),
             vk::usage::STORAGE_BUFFER,
             vk::Memory::Gpu,
             "light deposits",
@@ -443,6 +465,7 @@ impl SweepPass {
             compute_set,
             compute_planes: HashMap::new(),
             deposits,
+            cells_fit,
             bins,
             bin_list,
             sprite_groups,

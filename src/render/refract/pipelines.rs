@@ -113,11 +113,14 @@ impl PlanePipelines {
         cells: bool,
         forward: bool,
     ) -> Result<Self> {
-        let plane = |fragment, pass, name: &str| {
+        let [sweep_pass, light_pass, view_pass, splat_pass] = passes;
+        // The planes over the screen draw their polygon (the `region` lever,
+        // glsl/sweep_region.vert); the light rays' pass covers its ray images.
+        let drawn = |vertex, fragment, pass, name: &str| {
             let desc = GraphicsDesc {
                 constants: &constants,
                 ..GraphicsDesc::fullscreen(
-                    shaders::FULLSCREEN_VERT,
+                    vertex,
                     fragment,
                     pass,
                     set,
@@ -126,7 +129,8 @@ impl PlanePipelines {
             };
             GraphicsPipeline::new(ctx, &desc, name)
         };
-        let [sweep_pass, light_pass, view_pass, splat_pass] = passes;
+        let plane =
+            |fragment, pass, name: &str| drawn(shaders::SWEEP_REGION_VERT, fragment, pass, name);
         // The splat's point sprites (vertex and fragment shader) and its compute passes
         // over the rays, on the plane set with the plane's push constants.
         let sprites = |[vertex, fragment]: [&[u8]; 2], name: &str| {
@@ -163,12 +167,14 @@ impl PlanePipelines {
             )?,
             forward: if forward {
                 Some(ForwardPlanes {
-                    light: plane(
+                    light: drawn(
+                        shaders::FULLSCREEN_VERT,
                         shaders::SWEEP_LIGHT_FORWARD_FRAG,
                         light_pass,
                         "sweep light rays",
                     )?,
-                    light_soft: plane(
+                    light_soft: drawn(
+                        shaders::FULLSCREEN_VERT,
                         shaders::SWEEP_LIGHT_FORWARD_SOFT_FRAG,
                         light_pass,
                         "sweep light rays (soft)",

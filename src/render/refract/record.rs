@@ -6,9 +6,14 @@
 //! the ping-pong images between sampled, attachment and storage use plane by plane inside
 //! one pass (and `drop_barrier_before_plane` must be able to leave one out).
 
+use super::region::RegionPolygon;
 use super::*;
 use crate::render::limits::SPLAT_GROUP_WORKGROUP;
 use crate::vk::{Area, BufferUse, Use};
+
+/// The vertices of a plane's draw over its region: a fan of six triangles over the
+/// polygon's eight vertices (glsl/sweep_region.vert).
+const REGION_VERTICES: u32 = 18;
 
 impl SweepPass {
     /// Record one frame into `rec`: setup, every plane, and the composite into
@@ -23,6 +28,17 @@ impl SweepPass {
         let (ctx, info, env, sweep) = (inputs.ctx, inputs.info, &inputs.env, &opts.sweep);
         // The plane pipelines with what this frame does not use compiled out.
         let features = Features::of(opts, self.have_field, inputs.eta_films);
+        if features.cells && !self.cells_fit {
+            bail!(
+                "deposit=cells needs 160 bytes of light deposits per light ray, more at \
+                 {}x{} with this ray budget than device '{}' binds as one storage buffer \
+                 (maxStorageBufferRange); use deposit=boxes, fewer light rays per pixel \
+                 (--light-rays) or a smaller image",
+                self.width,
+                self.height,
+                ctx.info().name
+            );
+        }
         // Draws or dispatches per plane (issue 31): `auto` is what measured fastest on
         // this class of device.
         let compute = sweep.levers.sweep.for_device(
@@ -250,19 +266,32 @@ impl SweepPass {
         }
 
         // The pixels each plane shades (the `region` lever; region.rs).
-        let (regions, shaded_fraction) = match sweep.levers.region {
-            Region::Full => (
-                vec![Area::full(self.width, self.height); planes.count as usize],
-                1.0,
-            ),
-            Region::Rect => super::region::plane_regions(
-                view_to_tex,
-                &planes,
-                info.ref_step,
-                tan_half,
-                aspect,
-                [self.width, self.height],
-            ),
+        // The rectangles are the render areas and the compute dispatches; the fragment
+        // path draws the polygons inside them (`region=octagon` cuts the rectangles'
+        // empty corners, the others draw the rectangles).
+        let size = [self.width, self.height];
+        let (regions, polygons, shaded_fraction) = match sweep.levers.region {
+            Region::Full => {
+                let full = Area::full(self.width, self.height);
+                let n = planes.count as usize;
+                (vec![full; n], vec![RegionPolygon::new(full, None); n], 1.0)
+            }
+            region => {
+                let r = super::region::plane_regions(
+                    view_to_tex,
+                    &planes,
+                    info.ref_step,
+                    tan_half,
+                    aspect,
+                    size,
+                );
+                if region == Region::Octagon && !compute {
+                    (r.rects, r.polygons, r.polygon_fraction)
+                } else {
+                    let polygons = r.rects.iter().map(|&a| RegionPolygon::new(a, None));
+                    (r.rects.clone(), polygons.collect(), r.rect_fraction)
+                }
+            }
         };
 
         // The light rays each plane moves and deposits (ray_rows.rs, the `rays` lever): on
@@ -333,6 +362,7 @@ impl SweepPass {
                     read_layer: read,
                     depth: planes.depth(i),
                     pad: 0,
+                    region: polygons[i as usize].ndc(size),
                 };
                 // The layer the previous plane wrote becomes sampled (one batched barrier
                 // over the six images); begin_render_pass then makes the layer the previous
@@ -369,7 +399,7 @@ impl SweepPass {
                             area,
                         )?;
                         rec.set_scissor(area);
-                        rec.draw_fullscreen(plane_pipeline, bytemuck::bytes_of(&push))?;
+                        rec.draw(plane_pipeline, bytemuck::bytes_of(&push), REGION_VERTICES)?;
                         rec.end_render_pass();
                     }
                     Some(f) => {
@@ -536,7 +566,13 @@ impl SweepPass {
                                 // The previous plane's resolve zeroed the sums.
                                 rec.compute_storage_barrier(&self.splat_sums);
                                 let rays = grid_dims[0] * grid_dims[1];
-                                let splat_push = [i, write, push.depth.to_bits(), unit.to_bits()];
+                                // glsl/light_splat.comp reads the fourth word as the
+                                // sums' unit; the layout's push range is PlanePush's.
+                                let splat_push = PlanePush {
+                                    read_layer: write,
+                                    pad: unit.to_bits(),
+                                    ..push
+                                };
                                 rec.dispatch_explicit(
                                     &fp.splat_compute,
                                     &self.sweep_set,
@@ -584,7 +620,7 @@ impl SweepPass {
                             .expect("made with the forward transport")
                             .view;
                         rec.bind_pipeline(view);
-                        rec.draw_fullscreen(view, bytemuck::bytes_of(&push))?;
+                        rec.draw(view, bytemuck::bytes_of(&push), REGION_VERTICES)?;
                         rec.end_render_pass();
                         if timed {
                             rec.end_scope();

@@ -50,7 +50,7 @@ pub(crate) fn plane_regions(
     tan_half: f32,
     aspect: f32,
     size: [u32; 2],
-) -> (Vec<Area>, f64) {
+) -> PlaneRegions {
     let box_edges = BoxEdges::new(view_to_tex);
     let [w, h] = [size[0] as f32, size[1] as f32];
     let to_pixel = |p: Vec3| {
@@ -66,8 +66,12 @@ pub(crate) fn plane_regions(
     let margin = MARGIN_PX + reach * h / (2.0 * z_lo.max(1e-6) * tan_half);
     let full = Area::full(size[0], size[1]);
     let mut grown: Option<(f32, f32, f32, f32)> = None;
+    // The bounds of x + y and of x − y over the same points: the octagon's diagonals.
+    let mut diagonals: Option<[f32; 4]> = None;
     let mut out = Vec::with_capacity(planes.count as usize);
+    let mut polygons = Vec::with_capacity(planes.count as usize);
     let mut covered = 0.0f64;
+    let mut covered_polygons = 0.0f64;
     for i in 0..planes.count {
         // Widened by a little so a face of the box lying on a plane (a face-on view: the
         // first plane is the box's nearest depth) counts, whatever the rounding.
@@ -82,6 +86,11 @@ pub(crate) fn plane_regions(
             grown = Some(match grown {
                 None => (x, y, x, y),
                 Some((x0, y0, x1, y1)) => (x0.min(x), y0.min(y), x1.max(x), y1.max(y)),
+            });
+            let (s, d) = (x + y, x - y);
+            diagonals = Some(match diagonals {
+                None => [s, s, d, d],
+                Some([s0, s1, d0, d1]) => [s0.min(s), s1.max(s), d0.min(d), d1.max(d)],
             });
         }
         let area = match grown {
@@ -107,15 +116,141 @@ pub(crate) fn plane_regions(
             }
         };
         debug_assert!(area.x + area.width <= full.width && area.y + area.height <= full.height);
+        // The diagonals widened as the rectangle is, by the margin and the pixel a
+        // rounding outward adds (a point within that distance of the box's projection in
+        // any direction is inside: √2 × it along a diagonal's normal (1, ±1)).
+        let polygon = RegionPolygon::new(
+            area,
+            diagonals.map(|[s0, s1, d0, d1]| {
+                let m = (margin + 1.0) * std::f32::consts::SQRT_2;
+                [s0 - m, s1 + m, d0 - m, d1 + m]
+            }),
+        );
         covered += area.width as f64 * area.height as f64 / (w as f64 * h as f64);
+        covered_polygons += polygon.area() / (w as f64 * h as f64);
         out.push(area);
+        polygons.push(polygon);
     }
-    let mean = if out.is_empty() {
-        1.0
-    } else {
-        covered / out.len() as f64
+    let mean = |sum: f64| {
+        if out.is_empty() {
+            1.0
+        } else {
+            sum / out.len() as f64
+        }
     };
-    (out, mean)
+    PlaneRegions {
+        rect_fraction: mean(covered),
+        polygon_fraction: mean(covered_polygons),
+        rects: out,
+        polygons,
+    }
+}
+
+/// Each plane's rectangle and polygon ([`plane_regions`]), and the mean fraction of the
+/// viewport each covers.
+pub(crate) struct PlaneRegions {
+    pub(crate) rects: Vec<Area>,
+    pub(crate) polygons: Vec<RegionPolygon>,
+    pub(crate) rect_fraction: f64,
+    pub(crate) polygon_fraction: f64,
+}
+
+/// The pixels a plane's draw covers on the fragment path (the `region=octagon` lever):
+/// its rectangle cut by the bounds of x + y and of x − y (pixel coordinates) of the same
+/// box points, widened alike — an octagon at most. The box's part up to a plane projects
+/// to a convex polygon of up to ten vertices; seen obliquely, its bounding rectangle's
+/// corners are empty and the diagonals cut most of them off. Like the rectangles, these
+/// only grow from plane to plane (every bound is over a growing set of points, and the
+/// polygon is exactly the rectangle ∩ four half-planes), so a pixel outside one has never
+/// been shaded and holds the setup's state. glsl/sweep_region.vert draws it as a fan of
+/// six triangles from its vertices (push constants).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct RegionPolygon {
+    /// In order around the polygon, the last repeated up to eight (the fan's extra
+    /// triangles have no area).
+    pub(crate) vertices: [[f32; 2]; 8],
+    /// The bounds that made it: the rectangle x0, y0, x1, y1 and the diagonals' min and
+    /// max of x + y, min and max of x − y.
+    rect: [f32; 4],
+    diagonals: [f32; 4],
+}
+
+impl RegionPolygon {
+    /// The rectangle `area` cut by `diagonals` (none: the rectangle itself).
+    pub(crate) fn new(area: Area, diagonals: Option<[f32; 4]>) -> Self {
+        let [x0, y0] = [area.x as f32, area.y as f32];
+        let [x1, y1] = [x0 + area.width as f32, y0 + area.height as f32];
+        let mut poly = vec![[x0, y0], [x1, y0], [x1, y1], [x0, y1]];
+        let diagonals = diagonals.unwrap_or([f32::MIN, f32::MAX, f32::MIN, f32::MAX]);
+        let [s0, s1, d0, d1] = diagonals;
+        // Sutherland–Hodgman: keep the side where a·(x, y) ≥ c, for each half-plane. The
+        // rectangle's four sides and four cuts: at most eight vertices.
+        for (a, c) in [
+            ([1.0, 1.0], s0),
+            ([-1.0, -1.0], -s1),
+            ([1.0, -1.0], d0),
+            ([-1.0, 1.0], -d1),
+        ] {
+            let side = |p: [f32; 2]| a[0] * p[0] + a[1] * p[1] - c;
+            let mut next = Vec::with_capacity(poly.len() + 1);
+            for k in 0..poly.len() {
+                let (p, q) = (poly[k], poly[(k + 1) % poly.len()]);
+                let (sp, sq) = (side(p), side(q));
+                if sp >= 0.0 {
+                    next.push(p);
+                }
+                if (sp >= 0.0) != (sq >= 0.0) {
+                    let t = sp / (sp - sq);
+                    next.push([p[0] + (q[0] - p[0]) * t, p[1] + (q[1] - p[1]) * t]);
+                }
+            }
+            poly = next;
+        }
+        // Empty where the box's projection is off the screen (the rectangle is clamped to
+        // it, and kept a pixel wide for the render pass; its pixels cannot see the box):
+        // then the fan has no area and the plane draws nothing, which is exact.
+        debug_assert!(poly.len() <= 8, "{poly:?}");
+        let last = poly.last().copied().unwrap_or([x0, y0]);
+        let vertices = std::array::from_fn(|k| poly.get(k).copied().unwrap_or(last));
+        RegionPolygon {
+            vertices,
+            rect: [x0, y0, x1, y1],
+            diagonals,
+        }
+    }
+
+    /// The vertices in normalised device coordinates of a viewport of `size` pixels (what
+    /// glsl/sweep_region.vert takes).
+    pub(crate) fn ndc(&self, size: [u32; 2]) -> [[f32; 2]; 8] {
+        self.vertices.map(|[x, y]| {
+            [
+                x / size[0] as f32 * 2.0 - 1.0,
+                y / size[1] as f32 * 2.0 - 1.0,
+            ]
+        })
+    }
+
+    /// Whether a point lies inside (or on the edge, within `eps` for the rounding of
+    /// the cut's vertices).
+    #[cfg(test)]
+    pub(crate) fn contains(&self, x: f32, y: f32, eps: f32) -> bool {
+        let [x0, y0, x1, y1] = self.rect;
+        let [s0, s1, d0, d1] = self.diagonals;
+        let within = |v: f32, lo: f32, hi: f32| v >= lo - eps && v <= hi + eps;
+        within(x, x0, x1) && within(y, y0, y1) && within(x + y, s0, s1) && within(x - y, d0, d1)
+    }
+
+    /// Its area in square pixels (the shoelace formula).
+    pub(crate) fn area(&self) -> f64 {
+        let v = self.vertices;
+        let twice: f64 = (0..8)
+            .map(|k| {
+                let [a, b] = [v[k], v[(k + 1) % 8]];
+                a[0] as f64 * b[1] as f64 - b[0] as f64 * a[1] as f64
+            })
+            .sum();
+        twice.abs() * 0.5
+    }
 }
 
 /// View space (the camera at the origin looking along +z) to world space, and to the box's
@@ -184,17 +319,18 @@ mod tests {
     use super::*;
     use crate::render::Camera;
 
-    fn regions(camera: &Camera, half: Vec3, spacing: f32, side: u32) -> (Vec<Area>, Planes) {
+    fn regions(camera: &Camera, half: Vec3, spacing: f32, side: u32) -> (PlaneRegions, Planes) {
         let planes = Planes::for_box(camera, half, spacing).unwrap();
         let (_, view_to_tex) = view_matrices(camera, half);
         let tan_half = (camera.fov_y.to_radians() * 0.5).tan();
-        let (r, _) = plane_regions(view_to_tex, &planes, 0.01, tan_half, 1.0, [side, side]);
+        let r = plane_regions(view_to_tex, &planes, 0.01, tan_half, 1.0, [side, side]);
         (r, planes)
     }
 
     /// Every point of the box at or before plane i's depth projects inside plane i's
-    /// rectangle (sampled densely, independently of the vertex construction), and the
-    /// rectangles only grow.
+    /// rectangle and its polygon (sampled densely, independently of the vertex
+    /// construction), both only grow, and the polygons cut the rectangles' corners
+    /// where the box is seen obliquely.
     #[test]
     fn rectangles_bound_the_box_up_to_each_plane_and_grow() {
         for (az, el) in [(0.0, 0.0), (35.0, 40.0), (-60.0, 4.0), (120.0, -30.0)] {
@@ -206,7 +342,9 @@ mod tests {
             };
             let half = Vec3::new(0.5, 0.3, 0.4);
             let side = 64;
-            let (areas, planes) = regions(&camera, half, 0.05, side);
+            let (r, planes) = regions(&camera, half, 0.05, side);
+            let areas = &r.rects;
+            let polygons = &r.polygons;
             let (eye, forward, right, up) = camera.frame();
             let tan_half = (camera.fov_y.to_radians() * 0.5).tan();
             let n = 24;
@@ -216,6 +354,21 @@ mod tests {
                     let b = areas[i - 1];
                     assert!(a.x <= b.x && a.y <= b.y, "plane {i} shrank");
                     assert!(a.x + a.width >= b.x + b.width && a.y + a.height >= b.y + b.height);
+                    // Convex polygons: the smaller inside the larger iff its vertices are.
+                    for [x, y] in polygons[i - 1].vertices {
+                        assert!(
+                            polygons[i].contains(x, y, 1e-3),
+                            "plane {i}'s polygon shrank: ({x}, {y}) not in {:?} (before {:?})",
+                            polygons[i],
+                            polygons[i - 1]
+                        );
+                    }
+                }
+                for [x, y] in polygons[i].vertices {
+                    let inside = |v: f32, lo: u32, len: u32| {
+                        v >= lo as f32 - 1e-3 && v <= (lo + len) as f32 + 1e-3
+                    };
+                    assert!(inside(x, a.x, a.width) && inside(y, a.y, a.height), "{a:?}");
                 }
                 for k in 0..n * n * n {
                     let f = Vec3::new(
@@ -241,12 +394,60 @@ mod tests {
                         y >= a.y as f32 && y <= (a.y + a.height) as f32,
                         "az {az} el {el} plane {i}: y {y} outside {a:?}"
                     );
+                    // The polygon, by at least the margin in every direction (a pixel
+                    // whose centre is within MARGIN_PX of the box's projection is drawn).
+                    for (dx, dy) in [(1.0, 0.0), (0.0, 1.0), (0.7071, 0.7071), (0.7071, -0.7071)] {
+                        for sign in [-1.0, 1.0] {
+                            let (px, py) = (x + sign * dx * MARGIN_PX, y + sign * dy * MARGIN_PX);
+                            let on_screen = (0.0..=s).contains(&px) && (0.0..=s).contains(&py);
+                            assert!(
+                                !on_screen || polygons[i].contains(px, py, 0.0),
+                                "az {az} el {el} plane {i}: ({px}, {py}) outside the polygon"
+                            );
+                        }
+                    }
                 }
             }
             // The last plane's rectangle is the whole box's, which a box seen from 4
             // away does not fill the screen with.
             let last = areas.last().unwrap();
             assert!((last.width * last.height) < side * side, "{last:?}");
+            assert!(r.polygon_fraction <= r.rect_fraction + 1e-9);
+            if (az, el) == (35.0, 40.0) {
+                // A box seen from above a corner: its outline is a hexagon whose
+                // bounding rectangle's corners the diagonals cut.
+                assert!(
+                    r.polygon_fraction < 0.95 * r.rect_fraction,
+                    "{} against {}",
+                    r.polygon_fraction,
+                    r.rect_fraction
+                );
+            }
         }
+    }
+
+    /// A polygon's shape and area, worked by hand: the square 0..10 cut at x + y ≥ 4
+    /// (a corner triangle of area 8) and x − y ≤ 20 (nothing: beyond the corner).
+    #[test]
+    fn a_cut_square_has_the_area_and_vertices_of_geometry() {
+        let area = Area {
+            x: 0,
+            y: 0,
+            width: 10,
+            height: 10,
+        };
+        let p = RegionPolygon::new(area, Some([4.0, 100.0, -100.0, 20.0]));
+        assert!((p.area() - 92.0).abs() < 1e-9, "{}", p.area());
+        assert!(p.contains(2.0, 2.0, 0.0) && !p.contains(1.0, 1.0, 0.0));
+        assert!(p.vertices.contains(&[4.0, 0.0]) && p.vertices.contains(&[0.0, 4.0]));
+        // A cut beyond the far corner (a box projected off the screen) leaves nothing.
+        assert_eq!(
+            RegionPolygon::new(area, Some([30.0, 40.0, -100.0, 100.0])).area(),
+            0.0
+        );
+        let whole = RegionPolygon::new(area, None);
+        assert_eq!(whole.area(), 100.0);
+        // Pixel (0, 0)'s centre maps to the NDC of a 10-pixel viewport's first pixel.
+        assert_eq!(whole.ndc([10, 10])[0], [-1.0, -1.0]);
     }
 }
