@@ -396,7 +396,8 @@ mod tests {
                     );
                     // The polygon, by at least the margin in every direction (a pixel
                     // whose centre is within MARGIN_PX of the box's projection is drawn).
-                    for (dx, dy) in [(1.0, 0.0), (0.0, 1.0), (0.7071, 0.7071), (0.7071, -0.7071)] {
+                    let r = std::f32::consts::FRAC_1_SQRT_2;
+                    for (dx, dy) in [(1.0, 0.0), (0.0, 1.0), (r, r), (r, -r)] {
                         for sign in [-1.0, 1.0] {
                             let (px, py) = (x + sign * dx * MARGIN_PX, y + sign * dy * MARGIN_PX);
                             let on_screen = (0.0..=s).contains(&px) && (0.0..=s).contains(&py);
