@@ -435,6 +435,7 @@ mod pass;
 mod pipelines;
 mod ray_rows;
 mod record;
+mod record_forward;
 mod region;
 mod traffic;
 

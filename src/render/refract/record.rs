@@ -6,14 +6,11 @@
 //! the ping-pong images between sampled, attachment and storage use plane by plane inside
 //! one pass (and `drop_barrier_before_plane` must be able to leave one out).
 
-use super::region::RegionPolygon;
+use super::record_forward::ForwardDraws;
+use super::region::{RegionPolygon, REGION_VERTICES};
 use super::*;
 use crate::render::limits::SPLAT_GROUP_WORKGROUP;
-use crate::vk::{Area, BufferUse, Use};
-
-/// The vertices of a plane's draw over its region: a fan of six triangles over the
-/// polygon's eight vertices (glsl/sweep_region.vert).
-const REGION_VERTICES: u32 = 18;
+use crate::vk::{Area, Use};
 
 impl SweepPass {
     /// Record one frame into `rec`: setup, every plane, and the composite into
@@ -402,231 +399,24 @@ impl SweepPass {
                         rec.draw(plane_pipeline, bytemuck::bytes_of(&push), REGION_VERTICES)?;
                         rec.end_render_pass();
                     }
-                    Some(f) => {
-                        let fp = forward_planes.expect("made with the forward transport");
-                        let timed = sweep.pass_timings;
-                        if timed {
-                            rec.begin_scope("sweep: light rays");
-                        }
-                        // 1. The light rays advance to plane i (over the ray images):
-                        // the texel rows that hold rays, or those of the grid rows this
-                        // plane moves (ray_rows.rs); `pad` gives the previous plane's, the
-                        // rows still in their launch state outside them.
-                        let rows = (grid_dims[0] * grid_dims[1]).div_ceil(ray_image[0]);
-                        let rows = rows.clamp(1, ray_image[1]);
-                        let texel_rows = |r: super::ray_rows::Rows| {
-                            let lo = r.lo * grid_dims[0] / ray_image[0];
-                            (
-                                lo,
-                                (r.end * grid_dims[0])
-                                    .div_ceil(ray_image[0])
-                                    .clamp(lo, rows),
-                            )
-                        };
-                        let (moved, before) = match &plane_rays {
-                            Some(p) => (
-                                texel_rows(p[i as usize].moved),
-                                match i {
-                                    0 => (0, 0),
-                                    _ => texel_rows(p[i as usize - 1].moved),
-                                },
-                            ),
-                            None => ((0, rows), (0, rows)),
-                        };
-                        let light_push = PlanePush {
-                            pad: before.0 | before.1 << 16,
-                            ..push
-                        };
-                        if moved.1 > moved.0 {
-                            let area = Area {
-                                x: 0,
-                                y: moved.0,
-                                width: ray_image[0],
-                                height: moved.1 - moved.0,
-                            };
-                            rec.begin_render_pass_in(
-                                &self.light_pass,
-                                &self.light_framebuffers[write as usize],
-                                &[(light_images[0], write), (light_images[1], write)],
-                                area,
-                            )?;
-                            rec.set_viewport(ray_image[0], rows);
-                            rec.set_scissor(area);
-                            rec.draw_fullscreen(plane_pipeline, bytemuck::bytes_of(&light_push))?;
-                            rec.end_render_pass();
-                            rec.set_viewport(self.width, self.height);
-                        }
-                        if timed {
-                            rec.end_scope();
-                            rec.begin_scope("sweep: splat");
-                        }
-                        // 2. They deposit their flux on plane i: irradiance layer `write`
-                        // (plane i - 2's, read by no draw any more) is overwritten.
-                        rec.transition_many(&[
-                            (light_images[0], write..write + 1, Access::SampledGeneral),
-                            (light_images[1], write..write + 1, Access::SampledGeneral),
-                        ]);
-                        match sweep.levers.splat {
-                            Splat::Raster | Splat::Groups => {
-                                let splat_push = PlanePush {
-                                    read_layer: write,
-                                    ..push
-                                };
-                                // splat=groups: the deposits and groups first, in a compute
-                                // pass (glsl/light_splat_groups.glsl), after the previous
-                                // plane's sprites read them.
-                                let groups = grid_dims[0].div_ceil(2) * grid_dims[1].div_ceil(2);
-                                let workgroups = groups.div_ceil(SPLAT_GROUP_WORKGROUP);
-                                // The workgroups this plane deposits (ray_rows.rs): `pad`
-                                // gives the first.
-                                let (first_wg, end_wg) = match &plane_rays {
-                                    Some(p) => {
-                                        let w = p[i as usize].workgroups;
-                                        (w.lo, w.end.max(w.lo))
-                                    }
-                                    None => (0, workgroups),
-                                };
-                                let group_buffers = [
-                                    &self.deposits,
-                                    &self.sprite_groups,
-                                    &self.sprite_fallback,
-                                    &self.sprite_draws,
-                                ];
-                                if groups_on && end_wg > first_wg {
-                                    if timed {
-                                        rec.begin_scope("sweep: splat: deposits");
-                                    }
-                                    rec.buffer_handover(
-                                        &group_buffers,
-                                        BufferUse::Draws,
-                                        BufferUse::Compute,
-                                    );
-                                    let deposits_push = PlanePush {
-                                        pad: first_wg,
-                                        ..splat_push
-                                    };
-                                    rec.dispatch_explicit(
-                                        &fp.group_deposits,
-                                        &self.sweep_set,
-                                        bytemuck::bytes_of(&deposits_push),
-                                        [end_wg - first_wg, 1, 1],
-                                    )?;
-                                    rec.buffer_handover(
-                                        &group_buffers,
-                                        BufferUse::Compute,
-                                        BufferUse::Draws,
-                                    );
-                                    if timed {
-                                        rec.end_scope();
-                                    }
-                                }
-                                rec.begin_render_pass(
-                                    &self.splat_pass,
-                                    &self.splat_framebuffers[write as usize],
-                                    &[
-                                        (&self.irradiance[0].image, write),
-                                        (&self.irradiance[1].image, write),
-                                    ],
-                                )?;
-                                if groups_on {
-                                    // The indirect draws of one point per group, then of
-                                    // one point per ray (push constant `pad` 0 and 1):
-                                    // each workgroup's two lists, in order.
-                                    rec.bind_pipeline(&fp.splat_groups);
-                                    rec.draw_indirect(
-                                        &fp.splat_groups,
-                                        bytemuck::bytes_of(&splat_push),
-                                        &self.sprite_draws,
-                                        workgroups + first_wg..workgroups + end_wg,
-                                    )?;
-                                    let leftover_push = PlanePush {
-                                        pad: 1,
-                                        ..splat_push
-                                    };
-                                    let leftover =
-                                        fp.splat_group_rays.as_ref().unwrap_or(&fp.splat_groups);
-                                    rec.bind_pipeline(leftover);
-                                    rec.draw_indirect(
-                                        leftover,
-                                        bytemuck::bytes_of(&leftover_push),
-                                        &self.sprite_draws,
-                                        first_wg..end_wg,
-                                    )?;
-                                } else {
-                                    rec.bind_pipeline(&fp.splat);
-                                    rec.draw(
-                                        &fp.splat,
-                                        bytemuck::bytes_of(&splat_push),
-                                        grid_dims[0] * grid_dims[1],
-                                    )?;
-                                }
-                                rec.end_render_pass();
-                            }
-                            Splat::Compute => {
-                                // The previous plane's resolve zeroed the sums.
-                                rec.compute_storage_barrier(&self.splat_sums);
-                                let rays = grid_dims[0] * grid_dims[1];
-                                // glsl/light_splat.comp reads the fourth word as the
-                                // sums' unit; the layout's push range is PlanePush's.
-                                let splat_push = PlanePush {
-                                    read_layer: write,
-                                    pad: unit.to_bits(),
-                                    ..push
-                                };
-                                rec.dispatch_explicit(
-                                    &fp.splat_compute,
-                                    &self.sweep_set,
-                                    bytemuck::bytes_of(&splat_push),
-                                    [rays.div_ceil(64), 1, 1],
-                                )?;
-                                rec.compute_storage_barrier(&self.splat_sums);
-                                // The resolve's storage views name both layers, so both
-                                // are ordered after their last reads (only `write` is
-                                // written).
-                                rec.transition_many(&[
-                                    (&self.irradiance[0].image, 0..2, Access::ComputeStorage),
-                                    (&self.irradiance[1].image, 0..2, Access::ComputeStorage),
-                                ]);
-                                let resolve_push = [write, self.width, self.height, unit.to_bits()];
-                                rec.dispatch_explicit(
-                                    &f.splat_resolve,
-                                    &self.splat_resolve_set,
-                                    bytemuck::bytes_of(&resolve_push),
-                                    groups,
-                                )?;
-                            }
-                        }
-                        if timed {
-                            rec.end_scope();
-                            rec.begin_scope("sweep: viewing rays");
-                        }
-                        // 3. The viewing rays cross the segment from plane i - 1 to plane i,
-                        // lit by the irradiance of both (layers `read` and `write`).
-                        rec.transition_many(&[
-                            (&self.irradiance[0].image, 0..2, Access::SampledGeneral),
-                            (&self.irradiance[1].image, 0..2, Access::SampledGeneral),
-                        ]);
-                        let views: Vec<(&Image, u32)> =
-                            self.states[2..].iter().map(|s| (&s.image, write)).collect();
-                        let area = regions[i as usize];
-                        rec.begin_render_pass_in(
-                            &self.view_pass,
-                            &self.view_framebuffers[write as usize],
-                            &views,
-                            area,
-                        )?;
-                        rec.set_scissor(area);
-                        let view = &forward_planes
-                            .expect("made with the forward transport")
-                            .view;
-                        rec.bind_pipeline(view);
-                        rec.draw(view, bytemuck::bytes_of(&push), REGION_VERTICES)?;
-                        rec.end_render_pass();
-                        if timed {
-                            rec.end_scope();
-                        }
-                        rec.bind_pipeline(plane_pipeline);
-                    }
+                    Some(f) => self.record_forward_plane_draws(
+                        rec,
+                        &ForwardDraws {
+                            resolve: f,
+                            planes: forward_planes.expect("made with the forward transport"),
+                            plane_pipeline,
+                            plane_rays: plane_rays.as_deref(),
+                            grid_dims,
+                            ray_image,
+                            groups_on,
+                            unit,
+                            resolve_groups: groups,
+                            regions: &regions,
+                            splat: sweep.levers.splat,
+                            timed: sweep.pass_timings,
+                        },
+                        push,
+                    )?,
                 }
                 let splat = forward;
                 for (b, plane, buf) in &dump_buffers {

@@ -146,6 +146,10 @@ pub(crate) fn plane_regions(
     }
 }
 
+/// The vertices of a plane's draw over its polygon: a fan of six triangles over the
+/// polygon's eight vertices (glsl/sweep_region.vert).
+pub(crate) const REGION_VERTICES: u32 = 18;
+
 /// Each plane's rectangle and polygon ([`plane_regions`]), and the mean fraction of the
 /// viewport each covers.
 pub(crate) struct PlaneRegions {
