@@ -466,6 +466,24 @@ fn light_deposits_beyond_the_storage_range_are_clear_errors() {
         ],
         "(maxStorageBufferRange): use fewer light rays per pixel",
     );
+    // 1600² × 56 bytes of the compute splat's sums = 137 MiB: any buffer bound whole
+    // past the range is refused where its descriptor set is made, the buffer named.
+    assert_clean_failure(
+        &[
+            "render",
+            "--width",
+            "1600",
+            "--height",
+            "1600",
+            "--light-rays",
+            "1",
+            "--volume-size",
+            "16",
+            "-o",
+            "x.png",
+        ],
+        "use a smaller image: descriptor set 'sweep', binding 18: buffer 'light splat sums'",
+    );
 }
 
 #[test]

@@ -3,7 +3,7 @@
 //! A [`DescriptorSet`] owns its layout and pool: refrakt binds one set per pass and never
 //! updates it while a frame is being recorded, so the simplest ownership is the right one.
 
-use anyhow::{Context as _, Result};
+use anyhow::{ensure, Context as _, Result};
 use ash::vk;
 
 use std::ops::Range;
@@ -73,6 +73,7 @@ impl Binding<'_> {
 
 impl DescriptorSet {
     pub fn new(ctx: &Context, bindings: &[Binding<'_>], name: &str) -> Result<Self> {
+        Self::check_ranges(ctx, bindings, name)?;
         let device = ctx.device();
         let stages = vk::ShaderStageFlags::COMPUTE
             | vk::ShaderStageFlags::FRAGMENT
@@ -145,6 +146,38 @@ impl DescriptorSet {
         ctx.set_name(raw, name);
         ctx.set_name(layout, name);
         Ok(set)
+    }
+
+    /// Every buffer is bound whole, and a binding may not exceed the device's range for
+    /// its kind (maxStorageBufferRange: 128 MiB on lavapipe; maxUniformBufferRange): a
+    /// larger one is refused here, with the buffer named, rather than bound past the
+    /// limit (which the validation layer reports and a driver need not honour).
+    fn check_ranges(ctx: &Context, bindings: &[Binding<'_>], name: &str) -> Result<()> {
+        let limits = ctx.info().limits;
+        for (i, b) in bindings.iter().enumerate() {
+            let (buf, limit, what) = match b {
+                Binding::Storage(buf) => (
+                    buf,
+                    limits.max_storage_buffer_range,
+                    "maxStorageBufferRange",
+                ),
+                Binding::Uniform(buf) => (
+                    buf,
+                    limits.max_uniform_buffer_range,
+                    "maxUniformBufferRange",
+                ),
+                _ => continue,
+            };
+            ensure!(
+                buf.size() <= limit as u64,
+                "descriptor set '{name}', binding {i}: buffer '{}' is {} bytes, more than \
+                 device '{}' binds at once ({limit} bytes, {what})",
+                buf.name(),
+                buf.size(),
+                ctx.info().name
+            );
+        }
+        Ok(())
     }
 
     pub(crate) fn name(&self) -> &str {

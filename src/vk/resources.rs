@@ -161,6 +161,10 @@ impl Buffer {
         self.size
     }
 
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
     /// Copy bytes into a mapped buffer at `offset`.
     pub fn write(&mut self, offset: usize, bytes: &[u8]) -> Result<()> {
         let slice = self

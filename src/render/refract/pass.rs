@@ -3,6 +3,8 @@
 
 use std::collections::HashMap;
 
+use anyhow::Context as _;
+
 use super::pipelines::{
     gather_entries_per_ray, gather_words, ComputePlanes, ForwardPipelines, PlanePipelines,
 };
@@ -358,7 +360,14 @@ impl SweepPass {
         plane_bindings.push(Binding::Storage(&sprite_groups));
         plane_bindings.push(Binding::Storage(&sprite_fallback));
         plane_bindings.push(Binding::Storage(&sprite_draws));
-        let sweep_set = DescriptorSet::new(ctx, &plane_bindings, "sweep")?;
+        // The first set to bind the buffers that grow with the image (the splat's sums,
+        // the deposits): where one exceeds the device's binding range, say what to change.
+        let sweep_set = DescriptorSet::new(ctx, &plane_bindings, "sweep").with_context(|| {
+            format!(
+                "the plane sweep at {width}x{height} with {rays_per_pixel} light rays per \
+                     pixel: use a smaller image"
+            )
+        })?;
         // The compute sweep's set: the same bindings, with every image a plane writes
         // (states 4-9, irradiance 10-11, rays 13-14) a storage image.
         let mut compute_bindings = plane_bindings.clone();
