@@ -7,7 +7,7 @@
 //! one pass (and `drop_barrier_before_plane` must be able to leave one out).
 
 use super::record_forward::ForwardDraws;
-use super::region::{RegionPolygon, REGION_VERTICES};
+use super::region::RegionPolygon;
 use super::*;
 use crate::render::limits::SPLAT_GROUP_WORKGROUP;
 use crate::vk::{Area, Use};
@@ -385,20 +385,14 @@ impl SweepPass {
                     rec.transition_many(&items);
                 }
                 match forward {
-                    None => {
-                        let attachments: Vec<(&Image, u32)> =
-                            self.states.iter().map(|s| (&s.image, write)).collect();
-                        let area = regions[i as usize];
-                        rec.begin_render_pass_in(
-                            &self.render_pass,
-                            &self.framebuffers[write as usize],
-                            &attachments,
-                            area,
-                        )?;
-                        rec.set_scissor(area);
-                        rec.draw(plane_pipeline, bytemuck::bytes_of(&push), REGION_VERTICES)?;
-                        rec.end_render_pass();
-                    }
+                    None => self.draw_plane_region(
+                        rec,
+                        (&self.render_pass, &self.framebuffers[write as usize]),
+                        &self.states,
+                        regions[i as usize],
+                        plane_pipeline,
+                        &push,
+                    )?,
                     Some(f) => self.record_forward_plane_draws(
                         rec,
                         &ForwardDraws {

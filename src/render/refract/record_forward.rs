@@ -3,12 +3,13 @@
 //! Called per plane by [`SweepPass::record_sweep`] (record.rs), which records the
 //! barrier before it and the dumps after it.
 
+use super::pass::StateImage;
 use super::pipelines::{ForwardPipelines, ForwardPlanes};
 use super::ray_rows::PlaneRays;
 use super::region::REGION_VERTICES;
 use super::*;
 use crate::render::limits::SPLAT_GROUP_WORKGROUP;
-use crate::vk::{Area, BufferUse, GraphicsPipeline};
+use crate::vk::{Area, BufferUse, Framebuffer, GraphicsPipeline, RenderPass};
 
 /// What every plane's forward draws share within a frame.
 pub(crate) struct ForwardDraws<'a> {
@@ -33,6 +34,27 @@ pub(crate) struct ForwardDraws<'a> {
 }
 
 impl SweepPass {
+    /// A plane's draw over its region (render area and scissor: the rectangle; the
+    /// polygon in `push`, glsl/sweep_region.vert) into the write layer of `images`, with
+    /// `pipeline` bound.
+    pub(crate) fn draw_plane_region(
+        &self,
+        rec: &mut Recorder,
+        (pass, framebuffer): (&RenderPass, &Framebuffer),
+        images: &[StateImage],
+        area: Area,
+        pipeline: &GraphicsPipeline,
+        push: &PlanePush,
+    ) -> Result<()> {
+        let write = push.plane % 2;
+        let attachments: Vec<(&Image, u32)> = images.iter().map(|s| (&s.image, write)).collect();
+        rec.begin_render_pass_in(pass, framebuffer, &attachments, area)?;
+        rec.set_scissor(area);
+        rec.draw(pipeline, bytemuck::bytes_of(push), REGION_VERTICES)?;
+        rec.end_render_pass();
+        Ok(())
+    }
+
     /// Plane `push.plane`'s forward draws: 1. the light rays to the plane, 2. their
     /// deposits on it, 3. the viewing rays over the segment before it.
     pub(crate) fn record_forward_plane_draws(
@@ -249,20 +271,15 @@ impl SweepPass {
             (&self.irradiance[0].image, 0..2, Access::SampledGeneral),
             (&self.irradiance[1].image, 0..2, Access::SampledGeneral),
         ]);
-        let views: Vec<(&Image, u32)> =
-            self.states[2..].iter().map(|s| (&s.image, write)).collect();
-        let area = regions[i as usize];
-        rec.begin_render_pass_in(
-            &self.view_pass,
-            &self.view_framebuffers[write as usize],
-            &views,
-            area,
+        rec.bind_pipeline(&fp.view);
+        self.draw_plane_region(
+            rec,
+            (&self.view_pass, &self.view_framebuffers[write as usize]),
+            &self.states[2..],
+            regions[i as usize],
+            &fp.view,
+            &push,
         )?;
-        rec.set_scissor(area);
-        let view = &fp.view;
-        rec.bind_pipeline(view);
-        rec.draw(view, bytemuck::bytes_of(&push), REGION_VERTICES)?;
-        rec.end_render_pass();
         if timed {
             rec.end_scope();
         }
