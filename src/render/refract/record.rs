@@ -285,8 +285,12 @@ impl SweepPass {
                 if region == Region::Octagon && !compute {
                     (r.rects, r.polygons, r.polygon_fraction)
                 } else {
-                    let polygons = r.rects.iter().map(|&a| RegionPolygon::new(a, None));
-                    (r.rects.clone(), polygons.collect(), r.rect_fraction)
+                    let polygons = r
+                        .rects
+                        .iter()
+                        .map(|&a| RegionPolygon::new(a, None))
+                        .collect();
+                    (r.rects, polygons, r.rect_fraction)
                 }
             }
         };
