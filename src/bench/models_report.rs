@@ -127,27 +127,14 @@ pub fn models_markdown(r: &ModelsReport) -> String {
 /// applicable change (kind `tf-change`, `ls-change`, `pf-change`: ms is the rebuild
 /// scopes' sum), each with its whole context, as `bench thesis --csv`.
 pub fn write_models_csv(r: &ModelsReport, path: &Path) -> Result<()> {
-    // Written into memory, then to the file atomically (crate::files).
+    // Written into memory, then to the file atomically (finish_csv).
     let mut w = csv::Writer::from_writer(Vec::new());
     w.write_record(
-        [
-            "schema",
-            "dataset",
-            "model",
-            "kind",
-            "frame",
-            "ms",
-            "res_x",
-            "res_y",
-            "res_z",
-            "viewport",
-            "planes",
-            "scale",
-            "sample_distance",
-            "termination_alpha",
-        ]
-        .iter()
-        .chain(&META_HEADER),
+        ["schema", "dataset", "model", "kind", "frame", "ms"]
+            .iter()
+            .chain(&SIZE_HEADER)
+            .chain(&["termination_alpha"])
+            .chain(&META_HEADER),
     )?;
     for row in &r.rows {
         for m in &row.models {
@@ -185,10 +172,7 @@ pub fn write_models_csv(r: &ModelsReport, path: &Path) -> Result<()> {
             }
         }
     }
-    let bytes = w
-        .into_inner()
-        .map_err(|e| anyhow::anyhow!("{}: writing the CSV file: {e}", path.display()))?;
-    crate::files::write_atomically(path, &bytes)
+    finish_csv(w, path)
 }
 
 /// Median rendering ms per model per row as an SVG bar chart (log scale).

@@ -441,28 +441,15 @@ pub fn variants_markdown(r: &VariantsReport) -> String {
 /// One CSV record per frame (warm-up included) of every row and variant, each with its
 /// whole context, as `bench thesis --csv`.
 pub fn write_variants_csv(r: &VariantsReport, path: &Path) -> Result<()> {
-    // Written into memory, then to the file atomically (crate::files).
+    // Written into memory, then to the file atomically (finish_csv).
     let mut w = csv::Writer::from_writer(Vec::new());
     w.write_record(
         [
-            "schema",
-            "dataset",
-            "variant",
-            "levers",
-            "frame",
-            "warmup",
-            "order",
-            "frame_ms",
+            "schema", "dataset", "variant", "levers", "frame", "warmup", "order", "frame_ms",
             "sweep_ms",
-            "res_x",
-            "res_y",
-            "res_z",
-            "viewport",
-            "planes",
-            "scale",
-            "sample_distance",
         ]
         .iter()
+        .chain(&SIZE_HEADER)
         .chain(&META_HEADER),
     )?;
     for row in &r.rows {
@@ -502,10 +489,7 @@ pub fn write_variants_csv(r: &VariantsReport, path: &Path) -> Result<()> {
             }
         }
     }
-    let bytes = w
-        .into_inner()
-        .map_err(|e| anyhow::anyhow!("{}: writing the CSV file: {e}", path.display()))?;
-    crate::files::write_atomically(path, &bytes)
+    finish_csv(w, path)
 }
 
 #[cfg(test)]

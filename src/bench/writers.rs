@@ -118,27 +118,15 @@ pub fn markdown(r: &Report) -> String {
 /// One CSV record per measured or warm-up frame of every variant, each carrying the whole
 /// context (device, commit, settings), so a file is self-describing and files concatenate.
 pub fn write_csv(r: &Report, path: &Path) -> Result<()> {
-    // Written into memory, then to the file atomically (crate::files).
+    // Written into memory, then to the file atomically (finish_csv).
     let mut w = csv::Writer::from_writer(Vec::new());
     w.write_record(
         [
-            "schema",
-            "dataset",
-            "variant",
-            "frame",
-            "warmup",
-            "frame_ms",
-            "res_x",
-            "res_y",
-            "res_z",
-            "viewport",
-            "planes",
-            "scale",
-            "sample_distance",
-            "thesis_ms",
-            "thesis_gpu",
+            "schema", "dataset", "variant", "frame", "warmup", "frame_ms",
         ]
         .iter()
+        .chain(&SIZE_HEADER)
+        .chain(&["thesis_ms", "thesis_gpu"])
         .chain(&META_HEADER)
         .chain(&["levers"]),
     )?;
@@ -172,15 +160,29 @@ pub fn write_csv(r: &Report, path: &Path) -> Result<()> {
             }
         }
     }
+    finish_csv(w, path)
+}
+
+/// Writes a CSV built in memory to `path`, atomically (crate::files).
+pub(crate) fn finish_csv(w: csv::Writer<Vec<u8>>, path: &Path) -> Result<()> {
     let bytes = w
         .into_inner()
         .map_err(|e| anyhow::anyhow!("{}: writing the CSV file: {e}", path.display()))?;
     crate::files::write_atomically(path, &bytes)
 }
 
-/// Any report (thesis, variants) as pretty JSON.
-/// CSV columns of a row's size and the run's sampling: res_x, res_y, res_z, viewport,
-/// planes, scale, sample_distance.
+/// The CSV header of a row's size and the run's sampling ([`size_columns`]).
+pub(crate) const SIZE_HEADER: [&str; 7] = [
+    "res_x",
+    "res_y",
+    "res_z",
+    "viewport",
+    "planes",
+    "scale",
+    "sample_distance",
+];
+
+/// CSV columns of a row's size and the run's sampling, as [`SIZE_HEADER`] names them.
 pub(crate) fn size_columns(
     resolution: [u32; 3],
     viewport: [u32; 2],
@@ -223,6 +225,7 @@ pub(crate) fn meta_columns(meta: &Meta) -> [String; 6] {
     ]
 }
 
+/// Any report (thesis, variants, models) as pretty JSON.
 pub fn write_json<T: Serialize>(r: &T, path: &Path) -> Result<()> {
     let text = serde_json::to_string_pretty(r)?;
     crate::files::write_atomically(path, (text + "\n").as_bytes())

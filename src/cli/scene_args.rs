@@ -153,9 +153,7 @@ pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Resu
     if args.no_preintegration {
         o.preintegrated = Some(false);
     }
-    o.width = args.width;
-    o.height = args.height;
-    o.sample_distance = args.sample_distance;
+    refrakt::copy_plain_render_overrides!(o, args);
     o.azimuth = args.azimuth;
     o.elevation = args.elevation;
     o.distance = args.distance;
@@ -164,11 +162,6 @@ pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Resu
         o.target = Some(glam::Vec3::from(parse_floats::<3>("--target", t)?));
     }
     o.softness = args.softness;
-    o.roughness = args.roughness;
-    o.specular = args.specular;
-    o.eta_scale = args.eta_scale;
-    o.light_rays = args.light_rays;
-    o.light_spacing = args.light_spacing;
     if let Some(t) = &args.light_transport {
         o.light_transport =
             Some(refrakt::render::LightTransport::parse(t).context("--light-transport")?);
@@ -248,11 +241,6 @@ pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Resu
         ToneArg::Reinhard => output::ToneOperator::Reinhard,
         ToneArg::None => output::ToneOperator::None,
     });
-    o.ao_radius = args.ao_radius;
-    o.ao_diffuse = args.ao_diffuse;
-    o.g = args.g;
-    o.albedo = args.albedo;
-    o.ambient_radius = args.ambient_radius;
     if !args.add_light.is_empty() {
         eprintln!(
             "note: --add-light is deprecated; give --light again (the first is the main light)"

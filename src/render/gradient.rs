@@ -132,18 +132,15 @@ mod tests {
 
     #[test]
     fn push_matches_the_shaders_block() {
-        let host = crate::host_layout!(Push {
-            axis,
-            sigma,
-            radius
-        });
-        crate::vk::spirv::check_block(
+        crate::assert_host_block!(
             shaders::GRADIENT_COMP,
             "Push",
-            &host,
-            std::mem::size_of::<Push>(),
-            false,
-        )
-        .unwrap();
+            Push {
+                axis,
+                sigma,
+                radius
+            },
+            exact_size = false
+        );
     }
 }

@@ -86,6 +86,21 @@ pub(crate) fn check_params_block(
     crate::vk::spirv::check_block(spirv, "Params", &host, size, true).unwrap();
 }
 
+/// [`check_params_block`] of a model's `Params` struct with its own listed fields:
+/// `assert_params_block!(shaders::AO_COMP, Params { light, light_colour, dims })`.
+#[cfg(test)]
+macro_rules! assert_params_block {
+    ($spirv:expr, $ty:ident { $($field:ident),* $(,)? }) => {
+        $crate::render::march::check_params_block(
+            $spirv,
+            $crate::host_layout!($ty { $($field),* }),
+            std::mem::size_of::<$ty>(),
+        )
+    };
+}
+#[cfg(test)]
+pub(crate) use assert_params_block;
+
 /// What every ray-marched model's pass has: its parameter block, frame, descriptor set
 /// (bindings 0–4 as glsl/march.glsl's users declare them: params, volume, transfer
 /// functions, preintegration table, frame; then the model's own) and compute pipeline.

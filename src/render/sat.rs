@@ -103,18 +103,15 @@ mod tests {
 
     #[test]
     fn sat_push_matches_the_shaders_block() {
-        let host = crate::host_layout!(SatPush {
-            mean,
-            pass_index,
-            pad
-        });
-        crate::vk::spirv::check_block(
+        crate::assert_host_block!(
             shaders::SAT_COMP,
             "Push",
-            &host,
-            std::mem::size_of::<SatPush>(),
-            false,
-        )
-        .unwrap();
+            SatPush {
+                mean,
+                pass_index,
+                pad
+            },
+            exact_size = false
+        );
     }
 }

@@ -427,32 +427,26 @@ mod tests {
 
     #[test]
     fn scan_push_matches_the_shaders_block() {
-        let host = crate::host_layout!(ScanPush { axis, scale, bound });
-        crate::vk::spirv::check_block(
+        crate::assert_host_block!(
             shaders::SAT3D_SCAN_COMP,
             "Push",
-            &host,
-            std::mem::size_of::<ScanPush>(),
-            false,
-        )
-        .unwrap();
+            ScanPush { axis, scale, bound },
+            exact_size = false
+        );
     }
 
     #[test]
     fn probe_push_matches_the_shaders_block() {
-        let host = crate::host_layout!(ProbePush {
-            dims,
-            inv_scale,
-            count
-        });
-        crate::vk::spirv::check_block(
+        crate::assert_host_block!(
             shaders::SAT3D_PROBE_COMP,
             "Push",
-            &host,
-            std::mem::size_of::<ProbePush>(),
-            false,
-        )
-        .unwrap();
+            ProbePush {
+                dims,
+                inv_scale,
+                count
+            },
+            exact_size = false
+        );
     }
 
     #[test]

@@ -178,22 +178,19 @@ mod tests {
 
     #[test]
     fn push_matches_the_shaders_block() {
-        let host = crate::host_layout!(Push {
-            scale,
-            op,
-            encode_srgb,
-            axes,
-            target,
-            pad,
-            axis
-        });
-        crate::vk::spirv::check_block(
+        crate::assert_host_block!(
             shaders::TONEMAP_FRAG,
             "Push",
-            &host,
-            std::mem::size_of::<Push>(),
-            false,
-        )
-        .unwrap();
+            Push {
+                scale,
+                op,
+                encode_srgb,
+                axes,
+                target,
+                pad,
+                axis
+            },
+            exact_size = false
+        );
     }
 }

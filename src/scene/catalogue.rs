@@ -122,3 +122,96 @@ pub fn procedural_volume(kind: &str, n: u32) -> Result<Volume> {
         }
     })
 }
+
+impl Scene {
+    pub fn builtin(name: &str) -> Result<Option<Scene>> {
+        let mut s = Scene {
+            name: name.to_string(),
+            ..Default::default()
+        };
+        if let Some((kind, _, tf)) = PROCEDURAL.iter().find(|(n, _, _)| *n == name) {
+            s.volume = VolumeSource::Procedural {
+                kind: kind.to_string(),
+                size: 128,
+            };
+            s.transfer = TransferSource::Named(tf.to_string());
+            return Ok(Some(s));
+        }
+        if let Some((_, file, window, tf, _)) = FETCHED.iter().find(|f| f.0 == name) {
+            s.volume = VolumeSource::Fetched {
+                file: file.to_string(),
+                window: *window,
+            };
+            s.transfer = TransferSource::Named(tf.to_string());
+            match name {
+                "lung-ct" => {
+                    // Slices along z (world z). The scan's +y is posterior and world +y is
+                    // up, so turn it 180° about z (x and y flipped: still a right-handed
+                    // body, spine down). Look along the body axis, slightly from above.
+                    s.flip = [true, true, false];
+                    s.camera = Camera {
+                        azimuth: 20.0,
+                        elevation: 15.0,
+                        distance: 1.8,
+                        fov_y: 35.0,
+                        target: Vec3::ZERO,
+                    };
+                }
+                _ => {
+                    s.camera = Camera {
+                        azimuth: 35.0,
+                        elevation: 15.0,
+                        distance: 2.1,
+                        fov_y: 35.0,
+                        target: Vec3::ZERO,
+                    };
+                    s.clip = Some((Vec3::new(1.0, 0.0, 0.0), 0.0));
+                }
+            }
+            return Ok(Some(s));
+        }
+        let Some(d) = standins::DATASETS.iter().find(|d| d.name == name) else {
+            return Ok(None);
+        };
+        s.volume = VolumeSource::Standin {
+            name: d.name.to_string(),
+            scale: 1.0,
+        };
+        s.transfer = TransferSource::Named(
+            match d.name {
+                "glass" => "glass-scene",
+                n => n,
+            }
+            .to_string(),
+        );
+        // The thesis' protocol: 768 x 768, sample distance 1.
+        s.width = 768;
+        s.height = 768;
+        let cam = |azimuth, elevation, distance| Camera {
+            azimuth,
+            elevation,
+            distance,
+            fov_y: 35.0,
+            target: Vec3::ZERO,
+        };
+        match d.name {
+            "supernova" => s.camera = cam(30.0, 15.0, 2.1),
+            "piggy-bank" => {
+                s.camera = cam(25.0, 30.0, 1.9);
+                s.softness = 1.5;
+            }
+            "glass" => s.camera = cam(20.0, 12.0, 1.9),
+            "hand" => s.camera = cam(20.0, 55.0, 1.9),
+            "head" => {
+                s.camera = cam(40.0, 10.0, 2.0);
+                // Thesis Fig. 6.6: opacity zero in one half, medium and refraction kept.
+                s.clip = Some((Vec3::new(1.0, 0.0, 0.0), 0.0));
+            }
+            "water" => s.camera = cam(25.0, 28.0, 2.0),
+            "ship" => s.camera = cam(55.0, 20.0, 2.0),
+            "kiwi" => s.camera = cam(15.0, 25.0, 1.8),
+            _ => {}
+        }
+        Ok(Some(s))
+    }
+}

@@ -7,6 +7,21 @@ use crate::light::LightSource;
 
 // ---- the file format -------------------------------------------------------------------
 
+/// Copies the render settings that the command line and a scene file's `[render]` table
+/// both hold as plain optional values of the same name into an [`Overrides`] (`None`
+/// keeps the scene's value); every other setting is parsed by its front end.
+#[macro_export]
+macro_rules! copy_plain_render_overrides {
+    ($o:expr, $from:expr) => {
+        $crate::copy_plain_render_overrides!(@fields $o, $from; width, height,
+            sample_distance, roughness, specular, eta_scale, light_rays, light_spacing,
+            ao_radius, ao_diffuse, g, albedo, ambient_radius)
+    };
+    (@fields $o:expr, $from:expr; $($field:ident),*) => {
+        $( $o.$field = $from.$field; )*
+    };
+}
+
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct SceneFile {
@@ -472,9 +487,7 @@ impl SceneFile {
             if let Some(m) = r.model {
                 o.model = Some(parse_model(&m).context("[render]")?);
             }
-            o.width = r.width;
-            o.height = r.height;
-            o.sample_distance = r.sample_distance;
+            crate::copy_plain_render_overrides!(o, r);
             o.preintegrated = r.preintegrated;
             o.background = r.background;
             // As --background: applies (no environment) or is an error.
@@ -487,11 +500,6 @@ impl SceneFile {
                     ),
                 }
             }
-            o.roughness = r.roughness;
-            o.specular = r.specular;
-            o.eta_scale = r.eta_scale;
-            o.light_rays = r.light_rays;
-            o.light_spacing = r.light_spacing;
             if let Some(t) = &r.light_transport {
                 o.light_transport =
                     Some(LightTransport::parse(t).context("[render] light_transport")?);
@@ -499,11 +507,6 @@ impl SceneFile {
             o.reflections = r.reflections;
             o.clip = r.clip.map(|c| Some((Vec3::new(c[0], c[1], c[2]), c[3])));
             o.exposure = r.exposure;
-            o.ao_radius = r.ao_radius;
-            o.ao_diffuse = r.ao_diffuse;
-            o.g = r.g;
-            o.albedo = r.albedo;
-            o.ambient_radius = r.ambient_radius;
             if let Some(lights) = &r.lights {
                 ensure!(
                     more_lights.is_none(),

@@ -242,3 +242,20 @@ macro_rules! host_layout {
         )),*]
     }};
 }
+
+/// Asserts, in a test, that the listed fields of the `#[repr(C)]` struct `Ty` match the
+/// block `block` of `spirv` ([`check_block`] with `exact_size`), panicking with the
+/// differences: `assert_host_block!(SPV, "Push", Push { dims, scale }, exact_size = false)`.
+#[macro_export]
+macro_rules! assert_host_block {
+    ($spirv:expr, $block:expr, $ty:ty { $($field:ident),* $(,)? }, exact_size = $exact:expr) => {
+        $crate::vk::spirv::check_block(
+            $spirv,
+            $block,
+            &$crate::host_layout!($ty { $($field),* }),
+            std::mem::size_of::<$ty>(),
+            $exact,
+        )
+        .unwrap()
+    };
+}

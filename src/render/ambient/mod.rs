@@ -466,47 +466,38 @@ mod tests {
     use super::*;
 
     #[test]
-    fn push_blocks_match_the_shaders() {
-        crate::vk::spirv::check_block(
+    fn blocks_match_the_shaders() {
+        crate::assert_host_block!(
             shaders::RADIANCE_CACHE_COMP,
             "Push",
-            &crate::host_layout!(CachePush {
+            CachePush {
                 lights,
                 half_extent,
                 table,
                 misc
-            }),
-            std::mem::size_of::<CachePush>(),
-            true,
-        )
-        .unwrap();
-        crate::vk::spirv::check_block(
+            },
+            exact_size = true
+        );
+        crate::assert_host_block!(
             shaders::AMBIENT_EXTINCTION_COMP,
             "Push",
-            &crate::host_layout!(ExtinctionPush {
+            ExtinctionPush {
                 dims,
                 inv_scale,
                 side,
                 pad
-            }),
-            std::mem::size_of::<ExtinctionPush>(),
-            true,
-        )
-        .unwrap();
-    }
-
-    #[test]
-    fn params_match_the_shaders_block() {
-        crate::render::march::check_params_block(
+            },
+            exact_size = true
+        );
+        crate::render::march::assert_params_block!(
             shaders::AMBIENT_COMP,
-            crate::host_layout!(Params {
+            Params {
                 lights,
                 colours,
                 ambient,
                 table,
                 counts
-            }),
-            std::mem::size_of::<Params>(),
+            }
         );
     }
 

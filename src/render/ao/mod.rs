@@ -223,31 +223,24 @@ mod tests {
     use super::*;
 
     #[test]
-    fn cache_push_matches_the_shaders_block() {
-        crate::vk::spirv::check_block(
+    fn blocks_match_the_shaders() {
+        crate::assert_host_block!(
             shaders::AO_CACHE_COMP,
             "Push",
-            &crate::host_layout!(CachePush {
+            CachePush {
                 dims,
                 inv_scale,
                 pad
-            }),
-            std::mem::size_of::<CachePush>(),
-            true,
-        )
-        .unwrap();
-    }
-
-    #[test]
-    fn params_match_the_shaders_block() {
-        crate::render::march::check_params_block(
+            },
+            exact_size = true
+        );
+        crate::render::march::assert_params_block!(
             shaders::AO_COMP,
-            crate::host_layout!(Params {
+            Params {
                 light,
                 light_colour,
-                dims,
-            }),
-            std::mem::size_of::<Params>(),
+                dims
+            }
         );
     }
 

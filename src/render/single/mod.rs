@@ -227,29 +227,22 @@ mod tests {
     use super::*;
 
     #[test]
-    fn cache_push_matches_the_shaders_block() {
-        crate::vk::spirv::check_block(
+    fn blocks_match_the_shaders() {
+        crate::assert_host_block!(
             shaders::TRANSMITTANCE_COMP,
             "Push",
-            &crate::host_layout!(CachePush {
+            CachePush {
                 towards,
                 half_extent
-            }),
-            std::mem::size_of::<CachePush>(),
-            true,
-        )
-        .unwrap();
-    }
-
-    #[test]
-    fn params_match_the_shaders_block() {
-        crate::render::march::check_params_block(
+            },
+            exact_size = true
+        );
+        crate::render::march::assert_params_block!(
             shaders::SINGLE_COMP,
-            crate::host_layout!(Params {
+            Params {
                 light,
                 light_colour
-            }),
-            std::mem::size_of::<Params>(),
+            }
         );
     }
 }
