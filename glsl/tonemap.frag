@@ -19,7 +19,9 @@ layout(location = 0) in vec2 uv;
 layout(location = 0) out vec4 out_colour;
 
 float tone(float c) {
-    float x = max(c, 0.0) * pc.scale;
+    // Capped where every operator is white, as tone.rs' WHITE_CAP: ACES' x² overflows
+    // above ~1.8e19, and NaN would turn the brightest pixels black.
+    float x = min(max(c, 0.0) * pc.scale, 1e9);
     if (pc.op == 0u) return min(x, 1.0);
     if (pc.op == 1u) return x / (1.0 + x);
     return clamp((x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0);

@@ -23,3 +23,4 @@ pub mod tone;
 pub mod transfer;
 pub mod viewer;
 pub mod volume;
+pub mod workers;

@@ -14,6 +14,19 @@ pub(super) fn parse_variant(s: &str) -> Result<Levers, String> {
     Levers::parse(s).map_err(|e| format!("{e:#}"))
 }
 
+/// `--threads`' value: a worker count from 1 to [`refrakt::workers::MAX_THREADS`]
+/// (leaving the flag out means every core).
+pub(super) fn parse_threads(s: &str) -> Result<usize, String> {
+    let max = refrakt::workers::MAX_THREADS;
+    match s.trim().parse::<usize>() {
+        Ok(n) if (1..=max).contains(&n) => Ok(n),
+        _ => Err(format!(
+            "expected a whole number of threads from 1 to {max} (leave --threads out for \
+             every core)"
+        )),
+    }
+}
+
 pub(super) fn parse_transport(s: &str) -> Result<LightTransport, String> {
     LightTransport::parse(s).map_err(|e| format!("{e:#}"))
 }
@@ -137,8 +150,8 @@ pub struct AmbientArgs {
     /// Seed of the random walks.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Worker threads [default: all cores].
-    #[arg(long)]
+    /// Worker threads, 1 to 1024 [default: all cores].
+    #[arg(long, value_parser = parse_threads)]
     pub threads: Option<usize>,
     /// Refuse a table of more Monte-Carlo paths than this in all (θ bins × extinction bins
     /// × g bins × --paths), before building; the default is about 40 minutes on 2 cores
@@ -322,8 +335,8 @@ pub struct PhotonsArgs {
     /// Seed of the jitter.
     #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
     pub seed: u64,
-    /// Worker threads [default: all cores].
-    #[arg(long)]
+    /// Worker threads, 1 to 1024 [default: all cores].
+    #[arg(long, value_parser = parse_threads)]
     pub threads: Option<usize>,
     /// Refuse a job of more RK4 steps than this, estimated before tracing (photons ×
     /// straight path / step); the default is about 40 minutes on 2 cores.

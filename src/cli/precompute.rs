@@ -45,12 +45,7 @@ pub fn ambient(args: &AmbientArgs) -> Result<ExitCode> {
         params.paths,
         args.max_paths
     );
-    let threads = match args.threads {
-        Some(0) | None => std::thread::available_parallelism()
-            .map(|n| n.get())
-            .unwrap_or(1),
-        Some(n) => n,
-    };
+    let threads = refrakt::workers::count(args.threads.unwrap_or(0))?;
     let path = match &args.out {
         Some(p) => p.clone(),
         None => table::cache_dir(args.cache_dir.as_deref())?.join(params.file_name()),

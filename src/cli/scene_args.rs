@@ -171,10 +171,7 @@ pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Resu
     }
     o.env_rotation = args.env_rotation;
     if let Some(e) = args.exposure {
-        ensure!(
-            e.is_finite(),
-            "--exposure {e} must be a finite number of stops"
-        );
+        refrakt::tone::ToneMap::check_exposure(e).context("--exposure")?;
         o.exposure = Some(e);
     }
     if let Some(b) = &args.background {

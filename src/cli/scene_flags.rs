@@ -297,7 +297,7 @@ pub struct SceneArgs {
     /// Rotation of the environment map about the vertical axis, degrees [default: 0].
     #[arg(help_heading = "Environment", long, allow_negative_numbers = true)]
     pub env_rotation: Option<f32>,
-    /// Exposure in stops applied before tone mapping (PNG output and the window)
+    /// Exposure in stops applied before tone mapping (PNG output and the window), -64 to 64
     /// [default: 0].
     #[arg(help_heading = "Image", long, allow_negative_numbers = true)]
     pub exposure: Option<f32>,

@@ -134,13 +134,7 @@ pub fn trace_irradiance_with_progress(
         n: forward,
         c: z_k + forward.dot(eye),
     };
-    let threads = if popts.threads > 0 {
-        popts.threads
-    } else {
-        std::thread::available_parallelism()
-            .map(|n| n.get())
-            .unwrap_or(1)
-    };
+    let threads = crate::workers::count(popts.threads)?;
     let eta_launch = |p: DVec3| field.eta_w(p);
 
     #[derive(Default)]
@@ -211,13 +205,7 @@ pub fn trace_irradiance_with_progress(
         }
         acc
     };
-    let parts: Vec<Acc> = std::thread::scope(|s| {
-        let handles: Vec<_> = (0..threads).map(|_| s.spawn(work)).collect();
-        handles
-            .into_iter()
-            .map(|h| h.join().expect("photon worker panicked"))
-            .collect()
-    });
+    let parts: Vec<Acc> = crate::workers::run(threads, "photon", work)?;
     let mut total = Acc {
         flux: vec![[0.0; 3]; w * h],
         counts: vec![0; w * h],

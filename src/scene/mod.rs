@@ -485,11 +485,7 @@ impl Scene {
     }
 
     pub fn tone_map(&self) -> Result<ToneMap> {
-        ensure!(
-            self.exposure.is_finite(),
-            "exposure {} must be a finite number of stops",
-            self.exposure
-        );
+        ToneMap::check_exposure(self.exposure)?;
         Ok(ToneMap {
             exposure: self.exposure,
             operator: self.tonemap,

@@ -104,7 +104,16 @@ pub(crate) fn light_grid(
     if count > budget as f64 {
         n = (n * (budget as f64 / count).sqrt() as f32).floor();
     }
-    let n = n.max(glam::Vec2::splat(5.0));
+    let mut n = n.max(glam::Vec2::splat(5.0));
+    // The floor of five per side can take a thin grid (a 1024 × 1 image, a narrow field of
+    // view) past the budget: its long side then gives way (the budget is at least 25).
+    if n.x as f64 * n.y as f64 > budget as f64 {
+        if n.x >= n.y {
+            n.x = (budget as f64 / n.y as f64).floor().max(5.0) as f32;
+        } else {
+            n.y = (budget as f64 / n.x as f64).floor().max(5.0) as f32;
+        }
+    }
     let cell = extent / (n - 4.0);
     let corner = lo - 2.0 * cell;
     (

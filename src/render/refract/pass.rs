@@ -19,6 +19,32 @@ pub(crate) struct StateImage {
     pub(crate) layers: [LayerView; 2],
 }
 
+/// The fewest light rays a grid has: 5 × 5 (two cells of margin on each side of one,
+/// `params::light_grid`).
+pub(crate) const MIN_LIGHT_RAYS: u64 = 25;
+
+/// The size of the light-ray images: `rays_per_pixel` texels per pixel (at least
+/// [`MIN_LIGHT_RAYS`] in all), `width` wide where the height allows; an image too tall for
+/// the device (1 × 16384 at 2 rays per pixel) is laid out wider instead, since the rays
+/// wrap from texel row to texel row anyway.
+pub(crate) fn ray_image_size(
+    width: u32,
+    height: u32,
+    rays_per_pixel: u32,
+    max_side: u32,
+) -> Result<[u32; 2]> {
+    let rays = (width as u64 * height as u64 * rays_per_pixel as u64).max(MIN_LIGHT_RAYS);
+    let w = (width as u64).max(rays.div_ceil(max_side as u64));
+    let h = rays.div_ceil(w);
+    ensure!(
+        w <= max_side as u64 && h <= max_side as u64,
+        "{rays_per_pixel} light rays per pixel need {rays} texels of ray images, more than \
+         {max_side} × {max_side}: use fewer light rays per pixel (--light-rays) or a smaller \
+         image"
+    );
+    Ok([w as u32, h as u32])
+}
+
 impl StateImage {
     pub(crate) fn new(ctx: &Context, size: [u32; 2], name: &str) -> Result<Self> {
         let image = Image::new(
@@ -125,18 +151,18 @@ impl SweepPass {
         } = inputs;
         let (ctx, volume, tf, preint, sampler) = (*ctx, *volume, *tf, *preint, *sampler);
         let max_image = ctx.info().limits.max_image_dimension2_d;
-        ensure!(
-            (height as u64) * (rays_per_pixel as u64) <= max_image as u64,
-            "{rays_per_pixel} light rays per pixel need ray images {width}x{} texels; device \
-             '{}' allows {max_image} per side",
-            height as u64 * rays_per_pixel as u64,
-            ctx.info().name
-        );
+        let ray_size =
+            ray_image_size(width, height, rays_per_pixel, max_image).with_context(|| {
+                format!(
+                    "the light rays of a {width}x{height} image on '{}'",
+                    ctx.info().name
+                )
+            })?;
         // A deposit takes 3 vec4s as boxes, 10 as cells (light_gather.glsl DEPOSIT_VEC4S).
         // The buffer is bound whole, and a binding may not exceed the device's
         // maxStorageBufferRange (128 MiB on lavapipe: the cells of 2 rays per pixel reach
         // it at 648²): the boxes must fit, the cells may be refused per frame.
-        let capacity = width as u64 * height as u64 * rays_per_pixel as u64;
+        let capacity = ray_size[0] as u64 * ray_size[1] as u64;
         let range = ctx.info().limits.max_storage_buffer_range as u64;
         let [boxes_bytes, cells_bytes] = [capacity * 48, capacity * 160];
         // The compute splat's bin lists (below) are bound whole too.
@@ -188,7 +214,6 @@ impl SweepPass {
             StateImage::new(ctx, [width, height], "irradiance")?,
             StateImage::new(ctx, [width, height], "irradiance direction")?,
         ];
-        let ray_size = [width, height * rays_per_pixel];
         let rays = [
             StateImage::new(ctx, ray_size, "light rays")?,
             StateImage::new(ctx, ray_size, "light ray directions")?,
@@ -240,8 +265,8 @@ impl SweepPass {
                 ctx,
                 &light_pass,
                 &[&rays[0].layers[layer], &rays[1].layers[layer]],
-                width,
-                height * rays_per_pixel,
+                ray_size[0],
+                ray_size[1],
                 &format!("sweep light rays layer {layer}"),
             )
         };

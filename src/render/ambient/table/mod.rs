@@ -310,14 +310,7 @@ impl AmbientTable {
         );
         let columns = ns * ng;
         let units = 2 * columns;
-        let threads = if threads > 0 {
-            threads
-        } else {
-            std::thread::available_parallelism()
-                .map(|n| n.get())
-                .unwrap_or(1)
-        }
-        .min(units);
+        let threads = crate::workers::count(threads)?.min(units);
         let next = AtomicUsize::new(0);
         let done = AtomicU64::new(0);
         // Unit u < columns: the scattered column (k, m), largest s first (the longest walks
@@ -348,13 +341,7 @@ impl AmbientTable {
             }
             out
         };
-        let parts: Vec<Vec<Done>> = std::thread::scope(|sc| {
-            let handles: Vec<_> = (0..threads).map(|_| sc.spawn(work)).collect();
-            handles
-                .into_iter()
-                .map(|h| h.join().expect("ambient table worker panicked"))
-                .collect()
-        });
+        let parts: Vec<Vec<Done>> = crate::workers::run(threads, "ambient table", work)?;
         let mut table = Self {
             params: *params,
             scattered: vec![0.0; nt * ns * ng],
