@@ -20,6 +20,11 @@ use crate::volume::{Volume, Voxels};
 /// its transfer functions are derived from the data (`--labels auto`).
 pub const MAX_AUTO_LABELS: usize = 64;
 
+/// The most labels a volume may have: the preintegration table tells `PREINT_SIZE` (256)
+/// values apart per axis, and a label volume reaches the GPU as each voxel's label index
+/// ([`index_voxels`]), label k at k / 255.
+pub const MAX_LABELS: usize = crate::render::limits::PREINT_SIZE as usize;
+
 /// Opacity per reference sample of a label whose table alpha is 1: translucent enough to
 /// see one label through another.
 pub const LABEL_OPACITY: f32 = 0.5;
@@ -226,6 +231,64 @@ pub fn parse_table(text: &str) -> Result<Vec<Label>> {
         bail!("no labels (lines 'index name R G B A')");
     }
     Ok(labels)
+}
+
+/// Replaces each voxel by the index of its value in `values` (the volume's distinct values,
+/// sorted, at most [`MAX_LABELS`]) as 8-bit voxels, so that label k is k / 255 on the GPU:
+/// its own entry of the preintegration table and of the sampled transfer functions,
+/// whatever the values' type and spread (16-bit labels 0, 2 and 4 were 0, 3e-5 and 6e-5
+/// of the 16-bit range: one entry, one colour). Use [`indexed_table`] and
+/// [`categorical`] over the indices with the range (0, 255) with it.
+pub fn index_voxels(volume: &mut Volume, values: &[f64]) -> Result<()> {
+    ensure!(
+        values.len() <= MAX_LABELS,
+        "{} labels: at most {MAX_LABELS} can be told apart",
+        values.len()
+    );
+    let index = |v: f64| -> Result<u8> {
+        values
+            .binary_search_by(|x| x.total_cmp(&v))
+            .map(|k| k as u8)
+            .map_err(|_| anyhow::anyhow!("value {v} is not one of the volume's labels"))
+    };
+    let indices = match &volume.voxels {
+        Voxels::U8(v) => {
+            let mut lut = [0u8; 256];
+            for (i, l) in lut.iter_mut().enumerate() {
+                *l = index(i as f64).unwrap_or(0);
+            }
+            v.iter().map(|&x| lut[x as usize]).collect()
+        }
+        Voxels::U16(v) => {
+            let mut lut = vec![0u8; 65536];
+            for &value in values {
+                lut[value as usize] = index(value)?;
+            }
+            v.iter().map(|&x| lut[x as usize]).collect()
+        }
+        Voxels::F32(v) => v
+            .iter()
+            .map(|&x| index(x as f64))
+            .collect::<Result<Vec<u8>>>()?,
+    };
+    volume.voxels = Voxels::U8(indices);
+    volume.range = None;
+    Ok(())
+}
+
+/// `table` for a volume whose voxels [`index_voxels`] replaced: each label of `values`
+/// renumbered to its index (labels the volume lacks left out).
+pub fn indexed_table(table: &[Label], values: &[f64]) -> Vec<Label> {
+    table
+        .iter()
+        .filter_map(|l| {
+            let k = values.binary_search_by(|x| x.total_cmp(&l.value)).ok()?;
+            Some(Label {
+                value: k as f64,
+                ..l.clone()
+            })
+        })
+        .collect()
 }
 
 /// The categorical transfer functions: label k's colour, opacity and η over the values

@@ -37,10 +37,17 @@ impl PreintegrationTable {
     /// `labels`: the table of a label volume (nearest-voxel classification: each segment
     /// half its front label, half its back label; glsl/preintegrate.comp).
     pub fn new(ctx: &Context, labels: bool) -> Result<Self> {
-        // Header (2 x uvec4) plus every control point of the four functions.
+        // Header (2 x uvec4) plus every control point of the four functions: at most
+        // MAX_POINTS_PER_FUNCTION each from a file, or a label volume's categorical
+        // functions (two points per label in colour, opacity and η, one in medium).
+        let points = if labels {
+            6 * crate::labels::MAX_LABELS + 1
+        } else {
+            4 * MAX_POINTS_PER_FUNCTION
+        };
         let control_points = Buffer::new(
             ctx,
-            ((2 + 4 * MAX_POINTS_PER_FUNCTION) * 16) as u64,
+            ((2 + points) * 16) as u64,
             vk::usage::STORAGE_BUFFER,
             Memory::Upload,
             "tf control points",
@@ -84,8 +91,17 @@ impl PreintegrationTable {
     /// points are written to a host-visible buffer now, so the recording must be submitted
     /// before the next call.
     pub fn record_build(&mut self, rec: &mut Recorder, tf: &TransferFunctions) -> Result<()> {
+        let points = tf.control_points();
+        anyhow::ensure!(
+            (points.len() * 16) as u64 <= self.control_points.size(),
+            "the transfer functions '{}' have {} control points, more than the {} the \
+             preintegration takes",
+            tf.name,
+            points.len() - 2,
+            self.control_points.size() / 16 - 2
+        );
         self.control_points
-            .write(0, bytemuck::cast_slice(&tf.control_points()))?;
+            .write(0, bytemuck::cast_slice(&points))?;
         let (pipeline, set, _image) = (&self.pipeline, &self.set, &self.image);
         rec.pass(
             "preintegration",

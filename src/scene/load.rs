@@ -263,7 +263,7 @@ impl Scene {
             return Ok(None);
         }
         let max = if forced {
-            4096
+            labels::MAX_LABELS
         } else {
             labels::MAX_AUTO_LABELS
         };
@@ -273,7 +273,8 @@ impl Scene {
             Some(_) | None if !forced => return Ok(None),
             _ => bail!(
                 "--labels: the volume's values are not a label map (more than {max} \
-                 distinct values, or values that are not integers)"
+                 distinct values, the most labels refrakt tells apart, or values that are \
+                 not integers)"
             ),
         };
         let (table, source) = match &self.labels {
@@ -283,7 +284,15 @@ impl Scene {
                 "the built-in palette".into(),
             ),
         };
-        let tf = labels::categorical(&table, &values, volume.value_range());
+        // The voxels become label indices (label k at k / 255 on the GPU), the table and
+        // the transfer functions with them.
+        let indices: Vec<f64> = (0..values.len()).map(|k| k as f64).collect();
+        let tf = labels::categorical(
+            &labels::indexed_table(&table, &values),
+            &indices,
+            (0.0, 255.0),
+        );
+        labels::index_voxels(volume, &values)?;
         volume.labels = true;
         let missing = values
             .iter()
