@@ -33,6 +33,10 @@ impl Default for Camera {
     }
 }
 
+/// The farthest the camera and its target may be from the volume's centre, world units
+/// (the volume's box is 1 across).
+pub const MAX_DISTANCE: f32 = 1000.0;
+
 impl Camera {
     pub fn validate(&self) -> Result<()> {
         ensure!(
@@ -44,9 +48,12 @@ impl Camera {
             "camera elevation {} must be between -90 and 90 degrees",
             self.elevation
         );
+        // The volume's box is 1 across (world units): beyond a thousand boxes away, f32
+        // depths are too coarse for the planes (and 1e20 overflowed into NaN directions).
         ensure!(
-            self.distance.is_finite() && self.distance > 0.0,
-            "camera distance {} must be a positive number",
+            self.distance.is_finite() && self.distance > 0.0 && self.distance <= MAX_DISTANCE,
+            "camera distance {} must be a positive number up to {MAX_DISTANCE} (the volume's \
+             box is 1 across)",
             self.distance
         );
         ensure!(
@@ -55,8 +62,9 @@ impl Camera {
             self.fov_y
         );
         ensure!(
-            self.target.is_finite(),
-            "camera target {} must be finite numbers",
+            self.target.is_finite() && self.target.abs().max_element() <= MAX_DISTANCE,
+            "camera target {} must be finite numbers within {MAX_DISTANCE} of the volume's \
+             centre",
             self.target
         );
         Ok(())

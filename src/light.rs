@@ -118,6 +118,19 @@ impl Light {
 }
 
 impl LightSource {
+    /// A directional light towards `towards`, as given: any finite length, rescaled so its
+    /// largest component is ±1 (only its direction counts, and 1e20,1e20,0 overflowed f32
+    /// when normalised, judging the light by its length).
+    pub fn directional(towards: Vec3) -> Self {
+        let m = towards.abs().max_element();
+        let towards = if m.is_finite() && m > 0.0 {
+            towards / m
+        } else {
+            towards
+        };
+        LightSource::Directional { towards }
+    }
+
     /// `X,Y,Z` or `dir:X,Y,Z` (towards the light), or `point:X,Y,Z` (world position),
     /// optionally followed by `@R,G,B` (linear colour): the source and the colour if given.
     pub fn parse_with_colour(text: &str) -> anyhow::Result<(Self, Option<[f32; 3]>)> {
@@ -142,9 +155,7 @@ impl LightSource {
             None => (rest, None),
         };
         let source = match kind {
-            "dir" | "directional" => LightSource::Directional {
-                towards: triple(at, "direction")?,
-            },
+            "dir" | "directional" => LightSource::directional(triple(at, "direction")?),
             "point" => LightSource::Point {
                 position: triple(at, "position")?,
             },

@@ -596,6 +596,53 @@ fn bad_camera_and_sizes_are_clear_errors() {
         &["render", "--background", "1,2", "-o", "x.png"],
         "--background",
     );
+    // Far cameras: 1e20 made NaN light directions ("light 1: light direction [NaN...").
+    assert_clean_failure(
+        &["render", "--distance", "1e20", "-o", "x.png"],
+        "camera distance 100000000000000000000 must be a positive number up to 1000",
+    );
+    assert_clean_failure(
+        &["render", "--exposure", "100", "-o", "x.png"],
+        "exposure 100 must be a number of stops from -64 to 64",
+    );
+    assert_clean_failure(
+        &["photons", "--threads", "100000", "-o", "x.exr"],
+        "from 1 to 1024",
+    );
+}
+
+/// A light direction is a direction at any length: 1e20,1e20,0 was judged 90° from the
+/// view by its overflowing length, and 1e-20,1e-20,0 "zero"; both are the light of 1,1,0.
+#[test]
+fn light_directions_count_at_any_length() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = |light: &str| {
+        let out = dir.path().join(format!("{}.png", light.len()));
+        let o = refrakt(&[
+            "render",
+            "--width",
+            "24",
+            "--height",
+            "24",
+            "--volume-size",
+            "16",
+            "--light",
+            light,
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "--light {light}: {}", stderr(&o));
+        std::fs::read(&out).unwrap()
+    };
+    let unit = png("1,1,0");
+    assert!(
+        png("1e20,1e20,0") == unit,
+        "1e20,1e20,0 renders another light"
+    );
+    assert!(
+        png("1e-20,1e-20,0") == unit,
+        "1e-20,1e-20,0 renders another light"
+    );
 }
 
 /// A mistyped REFRAKT_VALIDATE is refused, not read as "off" (validation silently gone).

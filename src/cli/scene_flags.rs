@@ -120,7 +120,7 @@ pub struct SceneArgs {
     /// [scene default].
     #[arg(help_heading = "Camera", long, allow_negative_numbers = true)]
     pub elevation: Option<f32>,
-    /// Camera distance from the target, the volume centre unless --target (the volume's
+    /// Camera distance from the target, the volume centre unless --target, up to 1000 (the volume's
     /// longest side is 1) [scene default].
     #[arg(help_heading = "Camera", long, allow_negative_numbers = true)]
     pub distance: Option<f32>,

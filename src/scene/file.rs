@@ -380,9 +380,12 @@ impl SceneFile {
                 // The camera orbits the target (the origin unless given) and looks at it.
                 let e = eye - target;
                 let d = e.length();
+                ensure!(d > 0.0, "[camera] eye must differ from target");
                 ensure!(
-                    d > 0.0 && d.is_finite(),
-                    "[camera] eye must differ from target"
+                    d <= crate::camera::MAX_DISTANCE,
+                    "[camera] eye {eye} is {d:e} from the target, more than the {} a camera \
+                     may be (the volume's box is 1 across)",
+                    crate::camera::MAX_DISTANCE
                 );
                 o.distance = Some(d);
                 o.elevation = Some(
@@ -410,9 +413,7 @@ impl SceneFile {
                          light), not both"
                     ),
                     (Some(Towards::Direction(d)), None) => {
-                        o.light_source = Some(LightSource::Directional {
-                            towards: Vec3::from(d),
-                        })
+                        o.light_source = Some(LightSource::directional(Vec3::from(d)))
                     }
                     (Some(Towards::Word(w)), None) if w.eq_ignore_ascii_case("env") => {
                         ensure!(
@@ -445,9 +446,9 @@ impl SceneFile {
                          frame's ambient level, not a light's)"
                     );
                     let source = match (l.towards, l.position) {
-                        (Some(Towards::Direction(d)), None) => LightSource::Directional {
-                            towards: Vec3::from(d),
-                        },
+                        (Some(Towards::Direction(d)), None) => {
+                            LightSource::directional(Vec3::from(d))
+                        }
                         (None, Some(p)) => LightSource::Point {
                             position: Vec3::from(p),
                         },

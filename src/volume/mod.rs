@@ -133,6 +133,16 @@ impl Volume {
                 "value range ({lo}, {hi}) must be finite with max > min"
             );
         }
+        // f32 values are mapped onto [0, 1] over their range (or the window): a span beyond
+        // f32 (values near ±3e38) made every mapped value 0 and the reported range NaN.
+        if let Voxels::F32(_) = &self.voxels {
+            let (lo, hi) = self.value_range();
+            ensure!(
+                (hi - lo).is_finite(),
+                "the values span {lo:e} .. {hi:e}, wider than 32-bit floats can map onto \
+                 0 .. 1; give the range that matters with --window LO,HI"
+            );
+        }
         Ok(())
     }
 
@@ -302,6 +312,19 @@ impl Volume {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn values_spanning_beyond_f32_are_refused_and_a_window_mends_it() {
+        let mut v = Volume::new([2, 2, 2], [1.0; 3], Voxels::F32(vec![0.0; 8])).unwrap();
+        if let Voxels::F32(x) = &mut v.voxels {
+            x[0] = -3e38;
+            x[1] = 3e38;
+        }
+        let e = v.validate().unwrap_err().to_string();
+        assert!(e.contains("--window"), "{e}");
+        v.range = Some((-1.0, 1.0));
+        v.validate().unwrap();
+    }
 
     #[test]
     fn flip_mirrors_the_named_axes() {

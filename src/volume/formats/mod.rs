@@ -143,8 +143,8 @@ pub fn load_volume(path: &Path, opts: &LoadOptions) -> Result<Volume> {
 fn load_inner(path: &Path, opts: &LoadOptions) -> Result<Volume> {
     if let Some((lo, hi)) = opts.window {
         ensure!(
-            lo.is_finite() && hi.is_finite() && lo < hi,
-            "window ({lo}, {hi}) must be finite with lo < hi"
+            lo.is_finite() && hi.is_finite() && lo < hi && (hi - lo).is_finite(),
+            "window ({lo}, {hi}) must be finite with lo < hi (and hi − lo finite)"
         );
     }
     if let Some(s) = opts.spacing {
