@@ -1213,3 +1213,63 @@ fn a_flag_of_other_models_names_the_models_that_take_it() {
         }
     }
 }
+
+/// A scene file's settings of other models are refused as their flags are (they were
+/// silently ignored), and so are the light rays' settings with the backward transport,
+/// from a file or the command line (they were ignored: the images were byte-identical).
+#[test]
+fn settings_that_do_not_apply_are_refused_from_files_and_flags() {
+    let dir = tempfile::tempdir().unwrap();
+    let head = "[volume]\nbuiltin = \"shell\"\nsize = 8\n[render]\nwidth = 8\nheight = 8\n";
+    for (body, needle) in [
+        (
+            "model = \"ea\"\n[light]\ntowards = [0, 1, 1]\nsoftness = 2\n",
+            "[light] softness, [light] towards only apply to --model ao, single, ambient, \
+             refract, not ea",
+        ),
+        (
+            "model = \"ea\"\n[environment]\nmap = \"sky\"\nrotation = 30\n",
+            "[environment] map, [environment] rotation only apply to --model refract",
+        ),
+        (
+            "model = \"refract\"\ng = 0.5\nalbedo = 0.2\n",
+            "[render] g, [render] albedo only apply to --model single, ambient, not refract",
+        ),
+        (
+            "light_transport = \"backward\"\nlight_rays = 8\nlight_spacing = 4\n",
+            "[render] light_rays, [render] light_spacing only apply to the forward light \
+             transport",
+        ),
+    ] {
+        let path = dir.path().join("s.toml");
+        std::fs::write(&path, format!("{head}{body}")).unwrap();
+        let out = dir.path().join("o.png");
+        let o = refrakt(&[
+            "render",
+            path.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        let err = stderr(&o);
+        assert!(!o.status.success() && err.contains(needle), "{body}: {err}");
+        assert!(!out.exists(), "{body}: an image was written");
+    }
+    assert_clean_failure(
+        &[
+            "render",
+            "--volume-size",
+            "8",
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "--light-transport",
+            "backward",
+            "--light-rays",
+            "4",
+            "-o",
+            "x.png",
+        ],
+        "--light-rays only applies to the forward light transport",
+    );
+}

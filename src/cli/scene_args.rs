@@ -9,7 +9,7 @@ use anyhow::{bail, ensure, Context as _, Result};
 
 use refrakt::light::LightSource;
 use refrakt::output;
-use refrakt::render::{Model, StateBuffer};
+use refrakt::render::StateBuffer;
 use refrakt::scene::{self, EnvSource, LoadedScene, Scene, TransferSource, VolumeSource};
 use refrakt::volume::formats::{DeviceLimits, RawLayout};
 
@@ -259,59 +259,15 @@ pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Resu
         );
     }
     s.apply(o);
-    refuse_other_models_flags(s.model, args, extra)?;
-    Ok(s)
-}
-
-/// A flag that belongs to some models (their declarations list it: `Model::flags`),
-/// given with a model that does not take it, is an error naming the models that do: a
-/// flag that does not apply is refused, not silently ignored.
-fn refuse_other_models_flags(model: Model, args: &SceneArgs, extra: &[&str]) -> Result<()> {
-    // (flags, the models that take them), grouped by those models.
-    let mut refused: Vec<(Vec<&str>, Vec<&str>)> = Vec::new();
-    for flag in model_flags_given(args)
+    // A flag that belongs to some models (their declarations list it: `Model::flags`),
+    // given with a model that does not take it, is an error naming the models that do.
+    let given: Vec<scene::Given> = model_flags_given(args)
         .into_iter()
         .chain(extra.iter().copied())
-    {
-        if model.flags().contains(&flag) {
-            continue;
-        }
-        let owners: Vec<&str> = Model::ALL
-            .iter()
-            .filter(|m| m.flags().contains(&flag))
-            .map(|m| m.name())
-            .collect();
-        if owners.is_empty() {
-            continue;
-        }
-        match refused.iter_mut().find(|(_, o)| *o == owners) {
-            Some((flags, _)) => flags.push(flag),
-            None => refused.push((vec![flag], owners)),
-        }
-    }
-    let said: Vec<String> = refused
-        .iter()
-        .map(|(flags, owners)| {
-            format!(
-                "{} only appl{} to --model {}",
-                flags.join(", "),
-                if flags.len() > 1 { "y" } else { "ies" },
-                owners.join(", ")
-            )
-        })
+        .map(scene::Given::flag)
         .collect();
-    ensure!(
-        said.is_empty(),
-        "{}, not {}{}",
-        said.join("; "),
-        model.name(),
-        if model.uses_light() {
-            ""
-        } else {
-            " (which has no light, plane sweep, refraction or environment)"
-        }
-    );
-    Ok(())
+    scene::refuse_what_does_not_apply(s.model, s.light_transport, &given)?;
+    Ok(s)
 }
 
 /// The flags given that belong to some models only (which ones: their declarations).

@@ -216,7 +216,81 @@ pub fn parse_scalar_kind(s: &str) -> Result<crate::volume::formats::ScalarKind> 
 }
 
 impl SceneFile {
+    /// The settings this file gives that belong to some models (or to the forward light
+    /// transport) only, by their command-line flags, for
+    /// [`super::refuse_what_does_not_apply`].
+    fn model_settings(&self) -> Vec<Given> {
+        let mut given = Vec::new();
+        let mut add = |flag: &'static str, written: String| given.push(Given { flag, written });
+        let light_keys: Vec<(String, String)> = match &self.light {
+            Some(toml::Value::Table(t)) => {
+                t.keys().map(|k| ("[light]".into(), k.clone())).collect()
+            }
+            Some(toml::Value::Array(a)) => a
+                .iter()
+                .filter_map(|t| t.as_table())
+                .flat_map(|t| t.keys().map(|k| ("[[light]]".into(), k.clone())))
+                .collect(),
+            _ => Vec::new(),
+        };
+        for (table, key) in light_keys {
+            // A light table describes a light (its softness and colour too, which models
+            // that take lights but do not soften them leave as they are); the ambient
+            // level is the frame's, as --ambient-level.
+            let flag = match key.as_str() {
+                "towards" | "position" | "colour" | "softness" => "--light",
+                "ambient_level" => "--ambient-level",
+                _ => continue,
+            };
+            add(flag, format!("{table} {key}"));
+        }
+        if let Some(e) = &self.environment {
+            if e.map.is_some() {
+                add("--env", "[environment] map".into());
+            }
+            if e.rotation.is_some() {
+                add("--env-rotation", "[environment] rotation".into());
+            }
+        }
+        if let Some(r) = &self.render {
+            for (flag, key, set) in [
+                ("--roughness", "roughness", r.roughness.is_some()),
+                ("--specular", "specular", r.specular.is_some()),
+                ("--eta-scale", "eta_scale", r.eta_scale.is_some()),
+                (
+                    "--light-transport",
+                    "light_transport",
+                    r.light_transport.is_some(),
+                ),
+                ("--light-rays", "light_rays", r.light_rays.is_some()),
+                (
+                    "--light-spacing",
+                    "light_spacing",
+                    r.light_spacing.is_some(),
+                ),
+                ("--reflections", "reflections", r.reflections.is_some()),
+                ("--clip", "clip", r.clip.is_some()),
+                ("--g", "g", r.g.is_some()),
+                ("--albedo", "albedo", r.albedo.is_some()),
+                ("--ao-radius", "ao_radius", r.ao_radius.is_some()),
+                ("--ao-diffuse", "ao_diffuse", r.ao_diffuse.is_some()),
+                (
+                    "--ambient-radius",
+                    "ambient_radius",
+                    r.ambient_radius.is_some(),
+                ),
+                ("--light", "lights", r.lights.is_some()),
+            ] {
+                if set {
+                    add(flag, format!("[render] {key}"));
+                }
+            }
+        }
+        given
+    }
+
     pub(super) fn resolve(self, path: &Path) -> Result<Scene> {
+        let given = self.model_settings();
         let base = path.parent().unwrap_or(Path::new("."));
         let rel = |p: &str| -> Result<PathBuf> {
             let q = base.join(p);
@@ -533,6 +607,8 @@ impl SceneFile {
         }
         o.extra_lights = more_lights;
         s.apply(o);
+        // A setting of other models is refused, as its flag is (the file's own model).
+        super::refuse_what_does_not_apply(s.model, s.light_transport, &given)?;
         // Everything checkable without the GPU, now, with the scene's name on it.
         s.render_options()?;
         s.tone_map()?;

@@ -22,11 +22,13 @@ use crate::transfer::TransferFunctions;
 use crate::volume::formats::DeviceLimits;
 use crate::volume::{procedural, standins, Volume};
 
+mod applies;
 mod catalogue;
 mod data;
 mod file;
 mod load;
 
+pub use applies::{refuse_what_does_not_apply, Given};
 pub use catalogue::*;
 use file::SceneFile;
 pub use file::{parse_flip, parse_model, parse_on_off, parse_scalar_kind, parse_tonemap};
