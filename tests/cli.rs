@@ -1273,3 +1273,42 @@ fn settings_that_do_not_apply_are_refused_from_files_and_flags() {
         "--light-rays only applies to the forward light transport",
     );
 }
+
+/// A stand-in too large for the device is refused before it is generated (`--scale 2` on
+/// the glass wrote 3.8 GB to the cache first), and one too small is refused, not raised
+/// to 2 voxels a side while the report names the scale asked for.
+#[test]
+fn stand_in_scales_are_checked_before_any_work() {
+    // On lavapipe (2 GiB for textures): a GPU may hold the 3.8 GB volume, and then make it.
+    let info = refrakt(&["info"]);
+    if !String::from_utf8_lossy(&info.stdout).contains("llvmpipe") {
+        eprintln!("skipped: the size below is beyond lavapipe's limit only");
+        return;
+    }
+    let cache = tempfile::tempdir().unwrap();
+    let run = |scale: &str| {
+        refrakt_command(&[
+            "--device", "llvmpipe", "render", "glass", "--scale", scale, "--width", "8",
+            "--height", "8", "-o", "x.png",
+        ])
+        .env("REFRAKT_CACHE_DIR", cache.path())
+        .output()
+        .unwrap()
+    };
+    let o = run("2");
+    let err = stderr(&o);
+    assert!(
+        !o.status.success() && err.contains("the glass stand-in at scale 2"),
+        "{err}"
+    );
+    assert!(
+        std::fs::read_dir(cache.path()).unwrap().next().is_none(),
+        "something was written to the cache"
+    );
+    let o = run("0.001");
+    let err = stderr(&o);
+    assert!(
+        !o.status.success() && err.contains("fewer than 2 along an axis"),
+        "{err}"
+    );
+}

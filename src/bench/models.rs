@@ -402,7 +402,7 @@ fn frames_per_row(s: &ModelsSettings) -> u64 {
 /// Times every model of [`Model::ALL`] on every selected row.
 pub fn models(ctx: &Context, s: &ModelsSettings) -> Result<ModelsReport> {
     ensure!(s.timing.frames >= 1, "--frames must be at least 1");
-    standins::scaled_dims([1, 1, 1], s.timing.scale).context("--scale")?;
+    standins::check_scale(s.timing.scale).context("--scale")?;
     let specs = select_models_rows(&s.timing.rows)?;
     let ea = Model::ALL.iter().position(|m| *m == Model::Ea).unwrap_or(0);
     let side = models_side(s.timing.scale);

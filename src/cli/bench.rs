@@ -33,7 +33,7 @@ fn timed(
     [frames, warmup]: [u32; 2],
     more: &[(&str, Option<&Path>, &str)],
 ) -> Result<refrakt::bench::Timing> {
-    standins::scaled_dims([1, 1, 1], t.scale).context("--scale")?;
+    standins::check_scale(t.scale).context("--scale")?;
     let frames = t.frames.unwrap_or(frames);
     ensure!(frames >= 1, "--frames must be at least 1");
     let mut reports = vec![

@@ -29,6 +29,17 @@ impl Scene {
                 } else {
                     let d = standins::dataset(name)?;
                     let dims = standins::scaled_dims(d.dims, *scale)?;
+                    // Before generating (and caching) it: --scale 2 on the glass stand-in
+                    // wrote 3.8 GB to the cache and was refused only then.
+                    if let Some(l) = limits {
+                        crate::volume::formats::check_limits_texel(
+                            dims,
+                            1,
+                            l.max_3d_extent,
+                            l.bytes_available,
+                        )
+                        .with_context(|| format!("the {name} stand-in at scale {scale}"))?;
+                    }
                     standins::load_or_generate(name, dims, &standins::cache_dir())?.0
                 }
             }

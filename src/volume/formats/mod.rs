@@ -231,7 +231,7 @@ pub fn check_volume_limits(
     check_limits_texel(volume.dims, texel, max_3d_extent, bytes_available)
 }
 
-fn check_limits_texel(
+pub(crate) fn check_limits_texel(
     dims: [u32; 3],
     texel_bytes: u64,
     max_3d_extent: u32,

@@ -152,10 +152,32 @@ pub fn dataset(name: &str) -> Result<&'static Dataset> {
 /// The resolution at `scale` (benchmark `--scale`): every axis scaled and rounded, at
 /// least 2 voxels.
 pub fn scaled_dims(dims: [u32; 3], scale: f64) -> Result<[u32; 3]> {
+    check_scale(scale)?;
+    let scaled = dims.map(|d| (d as f64 * scale).round() as u32);
+    if scaled.iter().any(|&d| d < 2) {
+        // Not raised to 2 quietly: a report would name a scale it did not measure.
+        let smallest = dims.iter().copied().min().unwrap_or(1).max(1);
+        bail!(
+            "scale {scale} leaves {}x{}x{} voxels of {}x{}x{}, fewer than 2 along an axis; \
+             this data set needs a scale of at least {:.4}",
+            scaled[0],
+            scaled[1],
+            scaled[2],
+            dims[0],
+            dims[1],
+            dims[2],
+            1.5 / smallest as f64
+        );
+    }
+    Ok(scaled)
+}
+
+/// A stand-in scale's own check: a number in (0, 4].
+pub fn check_scale(scale: f64) -> Result<()> {
     if !(scale.is_finite() && scale > 0.0 && scale <= 4.0) {
         bail!("scale {scale} must be a number in (0, 4]");
     }
-    Ok(dims.map(|d| ((d as f64 * scale).round() as u32).max(2)))
+    Ok(())
 }
 
 /// Where generated stand-ins are cached: `$REFRAKT_CACHE_DIR`, else
@@ -452,6 +474,9 @@ mod tests {
         assert_eq!(a, b);
         assert!(scaled_dims([4, 4, 4], 0.0).is_err());
         assert!(scaled_dims([4, 4, 4], f64::NAN).is_err());
+        // Too small for a side of 2: refused, not raised to 2.
+        assert_eq!(scaled_dims([124, 256, 256], 0.0121).unwrap(), [2, 3, 3]);
+        assert!(scaled_dims([124, 256, 256], 0.012).is_err());
         assert!(load_or_generate("teapot", dims, dir.path()).is_err());
     }
 
