@@ -255,3 +255,42 @@ fn scaling_bench_reports_both_series_and_fits() {
     }
     assert!(stdout.contains("per plane and shaded pixel"), "{stdout}");
 }
+
+/// `bench scaling` takes any scene `render` takes: a volume file without --tf (its
+/// transfer functions derived from its data) failed with an internal "use load_all";
+/// and a series of one point is refused before measuring, naming its flag.
+#[test]
+fn scaling_bench_takes_a_volume_file_and_refuses_a_one_point_series() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut v = vec![0u8; 12 * 12 * 12];
+    for z in 3..9 {
+        for y in 3..9 {
+            for x in 3..9 {
+                v[x + 12 * (y + 12 * z)] = 200;
+            }
+        }
+    }
+    let raw = dir.path().join("cube_12x12x12_uint8.raw");
+    std::fs::write(&raw, &v).unwrap();
+    let base = [
+        "bench",
+        "scaling",
+        "--scene",
+        raw.to_str().unwrap(),
+        "--side",
+        "8",
+        "--frames",
+        "1",
+        "--quiet",
+    ];
+    let o = refrakt(&[&base[..], &["--sides", "8,12", "--sample-distances", "4,8"]].concat());
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(stdout.contains("ms per plane"), "{stdout}");
+    let o = refrakt(&[&base[..], &["--sides", "8", "--sample-distances", "4,8"]].concat());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("--sides: give at least two different values"),
+        "{err}"
+    );
+}

@@ -77,10 +77,10 @@ pub fn scaling(
     progress: bool,
 ) -> Result<ScalingReport> {
     ensure!(frames >= 1, "--frames must be at least 1");
-    let volume = scene.load_volume(data_dir, Some(upload::device_limits(ctx)))?;
-    let tf = scene.transfer_functions()?;
-    let mut renderer = Renderer::new(ctx, &volume, &tf)?;
-    renderer.set_environment(scene.environment_map()?.as_ref())?;
+    // Any scene `render` takes: a volume file's transfer functions may come from its data.
+    let loaded = scene.load_all(data_dir, Some(upload::device_limits(ctx)))?;
+    let mut renderer = Renderer::new(ctx, &loaded.volume, &loaded.tf)?;
+    renderer.set_environment(loaded.env.as_ref())?;
     let pb = progress_bar(
         ((distances.len() + sides.len()) as u64) * (frames as u64 + 1),
         progress,

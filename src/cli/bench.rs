@@ -215,6 +215,16 @@ pub fn bench_scaling(desc: &ContextDesc, args: &ScalingArgs) -> Result<ExitCode>
     if let Some(p) = &args.json {
         refrakt::bench::check_output(p, "json").context("--json")?;
     }
+    // Each curve is a fit: two different x values at least, checked before measuring.
+    let distinct = |v: &[f64]| v.iter().any(|x| *x != v[0]);
+    let distances: Vec<f64> = args.sample_distances.iter().map(|&d| d as f64).collect();
+    let sides: Vec<f64> = args.sides.iter().map(|&d| d as f64).collect();
+    for (flag, values) in [("--sample-distances", distances), ("--sides", sides)] {
+        ensure!(
+            values.len() >= 2 && distinct(&values),
+            "{flag}: give at least two different values (each is a point of a fitted line)"
+        );
+    }
     let ctx = Context::new(desc)?;
     let data_dir = args.data_dir.clone().unwrap_or_else(scene::data_dir);
     let r = refrakt::bench::scaling(

@@ -426,7 +426,10 @@ impl Scene {
             TransferSource::Named(n) => TransferFunctions::load(n),
             TransferSource::Inline(tf) => Ok((**tf).clone()),
             TransferSource::FromData => {
-                bail!("the transfer functions are derived from the volume: use load_all")
+                bail!(
+                    "the transfer functions are derived from the volume's data, which is not \
+                     loaded here: give --tf"
+                )
             }
         }
     }
