@@ -1312,3 +1312,55 @@ fn stand_in_scales_are_checked_before_any_work() {
         "{err}"
     );
 }
+
+/// Values that used to be accepted and then ignored (or half used) are refused, naming the
+/// reason.
+#[test]
+fn settings_that_would_be_ignored_are_refused() {
+    let small = [
+        "--volume-size",
+        "8",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "-o",
+        "x.png",
+    ];
+    for (args, needle) in [
+        (
+            &["--upright", "off"][..],
+            "--upright applies to volume files",
+        ),
+        (
+            &["--env", "none", "--env-rotation", "30"][..],
+            "an environment rotation (30°) turns an environment map, and this scene has none",
+        ),
+        (
+            &["--background", "1,0,0", "--env-rotation", "30"][..],
+            "this scene has none",
+        ),
+        (
+            &["--dump-dir", "."][..],
+            "--dump-dir is where --dump writes",
+        ),
+        (
+            &["--variant", "region=full,region=rect"][..],
+            "'region' is given twice",
+        ),
+        (
+            &["--background", "1,0,0,2"][..],
+            "the alpha 2 must be between 0 and 1",
+        ),
+        (
+            &["--background", "nan,0,0"][..],
+            "'nan' is not a finite, non-negative number",
+        ),
+    ] {
+        let mut a = vec!["render"];
+        a.extend(args);
+        a.extend(small);
+        assert_clean_failure(&a, needle);
+    }
+    assert_clean_failure(&["--device", "", "info"], "--device '' is empty");
+}

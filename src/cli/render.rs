@@ -5,7 +5,7 @@ use std::io::IsTerminal;
 use std::path::Path;
 use std::process::ExitCode;
 
-use anyhow::{bail, Result};
+use anyhow::{bail, ensure, Result};
 
 use refrakt::output;
 use refrakt::render::{
@@ -97,6 +97,10 @@ pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
         Some(d) => parse_dumps(d)?,
         None => Vec::new(),
     };
+    ensure!(
+        args.dump_dir.is_none() || !dumps.is_empty(),
+        "--dump-dir is where --dump writes its state buffers: give --dump too"
+    );
     let dump_dir = match &args.dump_dir {
         Some(d) => d.clone(),
         None => args

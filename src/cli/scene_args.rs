@@ -57,8 +57,17 @@ pub fn parse_background(s: &str) -> Result<[f32; 4]> {
     for (i, p) in parts.iter().enumerate() {
         out[i] = p
             .parse::<f32>()
-            .with_context(|| format!("--background '{s}': '{p}' is not a number"))?;
+            .ok()
+            .filter(|v| v.is_finite() && *v >= 0.0)
+            .with_context(|| {
+                format!("--background '{s}': '{p}' is not a finite, non-negative number")
+            })?;
     }
+    ensure!(
+        out[3] <= 1.0,
+        "--background '{s}': the alpha {} must be between 0 and 1",
+        out[3]
+    );
     Ok(out)
 }
 
@@ -137,6 +146,14 @@ pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Resu
         o.flip = Some(scene::parse_flip(f).context("--flip")?);
     }
     if let Some(u) = &args.upright {
+        // Only files state a patient's orientation (the built-in scenes are upright).
+        ensure!(
+            matches!(
+                s.volume,
+                VolumeSource::File { .. } | VolumeSource::Fetched { .. }
+            ),
+            "--upright applies to volume files; '{name}' is a built-in scene"
+        );
         o.upright = Some(scene::parse_on_off(u).context("--upright")?);
     }
     if let Some(l) = &args.labels {

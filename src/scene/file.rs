@@ -373,6 +373,14 @@ impl SceneFile {
         if let Some(f) = &v.flip {
             o.flip = Some(parse_flip(f).context("[volume] flip")?);
         }
+        ensure!(
+            v.upright.is_none()
+                || matches!(
+                    s.volume,
+                    VolumeSource::File { .. } | VolumeSource::Fetched { .. }
+                ),
+            "[volume] upright applies to volume files and scans, not built-in scenes"
+        );
         o.upright = v.upright;
         if let Some(l) = &v.labels {
             o.labels = Some(match LabelChoice::parse(l) {

@@ -458,6 +458,12 @@ impl Scene {
     /// Render options for this scene (validated).
     pub fn render_options(&self) -> Result<RenderOptions> {
         self.camera.validate()?;
+        ensure!(
+            self.env_rotation == 0.0 || self.environment != EnvSource::None,
+            "an environment rotation ({}°) turns an environment map, and this scene has none \
+             (--env none or a background): drop the rotation or give a map",
+            self.env_rotation
+        );
         let opts = RenderOptions {
             width: self.width,
             height: self.height,

@@ -41,7 +41,9 @@ pub fn context() -> TestContext {
     let lock = CONTEXT_LOCK.lock().unwrap_or_else(|e| e.into_inner());
     let ctx = Context::new(&ContextDesc {
         validate: true,
-        device: std::env::var("REFRAKT_DEVICE").ok(),
+        device: std::env::var("REFRAKT_DEVICE")
+            .ok()
+            .filter(|d| !d.is_empty()),
         ..Default::default()
     })
     .expect("creating a validated Vulkan context (is scripts/setup.sh run?)");

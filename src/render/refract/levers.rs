@@ -273,6 +273,7 @@ impl Levers {
             );
         }
         let mut levers = Levers::default();
+        let mut keys: Vec<&str> = Vec::new();
         for (k, part) in spec.split(',').map(str::trim).enumerate() {
             match part {
                 "default" if k == 0 => continue,
@@ -292,6 +293,11 @@ impl Levers {
                 );
             };
             let (key, value) = (key.trim(), value.trim());
+            // One value a lever: with two, which one was meant?
+            if keys.contains(&key) {
+                bail!("'{key}' is given twice in variant '{spec}'");
+            }
+            keys.push(key);
             let on = |value: &str| match value {
                 "on" | "true" | "1" => Ok(true),
                 "off" | "false" | "0" => Ok(false),

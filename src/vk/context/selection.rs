@@ -168,7 +168,13 @@ pub(super) fn select_device(infos: &[DeviceInfo], sel: &str) -> Result<usize> {
             device_list(infos)
         );
     }
-    let needle = sel.to_lowercase();
+    let needle = sel.trim().to_lowercase();
+    if needle.is_empty() {
+        bail!(
+            "--device '{sel}' is empty: give an index or part of a name; devices: {}",
+            device_list(infos)
+        );
+    }
     let matches: Vec<usize> = infos
         .iter()
         .filter(|i| i.name.to_lowercase().contains(&needle))
