@@ -580,6 +580,58 @@ fn nifti_errors_name_file_and_reason() {
     assert_eq!(load_opts(&p, &opts).voxels, Voxels::U8(u8s()));
 }
 
+/// Headers that contradict themselves are refused, not read with one of the two winning:
+/// a field given twice (the last won), NRRD's `spacings` beside `space directions` (the
+/// spacings were dropped), a MetaImage line after an external ElementDataFile (ignored).
+#[test]
+fn contradictory_headers_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let raw = le16(&i16s());
+    let base = "type: short\ndimension: 3\nsizes: 5 4 3\nendian: little\nencoding: raw\n";
+    let p = write(
+        dir.path(),
+        "twice.nrrd",
+        &nrrd(&format!("{base}type: float\n"), &raw),
+    );
+    expect_err(&p, &["twice.nrrd", "'type' is given twice"]);
+    let p = write(
+        dir.path(),
+        "both.nrrd",
+        &nrrd(
+            &format!(
+                "{base}spacings: 5 5 5\nspace: left-posterior-superior\n\
+                 space directions: (1,0,0) (0,1,0) (0,0,1)\n"
+            ),
+            &raw,
+        ),
+    );
+    expect_err(&p, &["both.nrrd", "'space directions' and 'spacings'"]);
+    let p = write(
+        dir.path(),
+        "twice.mha",
+        &[
+            mhd("DimSize = 5 4 2\nElementType = MET_SHORT\n", "LOCAL").as_bytes(),
+            &raw[..],
+        ]
+        .concat(),
+    );
+    expect_err(&p, &["twice.mha", "'DimSize' is given twice"]);
+    write(dir.path(), "after.raw", &raw);
+    let p = write(
+        dir.path(),
+        "after.mhd",
+        format!(
+            "{}ElementSpacing = 2 2 2\n",
+            mhd("ElementType = MET_SHORT\n", "after.raw")
+        )
+        .as_bytes(),
+    );
+    expect_err(
+        &p,
+        &["after.mhd", "after ElementDataFile", "ElementSpacing"],
+    );
+}
+
 // ---------------------------------------------------------------------------------------
 // MetaImage
 

@@ -236,7 +236,16 @@ impl Volume {
         let mut perm = [usize::MAX; 3];
         let mut reverse = [false; 3];
         for (k, &(lps, positive)) in want.iter().enumerate() {
-            let src = dominant.iter().position(|&(j, _)| j == lps)?;
+            let Some(src) = dominant.iter().position(|&(j, _)| j == lps) else {
+                // Two voxel axes nearest one patient axis: parallel or oblique axes. Said,
+                // not skipped quietly.
+                return Some(format!(
+                    "not turned upright: the file's orientation (voxel axes {axes:?} in LPS) \
+                     has no voxel axis along {}, as two point the same way or the volume is \
+                     oblique; turn it with --rotate, or give --orientation",
+                    ["left-right", "anterior-posterior", "inferior-superior"][lps]
+                ));
+            };
             perm[k] = src;
             reverse[k] = dominant[src].1 != positive;
         }
@@ -312,6 +321,25 @@ impl Volume {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn parallel_or_oblique_axes_are_said_and_leave_the_volume_as_it_is() {
+        let voxels: Vec<u8> = (0..8).collect();
+        for axes in [
+            [[1.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]],
+            [
+                [0.7071, 0.7071, 0.0],
+                [-0.7071, 0.7071, 0.0],
+                [0.0, 0.0, 1.0],
+            ],
+        ] {
+            let mut v = Volume::new([2, 2, 2], [1.0; 3], Voxels::U8(voxels.clone())).unwrap();
+            v.axes = Some(axes);
+            let note = v.turn_upright().expect("a note");
+            assert!(note.starts_with("not turned upright"), "{note}");
+            assert_eq!(v.voxels, Voxels::U8(voxels.clone()));
+        }
+    }
 
     #[test]
     fn values_spanning_beyond_f32_are_refused_and_a_window_mends_it() {

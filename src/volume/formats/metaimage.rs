@@ -47,10 +47,36 @@ pub(super) fn load(path: &Path, opts: &LoadOptions) -> Result<Volume> {
         };
         let key = k.trim().to_ascii_lowercase();
         let done = key == "elementdatafile";
-        fields.insert(key, v.trim().to_string());
+        ensure!(
+            fields.insert(key.clone(), v.trim().to_string()).is_none(),
+            "'{}' is given twice (which one is meant?)",
+            k.trim()
+        );
         if done {
             data_start = Some(pos);
             break;
+        }
+    }
+    // ElementDataFile ends the header: with the data in another file, any line after it
+    // would be ignored (an ElementSpacing there was), so it is an error.
+    if let (Some(start), Some(f)) = (data_start, fields.get("elementdatafile")) {
+        // (LIST and file patterns, whose names follow, are refused below.)
+        let external = !f.eq_ignore_ascii_case("local")
+            && !f.to_ascii_uppercase().starts_with("LIST")
+            && !f.contains('%');
+        let rest = String::from_utf8_lossy(&file[start..]);
+        if external && !rest.trim().is_empty() {
+            bail!(
+                "header lines after ElementDataFile ('{}') would be ignored: ElementDataFile \
+                 must be the last line",
+                rest.trim()
+                    .lines()
+                    .next()
+                    .unwrap_or("")
+                    .chars()
+                    .take(60)
+                    .collect::<String>()
+            );
         }
     }
     let data_start =

@@ -56,7 +56,11 @@ pub(super) fn load(path: &Path, opts: &LoadOptions) -> Result<Volume> {
                 }
             );
         };
-        fields.insert(k.trim().to_ascii_lowercase(), v.trim().to_string());
+        let key = k.trim().to_ascii_lowercase();
+        ensure!(
+            fields.insert(key.clone(), v.trim().to_string()).is_none(),
+            "field '{key}' is given twice (which one is meant?)"
+        );
     }
     let get = |k: &str| fields.get(k).map(String::as_str);
 
@@ -272,6 +276,11 @@ fn header_axes(fields: &HashMap<String, String>) -> Option<[[f32; 3]; 3]> {
 
 /// Spacing from `space directions` (vector lengths) or `spacings`.
 fn header_spacing(fields: &HashMap<String, String>) -> Result<Option<[f64; 3]>> {
+    ensure!(
+        !(fields.contains_key("space directions") && fields.contains_key("spacings")),
+        "both 'space directions' and 'spacings' are given; the NRRD format allows one \
+         (the directions' lengths are the spacing)"
+    );
     if let Some(dirs) = fields.get("space directions") {
         let mut out = Vec::new();
         let mut rest = dirs.as_str().trim();
