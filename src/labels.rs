@@ -219,6 +219,11 @@ pub fn parse_table(text: &str) -> Result<Vec<Label>> {
             (1.0..=3.0).contains(&eta),
             "line {line_no}: η {eta} is outside 1–3"
         );
+        // Two colours for one label: which is meant?
+        ensure!(
+            !labels.iter().any(|l: &Label| l.value == value),
+            "line {line_no}: label {value} is given twice"
+        );
         labels.push(Label {
             value,
             name,
@@ -334,6 +339,15 @@ pub fn categorical(labels: &[Label], present: &[f64], range: (f32, f32)) -> Tran
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_label_given_twice_is_refused() {
+        let e = parse_table("1 a 255 0 0 255\n1 dup 0 255 0 255\n").unwrap_err();
+        assert!(
+            e.to_string().contains("line 2: label 1 is given twice"),
+            "{e}"
+        );
+    }
 
     #[test]
     fn tables_of_both_formats() {

@@ -416,7 +416,8 @@ fn thesis_report(scale: f64, rows: &[(&str, &str, Vec<f64>)]) -> Report {
         meta: meta(),
         settings: SettingsRecord {
             scale,
-            frames: 5,
+            // As many as the rows measured (a report's frames match its settings).
+            frames: rows.first().map_or(0, |r| r.2.len() as u32),
             warmup: 1,
             baselines: false,
             sample_distance: 1.0,
@@ -616,7 +617,7 @@ fn variants_report(default: &[f64], reference: &[f64]) -> VariantsReport {
         meta: meta(),
         settings: VariantsSettingsRecord {
             scale: 0.05,
-            frames: 4,
+            frames: default.len() as u32,
             warmup: 0,
             sample_distance: 1.0,
             orbit_deg_per_frame: 0.5,
@@ -803,4 +804,50 @@ fn compare_names_the_file_it_cannot_use() {
     let (_, err) = text(&o);
     assert_eq!(o.status.code(), Some(1));
     assert!(err.contains("compare two of the same kind"), "{err}");
+}
+
+/// A report cut or edited by hand is refused by name, not compared as if whole: no rows,
+/// a row twice, fewer frames than its settings say.
+#[test]
+fn compare_refuses_reports_that_do_not_hold_together() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = write(
+        dir.path(),
+        "good.json",
+        &thesis_report(0.05, &[("kiwi", "Kiwi", vec![1.0, 1.1])]),
+    );
+    let mut empty = thesis_report(0.05, &[("kiwi", "Kiwi", vec![1.0, 1.1])]);
+    empty.rows.clear();
+    let mut twice = thesis_report(
+        0.05,
+        &[
+            ("kiwi", "Kiwi", vec![1.0, 1.1]),
+            ("kiwi", "Kiwi", vec![1.0, 1.1]),
+        ],
+    );
+    twice.settings.rows.dedup();
+    let mut cut = thesis_report(0.05, &[("kiwi", "Kiwi", vec![1.0, 1.1])]);
+    cut.rows[0].refract.frames_ms.pop();
+    for (name, report, needle) in [
+        ("empty.json", &empty, "the report has no rows"),
+        ("twice.json", &twice, "row 'kiwi' is there twice"),
+        (
+            "cut.json",
+            &cut,
+            "kiwi refract: 1 measured frames where the settings say 2",
+        ),
+    ] {
+        let bad = write(dir.path(), name, report);
+        let o = refrakt(&[
+            "bench",
+            "compare",
+            good.to_str().unwrap(),
+            bad.to_str().unwrap(),
+        ]);
+        let (_, err) = text(&o);
+        assert!(
+            o.status.code() == Some(1) && err.contains(&format!("{}: {needle}", bad.display())),
+            "{name}: {err}"
+        );
+    }
 }

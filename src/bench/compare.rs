@@ -73,7 +73,33 @@ pub fn read_report(path: &Path) -> Result<AnyReport> {
     } else {
         bail!("{p}: schema '{schema}' is neither {SCHEMA} nor {VARIANTS_SCHEMA}");
     };
+    check_report(&p.to_string(), &report)?;
     Ok(report)
+}
+
+/// What a report must hold to be compared: rows, each dataset once, and as many frames
+/// per row and variant as its settings say (a hand-edited or cut report was compared as
+/// if whole).
+fn check_report(p: &str, report: &AnyReport) -> Result<()> {
+    let f = flatten(report);
+    ensure!(!f.rows.is_empty(), "{p}: the report has no rows");
+    for (i, row) in f.rows.iter().enumerate() {
+        ensure!(
+            !f.rows[..i].iter().any(|r| r.dataset == row.dataset),
+            "{p}: row '{}' is there twice",
+            row.dataset
+        );
+        for (variant, frames) in &row.entries {
+            ensure!(
+                frames.len() == f.frames as usize,
+                "{p}: {} {variant}: {} measured frames where the settings say {}",
+                row.dataset,
+                frames.len(),
+                f.frames
+            );
+        }
+    }
+    Ok(())
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -81,7 +81,16 @@ impl Scene {
                 tf
             }
         };
-        if from_file && tf.max_opacity(h.min, h.max) <= 0.0 {
+        if from_file && h.min == h.max {
+            // One value everywhere: no window can separate anything (the hint below would
+            // suggest --window V,V, which is refused).
+            log::warn!(
+                "{}: every voxel holds the same value ({}): there is nothing to tell apart, \
+                 and the image will be empty or a uniform block",
+                self.name,
+                short(raw(h.min)),
+            );
+        } else if from_file && tf.max_opacity(h.min, h.max) <= 0.0 {
             let opaque = match tf.opaque_range() {
                 Some((a, b)) => format!("only for normalised values {a:.3} .. {b:.3}"),
                 None => "nowhere".into(),
