@@ -633,6 +633,10 @@ fn params_are_validated() {
             },
             "s_max",
         ),
+        (
+            TableParams { s_max: 1e30, ..d },
+            "s_max 1000000000000000000000000000000 must",
+        ),
         (TableParams { paths: 0, ..d }, "paths"),
     ] {
         let e = format!("{:#}", p.validate().unwrap_err());

@@ -157,9 +157,11 @@ impl TableParams {
             ensure!(n >= 2, "{name} {n} must be at least 2");
             ensure!(n <= 4096, "{name} {n} must be at most 4096");
         }
+        // Extinction per radius beyond a few thousand leaves nothing scattered to tabulate
+        // (--s-max 1e30 built an all-zero table without a word).
         ensure!(
-            self.s_max.is_finite() && self.s_max > 0.0,
-            "s_max {} must be a finite number > 0",
+            self.s_max.is_finite() && self.s_max > 0.0 && self.s_max <= 4096.0,
+            "s_max {} must be a number in (0, 4096]",
             self.s_max
         );
         ensure!(self.paths >= 1, "paths {} must be at least 1", self.paths);
