@@ -41,11 +41,26 @@ fn main() -> ExitCode {
         Ok(code) => code,
         Err(e) => {
             let prefix = "error: ";
-            let line = one_line(&format!("{e:#}"), MAX_ERROR_CHARS - prefix.len());
+            let line = one_line(&chain_text(&e), MAX_ERROR_CHARS - prefix.len());
             eprintln!("{prefix}{line}");
             ExitCode::FAILURE
         }
     }
+}
+
+/// The error and its causes, "context: cause: ...", leaving out a cause whose text the one
+/// before it already carries (an image decoder's error repeats its I/O source, which the
+/// chain then gave a second time).
+fn chain_text(e: &anyhow::Error) -> String {
+    let mut parts: Vec<String> = Vec::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if parts.last().is_some_and(|p| p.contains(text.trim())) {
+            continue;
+        }
+        parts.push(text);
+    }
+    parts.join(": ")
 }
 
 /// Longest error line printed, whole (issue 33): the start (file and reason) and the end (a parser's
@@ -107,7 +122,22 @@ fn run(cli: Cli) -> Result<ExitCode> {
 
 #[cfg(test)]
 mod tests {
-    use super::one_line;
+    use super::{chain_text, one_line};
+
+    #[test]
+    fn a_cause_already_in_its_context_is_not_said_twice() {
+        let io = std::io::Error::other("Not enough bytes");
+        let e = anyhow::Error::new(io)
+            .context("Format error decoding Jpeg: Not enough bytes")
+            .context("environment map x.jpg: not a readable image");
+        assert_eq!(
+            chain_text(&e),
+            "environment map x.jpg: not a readable image: Format error decoding Jpeg: Not \
+             enough bytes"
+        );
+        let e = anyhow::anyhow!("inner").context("outer");
+        assert_eq!(chain_text(&e), "outer: inner");
+    }
 
     #[test]
     fn errors_print_as_one_bounded_line() {

@@ -137,7 +137,8 @@ impl Scene {
             };
             let key = map.key_light().ok_or_else(|| {
                 anyhow::anyhow!(
-                    "--light env: the environment map is black everywhere; it gives no light"
+                    "the light from the environment (--light env, [light] towards = \"env\"): \
+                     the environment map is black everywhere; it gives no light"
                 )
             })?;
             let towards = Vec3::from(key.world_towards(self.env_rotation));
@@ -152,7 +153,8 @@ impl Scene {
                 let turn = angle(towards) - angle(-forward);
                 let r = (self.env_rotation + turn + 540.0).rem_euclid(360.0) - 180.0;
                 bail!(
-                    "--light env: the environment map's brightest region (towards ({:.2}, \
+                    "the light from the environment (--light env, [light] towards = \"env\"): \
+                     the map's brightest region (towards ({:.2}, \
                      {:.2}, {:.2})) lies behind the volume as this camera sees it, and the \
                      sweep takes light from the viewer's side only; turn the map with \
                      --env-rotation {r:.0} (the camera's side), move the camera, or give \

@@ -175,7 +175,7 @@ impl SweepOptions {
         );
         ensure!(
             self.specular.is_finite() && self.specular >= 0.0,
-            "specular strength {} must be >= 0",
+            "specular strength {} must be a finite number >= 0",
             self.specular
         );
         ensure!(
