@@ -239,6 +239,24 @@ struct FlatRow<'a> {
     entries: Vec<(&'a str, &'a [f64])>,
 }
 
+/// A report's row (thesis or variants: the same header fields) with `runs`, its variants'
+/// runs, as (variant, per-frame ms).
+macro_rules! flat_row {
+    ($row:expr, $runs:expr) => {
+        FlatRow {
+            dataset: &$row.dataset,
+            title: &$row.title,
+            source: &$row.source,
+            resolution: $row.resolution,
+            viewport: $row.viewport,
+            planes: $row.planes,
+            entries: $runs
+                .map(|v| (v.variant.as_str(), v.frames_ms.as_slice()))
+                .collect(),
+        }
+    };
+}
+
 fn flatten(r: &AnyReport) -> Flat<'_> {
     match r {
         AnyReport::Thesis(t) => Flat {
@@ -260,18 +278,7 @@ fn flatten(r: &AnyReport) -> Flat<'_> {
             rows: t
                 .rows
                 .iter()
-                .map(|row| FlatRow {
-                    dataset: &row.dataset,
-                    title: &row.title,
-                    source: &row.source,
-                    resolution: row.resolution,
-                    viewport: row.viewport,
-                    planes: row.planes,
-                    entries: row
-                        .variants()
-                        .map(|v| (v.variant.as_str(), v.frames_ms.as_slice()))
-                        .collect(),
-                })
+                .map(|row| flat_row!(row, row.variants()))
                 .collect(),
         },
         AnyReport::Variants(v) => Flat {
@@ -292,19 +299,7 @@ fn flatten(r: &AnyReport) -> Flat<'_> {
             rows: v
                 .rows
                 .iter()
-                .map(|row| FlatRow {
-                    dataset: &row.dataset,
-                    title: &row.title,
-                    source: &row.source,
-                    resolution: row.resolution,
-                    viewport: row.viewport,
-                    planes: row.planes,
-                    entries: row
-                        .variants
-                        .iter()
-                        .map(|v| (v.variant.as_str(), v.frames_ms.as_slice()))
-                        .collect(),
-                })
+                .map(|row| flat_row!(row, row.variants.iter()))
                 .collect(),
         },
     }

@@ -136,8 +136,10 @@ pub fn write_models_csv(r: &ModelsReport, path: &Path) -> Result<()> {
             .chain(&["termination_alpha"])
             .chain(&META_HEADER),
     )?;
+    let sampling = (r.settings.scale, r.settings.sample_distance);
     for row in &r.rows {
         for m in &row.models {
+            let size = size_columns(row.resolution, row.viewport, m.max_steps, sampling);
             let frames = m
                 .warmup_ms
                 .iter()
@@ -159,13 +161,7 @@ pub fn write_models_csv(r: &ModelsReport, path: &Path) -> Result<()> {
                     k.to_string(),
                     ms.map(|t| format!("{t:.6}")).unwrap_or_default(),
                 ];
-                record.extend(size_columns(
-                    row.resolution,
-                    row.viewport,
-                    m.max_steps,
-                    r.settings.scale,
-                    r.settings.sample_distance,
-                ));
+                record.extend(size.clone());
                 record.push(r.settings.termination_alpha.to_string());
                 record.extend(meta_columns(&r.meta));
                 w.write_record(&record)?;

@@ -452,8 +452,10 @@ pub fn write_variants_csv(r: &VariantsReport, path: &Path) -> Result<()> {
         .chain(&SIZE_HEADER)
         .chain(&META_HEADER),
     )?;
+    let sampling = (r.settings.scale, r.settings.sample_distance);
     for row in &r.rows {
         for v in &row.variants {
+            let size = size_columns(row.resolution, row.viewport, row.planes, sampling);
             let warm = v
                 .warmup_ms
                 .iter()
@@ -477,13 +479,7 @@ pub fn write_variants_csv(r: &VariantsReport, path: &Path) -> Result<()> {
                     format!("{t:.6}"),
                     sweep.map(|x| format!("{x:.6}")).unwrap_or_default(),
                 ];
-                record.extend(size_columns(
-                    row.resolution,
-                    row.viewport,
-                    row.planes,
-                    r.settings.scale,
-                    r.settings.sample_distance,
-                ));
+                record.extend(size.clone());
                 record.extend(meta_columns(&r.meta));
                 w.write_record(&record)?;
             }

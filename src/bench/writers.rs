@@ -130,8 +130,10 @@ pub fn write_csv(r: &Report, path: &Path) -> Result<()> {
         .chain(&META_HEADER)
         .chain(&["levers"]),
     )?;
+    let sampling = (r.settings.scale, r.settings.sample_distance);
     for row in &r.rows {
         for v in row.variants() {
+            let size = size_columns(row.resolution, row.viewport, row.planes, sampling);
             let all = v
                 .warmup_ms
                 .iter()
@@ -146,13 +148,7 @@ pub fn write_csv(r: &Report, path: &Path) -> Result<()> {
                     warm.to_string(),
                     format!("{t:.6}"),
                 ];
-                record.extend(size_columns(
-                    row.resolution,
-                    row.viewport,
-                    row.planes,
-                    r.settings.scale,
-                    r.settings.sample_distance,
-                ));
+                record.extend(size.clone());
                 record.extend([row.thesis.ms.to_string(), row.thesis.gpu.clone()]);
                 record.extend(meta_columns(&r.meta));
                 record.push(r.settings.variant.clone().unwrap_or_default());
@@ -187,8 +183,7 @@ pub(crate) fn size_columns(
     resolution: [u32; 3],
     viewport: [u32; 2],
     planes: u32,
-    scale: f64,
-    sample_distance: f32,
+    (scale, sample_distance): (f64, f32),
 ) -> [String; 7] {
     [
         resolution[0].to_string(),
