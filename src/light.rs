@@ -118,12 +118,13 @@ impl Light {
 }
 
 impl LightSource {
-    /// A directional light towards `towards`, as given: any finite length, rescaled so its
-    /// largest component is ±1 (only its direction counts, and 1e20,1e20,0 overflowed f32
-    /// when normalised, judging the light by its length).
+    /// A directional light towards `towards`, as given, at any finite length: only its
+    /// direction counts. One whose length overflows or underflows f32 (1e20,1e20,0 was
+    /// judged 90° from the view, 1e-20,1e-20,0 zero) is rescaled so its largest component
+    /// is ±1; any other is kept as given.
     pub fn directional(towards: Vec3) -> Self {
-        let m = towards.abs().max_element();
-        let towards = if m.is_finite() && m > 0.0 {
+        let (l, m) = (towards.length(), towards.abs().max_element());
+        let towards = if !(l.is_finite() && l > 1e-6) && m.is_finite() && m > 0.0 {
             towards / m
         } else {
             towards
