@@ -770,7 +770,7 @@ preintegrated = true
 roughness = 0.2
 specular = 0.8
 eta_scale = 1.0
-light_transport = "backward"
+light_transport = "forward"
 light_rays = 2
 clip = [1.0, 0.0, 0.0, 0.1]
 exposure = 0.5
@@ -788,7 +788,7 @@ preset = "ct-bone"
 [environment]
 map = "env.exr"
 [render]
-model = "ea"
+model = "refract"
 "#;
 
 pub fn scene() -> Vec<Seed> {
