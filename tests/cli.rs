@@ -12,6 +12,16 @@ fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
+/// Whether lavapipe is among the devices (a test of its limits says why it skips if not).
+fn on_lavapipe(why: &str) -> bool {
+    let info = refrakt(&["info"]);
+    let yes = String::from_utf8_lossy(&info.stdout).contains("llvmpipe");
+    if !yes {
+        eprintln!("skipped: {why}");
+    }
+    yes
+}
+
 /// Fails unless the command exited non-zero with `needle` in its error and no panic.
 fn assert_clean_failure(args: &[&str], needle: &str) {
     let o = refrakt(args);
@@ -427,9 +437,7 @@ fn bad_sweep_options_are_clear_errors() {
 /// reports and a driver may not honour).
 #[test]
 fn light_deposits_beyond_the_storage_range_are_clear_errors() {
-    let info = refrakt(&["info"]);
-    if !String::from_utf8_lossy(&info.stdout).contains("llvmpipe") {
-        eprintln!("skipped: the sizes below are lavapipe's limit");
+    if !on_lavapipe("the sizes below are lavapipe's limit") {
         return;
     }
     // 700² × 2 rays × 160 bytes = 157 MB of cells; their boxes (48 bytes) fit.
@@ -1280,9 +1288,7 @@ fn settings_that_do_not_apply_are_refused_from_files_and_flags() {
 #[test]
 fn stand_in_scales_are_checked_before_any_work() {
     // On lavapipe (2 GiB for textures): a GPU may hold the 3.8 GB volume, and then make it.
-    let info = refrakt(&["info"]);
-    if !String::from_utf8_lossy(&info.stdout).contains("llvmpipe") {
-        eprintln!("skipped: the size below is beyond lavapipe's limit only");
+    if !on_lavapipe("the size below is beyond lavapipe's limit only") {
         return;
     }
     let cache = tempfile::tempdir().unwrap();

@@ -14,6 +14,38 @@ use common::refrakt;
 
 const N: usize = 20;
 
+/// `render` of the label volume `raw` with the colour table `table`, face on, unlit
+/// background black, 40², into `out`.
+fn render_face_on(
+    raw: &std::path::Path,
+    table: &std::path::Path,
+    model: &str,
+    out: &std::path::Path,
+) -> std::process::Output {
+    refrakt(&[
+        "render",
+        raw.to_str().unwrap(),
+        "--labels",
+        table.to_str().unwrap(),
+        "--model",
+        model,
+        "--spacing",
+        "1,1,1",
+        "--azimuth",
+        "0",
+        "--elevation",
+        "0",
+        "--background",
+        "0,0,0,1",
+        "--width",
+        "40",
+        "--height",
+        "40",
+        "-o",
+        out.to_str().unwrap(),
+    ])
+}
+
 #[test]
 fn labels_take_their_table_colours_and_never_blend() {
     let dir = tempfile::tempdir().unwrap();
@@ -36,28 +68,7 @@ fn labels_take_their_table_colours_and_never_blend() {
     .unwrap();
     let out = dir.path().join("o.exr");
     for model in ["ea", "refract"] {
-        let o = refrakt(&[
-            "render",
-            raw.to_str().unwrap(),
-            "--labels",
-            table.to_str().unwrap(),
-            "--model",
-            model,
-            "--spacing",
-            "1,1,1",
-            "--azimuth",
-            "0",
-            "--elevation",
-            "0",
-            "--background",
-            "0,0,0,1",
-            "--width",
-            "40",
-            "--height",
-            "40",
-            "-o",
-            out.to_str().unwrap(),
-        ]);
+        let o = render_face_on(&raw, &table, model, &out);
         let stdout = String::from_utf8_lossy(&o.stdout);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         assert!(
@@ -105,27 +116,7 @@ fn hundreds_of_sixteen_bit_labels_keep_their_table_colours() {
         let ctbl = dir.path().join("seg.ctbl");
         std::fs::write(&ctbl, table).unwrap();
         let out = dir.path().join("o.exr");
-        let o = refrakt(&[
-            "render",
-            raw.to_str().unwrap(),
-            "--labels",
-            ctbl.to_str().unwrap(),
-            "--model",
-            "ea",
-            "--azimuth",
-            "0",
-            "--elevation",
-            "0",
-            "--background",
-            "0,0,0,1",
-            "--width",
-            "40",
-            "--height",
-            "40",
-            "-o",
-            out.to_str().unwrap(),
-        ]);
-        (o, out)
+        (render_face_on(&raw, &ctbl, "ea", &out), out)
     };
     let mut v = vec![0u16; N * N * N];
     for z in 4..N - 4 {

@@ -26,12 +26,7 @@ fn thin_and_telephoto_views_show_what_the_same_pixels_of_larger_views_show() {
         if let refrakt::scene::VolumeSource::Procedural { size, .. } = &mut scene.volume {
             *size = 64;
         }
-        let volume = scene.load_volume(&std::env::temp_dir(), None).unwrap();
-        let tf = scene.transfer_functions().unwrap();
-        let mut renderer = Renderer::new(ctx, &volume, &tf).unwrap();
-        renderer
-            .set_environment(scene.environment_map().unwrap().as_ref())
-            .unwrap();
+        let mut renderer = common::renderer_for(ctx, &scene);
         let n = 63u32;
         let render = |renderer: &mut Renderer, w: u32, h: u32, cam: &Camera| {
             let mut opts = scene.render_options().unwrap();

@@ -372,6 +372,17 @@ pub fn read_exr_rgb(path: &std::path::Path) -> (usize, Vec<[f32; 3]>) {
     img.layer_data.channel_data.pixels
 }
 
+/// A renderer of `scene`'s volume, transfer functions and environment.
+pub fn renderer_for(ctx: &Context, scene: &refrakt::scene::Scene) -> Renderer {
+    let volume = scene.load_volume(&std::env::temp_dir(), None).unwrap();
+    let tf = scene.transfer_functions().unwrap();
+    let mut renderer = Renderer::new(ctx, &volume, &tf).unwrap();
+    renderer
+        .set_environment(scene.environment_map().unwrap().as_ref())
+        .unwrap();
+    renderer
+}
+
 /// The built-in glass sphere on its floor (a caustic, a shadow, Fresnel reflections, the
 /// sky) with its environment, seen obliquely (35° round from the scene's camera, 40°
 /// up): the scene, a renderer for it and the camera.
@@ -379,12 +390,7 @@ pub fn sphere_on_floor_oblique(ctx: &Context) -> (refrakt::scene::Scene, Rendere
     let scene = refrakt::scene::Scene::builtin("sphere-on-floor")
         .unwrap()
         .unwrap();
-    let volume = scene.load_volume(&std::env::temp_dir(), None).unwrap();
-    let tf = scene.transfer_functions().unwrap();
-    let mut renderer = Renderer::new(ctx, &volume, &tf).unwrap();
-    renderer
-        .set_environment(scene.environment_map().unwrap().as_ref())
-        .unwrap();
+    let renderer = renderer_for(ctx, &scene);
     let cam = Camera {
         azimuth: scene.camera.azimuth + 35.0,
         elevation: 40.0,
