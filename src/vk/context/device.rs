@@ -80,8 +80,11 @@ impl Context {
         info.timestamps = info.limits.timestamp_compute_and_graphics == vk::TRUE
             && families[family as usize].timestamp_valid_bits > 0;
 
+        let mut f12 = vk::PhysicalDeviceVulkan12Features::default();
         let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
-        let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut f13);
+        let mut f2 = vk::PhysicalDeviceFeatures2::default()
+            .push_next(&mut f12)
+            .push_next(&mut f13);
         // SAFETY: valid physical device and a well-formed pNext chain.
         unsafe { instance.get_physical_device_features2(physical, &mut f2) };
         let core = f2.features;
@@ -91,16 +94,22 @@ impl Context {
         info.large_points = core.large_points == vk::TRUE;
         info.fragment_atomics = core.fragment_stores_and_atomics == vk::TRUE;
         info.multi_draw_indirect = core.multi_draw_indirect == vk::TRUE;
+        info.buffer_int64_atomics = !desc.without_int64_atomics
+            && core.shader_int64 == vk::TRUE
+            && f12.shader_buffer_int64_atomics == vk::TRUE;
         let core_features = vk::PhysicalDeviceFeatures::default()
             .large_points(info.large_points)
             .fragment_stores_and_atomics(info.fragment_atomics)
-            .multi_draw_indirect(info.multi_draw_indirect);
+            .multi_draw_indirect(info.multi_draw_indirect)
+            .shader_int64(info.buffer_int64_atomics);
         let priorities = [1.0f32];
         let queue_infos = [vk::DeviceQueueCreateInfo::default()
             .queue_family_index(family)
             .queue_priorities(&priorities)];
         // maintenance4 is required by Vulkan 1.3; glslang targeting 1.3 emits LocalSizeId, which
         // needs it enabled.
+        let mut enable12 = vk::PhysicalDeviceVulkan12Features::default()
+            .shader_buffer_int64_atomics(info.buffer_int64_atomics);
         let mut enable13 = vk::PhysicalDeviceVulkan13Features::default()
             .synchronization2(true)
             .maintenance4(true);
@@ -113,6 +122,7 @@ impl Context {
             .queue_create_infos(&queue_infos)
             .enabled_extension_names(&device_exts)
             .enabled_features(&core_features)
+            .push_next(&mut enable12)
             .push_next(&mut enable13);
         // SAFETY: create info references locals that outlive the call.
         let device = unsafe { instance.create_device(physical, &device_info, None) }

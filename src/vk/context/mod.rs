@@ -40,6 +40,10 @@ pub struct ContextDesc {
     /// (ash-window) and VK_KHR_swapchain, creates its surface, and chooses only among
     /// devices whose graphics+compute queue can present to it. None = headless.
     pub window: Option<Arc<dyn WindowSource>>,
+    /// Leave 64-bit atomics off even where the device offers them
+    /// ([`DeviceInfo::buffer_int64_atomics`] false), so that tests run the two-word
+    /// paths the devices without them take.
+    pub without_int64_atomics: bool,
 }
 
 impl std::fmt::Debug for ContextDesc {
@@ -48,6 +52,7 @@ impl std::fmt::Debug for ContextDesc {
             .field("validate", &self.validate)
             .field("device", &self.device)
             .field("window", &self.window.is_some())
+            .field("without_int64_atomics", &self.without_int64_atomics)
             .finish()
     }
 }
@@ -73,6 +78,7 @@ impl ContextDesc {
             validate: validate || env,
             device,
             window: None,
+            without_int64_atomics: false,
         })
     }
 }

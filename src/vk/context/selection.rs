@@ -30,6 +30,11 @@ pub struct DeviceInfo {
     /// forward transport's grouped point sprites draw each workgroup's leftover rays as one
     /// draw of one call (without it, one call per draw).
     pub multi_draw_indirect: bool,
+    /// 64-bit integer atomics on storage buffers (`shaderInt64` and
+    /// `shaderBufferInt64Atomics`), enabled when offered: a 64-bit sum is then one atomic
+    /// add whose result the shader need not wait for, where two 32-bit words need the low
+    /// word's old value for the carry.
+    pub buffer_int64_atomics: bool,
 }
 
 pub fn version_string(v: u32) -> String {
@@ -139,6 +144,7 @@ pub(super) fn query_info(
         large_points: false,
         fragment_atomics: false,
         multi_draw_indirect: false,
+        buffer_int64_atomics: false,
     }
 }
 
