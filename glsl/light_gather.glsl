@@ -14,7 +14,9 @@
 #ifndef REFRAKT_LIGHT_GATHER_GLSL
 #define REFRAKT_LIGHT_GATHER_GLSL
 
-#define SPLAT_GATHER_CHANNELS 7
+#include "light_splat_fixed.glsl"
+
+#define SPLAT_GATHER_CHANNELS SPLAT_CHANNELS
 
 // Per ray r (of the grid, r = j * columns + i): its RayDeposit (light_splat_ray.glsl) in
 // DEPOSIT_VEC4S vec4s from DEPOSIT_VEC4S r: footprint (an empty one, zero width: no
@@ -38,21 +40,26 @@ layout(std430, set = 0, binding = 20) buffer Deposits {
 const int DEPOSIT_VEC4S = DEPOSIT_CELLS ? 10 : 3;
 const int DEPOSIT_VEC4S_MAX = 10;
 
+// A deposit as its DEPOSIT_VEC4S vec4s (the rest zero), as stored and as deposit_from
+// reads them.
+void deposit_to(RayDeposit d, out vec4 v[DEPOSIT_VEC4S_MAX]) {
+    v[0] = d.footprint;
+    v[1] = vec4(d.direction, 0.0);
+    v[2] = d.box_amplitude;
+    v[3] = DEPOSIT_CELLS ? d.box : vec4(0.0);
+    v[4] = DEPOSIT_CELLS ? d.flux_a : vec4(0.0);
+    v[5] = DEPOSIT_CELLS ? d.flux_b : vec4(0.0);
+    v[6] = DEPOSIT_CELLS ? d.flux_c : vec4(0.0);
+    v[7] = DEPOSIT_CELLS ? d.flux_d : vec4(0.0);
+    v[8] = DEPOSIT_CELLS ? d.corners_ab : vec4(0.0);
+    v[9] = DEPOSIT_CELLS ? d.corners_cd : vec4(0.0);
+}
+
 #if !DEPOSITS_READONLY
 void store_deposit(int r, RayDeposit d) {
-    int k = DEPOSIT_VEC4S * r;
-    deposits[k] = d.footprint;
-    deposits[k + 1] = vec4(d.direction, 0.0);
-    deposits[k + 2] = d.box_amplitude;
-    if (DEPOSIT_CELLS) {
-        deposits[k + 3] = d.box;
-        deposits[k + 4] = d.flux_a;
-        deposits[k + 5] = d.flux_b;
-        deposits[k + 6] = d.flux_c;
-        deposits[k + 7] = d.flux_d;
-        deposits[k + 8] = d.corners_ab;
-        deposits[k + 9] = d.corners_cd;
-    }
+    vec4 v[DEPOSIT_VEC4S_MAX];
+    deposit_to(d, v);
+    for (int k = 0; k < DEPOSIT_VEC4S; ++k) deposits[DEPOSIT_VEC4S * r + k] = v[k];
 }
 #endif
 
@@ -248,38 +255,5 @@ int slot_add(uint b, out uint rank) {
     return -1;
 }
 #endif
-
-// v truncated to 32.32 fixed point, as (lo, hi) words of a 64-bit two's complement
-// number (light_splat_fixed.glsl). Branch-free (llvmpipe runs both sides of a branch): 0
-// is (0, 0), a negative value the two's complement of its magnitude's.
-uvec2 to_fixed(float v) {
-    float m = abs(v);
-    float f = floor(m);
-    uint hi = uint(f);
-    uint lo = uint((m - f) * 4294967296.0);
-    bool negative = v < 0.0;
-    uint hi_n = ~hi + (lo == 0u ? 1u : 0u);
-    uint lo_n = 0u - lo;
-    return negative ? uvec2(lo_n, hi_n) : uvec2(lo, hi);
-}
-
-// A 64-bit fixed-point sum in registers: (lo, hi) words as light_splat_fixed.glsl has them.
-void add_fixed_reg(inout uvec2 sum, float v) {
-    uvec2 w = to_fixed(v);
-    uint carry;
-    sum.x = uaddCarry(sum.x, w.x, carry);
-    sum.y = sum.y + w.y + carry;
-}
-
-float fixed_to_float(uvec2 sum) {
-    uint lo = sum.x, hi = sum.y;
-    bool negative = int(hi) < 0;
-    if (negative) {
-        hi = ~hi + (lo == 0u ? 1u : 0u);
-        lo = 0u - lo;
-    }
-    float m = float(hi) + float(lo) * (1.0 / 4294967296.0);
-    return negative ? -m : m;
-}
 
 #endif

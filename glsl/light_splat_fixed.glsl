@@ -1,7 +1,9 @@
-// The compute splat's sums (the `splat=compute` lever): per pixel seven channels
-// (irradiance rgb, luminance-weighted direction xyz, luminance weight), each a signed
-// 32.32 fixed-point number in two words (low, high) of one storage buffer, channel-major:
-// word 2 * (channel * pixels + pixel) + (0 low, 1 high).
+// The splat's 32.32 fixed-point sums (every splat but the point sprites: the compute
+// splat `splat=compute`, the compute sweep's gathers and its scatter of ray blocks): per
+// pixel seven channels (irradiance rgb, luminance-weighted direction xyz, luminance
+// weight), each a signed 32.32 fixed-point number in two words (low, high). With
+// SPLAT_SUMS_BINDING defined, the plane's sums are one storage buffer at that binding,
+// channel-major: word 2 * (channel * pixels + pixel) + (0 low, 1 high).
 //
 // Why fixed point: integer addition is associative, so the sum of the deposits does not
 // depend on the order the GPU runs the rays in and every frame is bit-reproducible (float
@@ -17,6 +19,41 @@
 
 #define SPLAT_CHANNELS 7
 
+// v truncated to 32.32 fixed point, as (lo, hi) words of a 64-bit two's complement
+// number. Branch-free (llvmpipe runs both sides of a branch): 0 is (0, 0), a negative
+// value the two's complement of its magnitude's. |v| < 2^31.
+uvec2 to_fixed(float v) {
+    float m = abs(v);
+    float f = floor(m);
+    uint hi = uint(f);
+    // m - f is exact (the fraction of a float), and so is scaling it by 2^32.
+    uint lo = uint((m - f) * 4294967296.0);
+    bool negative = v < 0.0;
+    uint hi_n = ~hi + (lo == 0u ? 1u : 0u);
+    uint lo_n = 0u - lo;
+    return negative ? uvec2(lo_n, hi_n) : uvec2(lo, hi);
+}
+
+// A 64-bit fixed-point sum in registers: (lo, hi) words.
+void add_fixed_reg(inout uvec2 sum, float v) {
+    uvec2 w = to_fixed(v);
+    uint carry;
+    sum.x = uaddCarry(sum.x, w.x, carry);
+    sum.y = sum.y + w.y + carry;
+}
+
+float fixed_to_float(uvec2 sum) {
+    uint lo = sum.x, hi = sum.y;
+    bool negative = int(hi) < 0;
+    if (negative) {
+        hi = ~hi + (lo == 0u ? 1u : 0u);
+        lo = 0u - lo;
+    }
+    float m = float(hi) + float(lo) * (1.0 / 4294967296.0);
+    return negative ? -m : m;
+}
+
+#ifdef SPLAT_SUMS_BINDING
 layout(std430, set = 0, binding = SPLAT_SUMS_BINDING) buffer SplatSums {
     uint sums[];
 };
@@ -25,33 +62,33 @@ uint splat_slot(uint channel, uint pixel, uint pixels) {
     return 2u * (channel * pixels + pixel);
 }
 
-// Two's complement negation of the 64-bit (hi, lo).
-void negate64(inout uint hi, inout uint lo) {
-    hi = ~hi + (lo == 0u ? 1u : 0u);
-    lo = 0u - lo;
+// Add the 64-bit (lo, hi) to the sum at `slot`: the low word's old value tells whether
+// it wrapped, and the carry goes into the high word.
+void add_words(uint slot, uvec2 w) {
+    uint old = atomicAdd(sums[slot], w.x);
+    uint h = w.y + (old + w.x < old ? 1u : 0u);
+    if (h != 0u) atomicAdd(sums[slot + 1u], h);
 }
 
 // Add v (|v| < 2^31) to the sum at `slot`, truncated to a multiple of 2^-32.
 void add_fixed(uint slot, float v) {
     if (v == 0.0) return;
-    float m = abs(v);
-    float f = floor(m);
-    uint hi = uint(f);
-    // m - f is exact (the fraction of a float), and so is scaling it by 2^32.
-    uint lo = uint((m - f) * 4294967296.0);
-    if (v < 0.0) negate64(hi, lo);
-    uint old = atomicAdd(sums[slot], lo);
-    uint carry = (old + lo < old) ? 1u : 0u;   // the low word wrapped
-    uint h = hi + carry;
-    if (h != 0u) atomicAdd(sums[slot + 1u], h);
+    add_words(slot, to_fixed(v));
 }
 
-float read_fixed(uint slot) {
-    uint lo = sums[slot], hi = sums[slot + 1u];
-    bool negative = int(hi) < 0;
-    if (negative) negate64(hi, lo);
-    float m = float(hi) + float(lo) * (1.0 / 4294967296.0);
-    return negative ? -m : m;
+// Pixel `pixel`'s seven sums in the light's units (`unit`): irradiance (rgb) and the
+// luminance-weighted direction and weight; zeroed for the next plane.
+void take_sums(uint pixel, uint pixels, float unit, out vec3 irradiance_rgb, out vec4 weighted) {
+    float c[SPLAT_CHANNELS];
+    for (uint k = 0u; k < SPLAT_CHANNELS; ++k) {
+        uint slot = splat_slot(k, pixel, pixels);
+        c[k] = fixed_to_float(uvec2(sums[slot], sums[slot + 1u])) * unit;
+        sums[slot] = 0u;
+        sums[slot + 1u] = 0u;
+    }
+    irradiance_rgb = vec3(c[0], c[1], c[2]);
+    weighted = vec4(c[3], c[4], c[5], c[6]);
 }
+#endif
 
 #endif

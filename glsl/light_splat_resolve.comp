@@ -20,16 +20,10 @@ layout(push_constant) uniform Push {
 void main() {
     uvec2 p = gl_GlobalInvocationID.xy;
     if (p.x >= pc.width || p.y >= pc.height) return;
-    uint pixels = pc.width * pc.height;
-    uint pixel = p.y * pc.width + p.x;
-    float c[SPLAT_CHANNELS];
-    for (uint k = 0u; k < SPLAT_CHANNELS; ++k) {
-        uint slot = splat_slot(k, pixel, pixels);
-        c[k] = read_fixed(slot) * pc.unit;
-        sums[slot] = 0u;
-        sums[slot + 1u] = 0u;
-    }
+    vec3 e;
+    vec4 dir;
+    take_sums(p.y * pc.width + p.x, pc.width * pc.height, pc.unit, e, dir);
     ivec3 at = ivec3(p, pc.layer);
-    imageStore(irradiance, at, vec4(c[0], c[1], c[2], 0.0));
-    imageStore(irradiance_direction, at, vec4(c[3], c[4], c[5], c[6]));
+    imageStore(irradiance, at, vec4(e, 0.0));
+    imageStore(irradiance_direction, at, dir);
 }
