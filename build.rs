@@ -62,6 +62,7 @@ fn main() {
             "GATHER_COARSE_TILE",
             Some(&format!("{GATHER_COARSE_TILE}u")),
         );
+        options.add_macro_definition("SCATTER_TILE", Some(&format!("{SCATTER_TILE}u")));
         options.add_macro_definition("SPLAT_GROUP_SPAN", Some(&format!("{SPLAT_GROUP_SPAN}")));
         options.add_macro_definition(
             "SPLAT_GROUP_WORKGROUP",

@@ -134,6 +134,29 @@ fn the_gather_splat_sums_tiles_of_several_chunks_exactly() {
     });
 }
 
+/// The scatter of ray blocks (`gather=blocks`, glsl/sweep_scatter.glsl) on a device
+/// without 64-bit atomics (here: with them left off) adds its sums as two 32-bit words
+/// with the carry from the low word's old value: the same sums, bit for bit, as the
+/// atomic splat, with rays 4 pixels apart (a block of 8 x 8 spans more than its tile
+/// of 12: most rays add straight into the plane's sums) and 0.25 apart (blocks within
+/// their tiles), both deposits.
+#[test]
+fn the_scatter_of_ray_blocks_sums_exactly_with_two_word_atomics() {
+    let desc = refrakt::vk::ContextDesc {
+        without_int64_atomics: true,
+        ..Default::default()
+    };
+    with_context_from(desc, |ctx| {
+        assert!(!ctx.info().buffer_int64_atomics);
+        for (size, spacing, deposit) in [
+            ([136, 130], 4.0, Deposit::Boxes),
+            ([48, 40], 0.25, Deposit::Cells),
+        ] {
+            gather_matches_atomic(ctx, size, spacing, deposit);
+        }
+    });
+}
+
 /// The grouped point sprites (`splat=groups`, glsl/light_splat_groups.glsl) deposit what
 /// the atomic splat's exact integer sums deposit, within float rounding, at four planes
 /// of the sheared caustic, with both deposits: with rays 0.25 px apart (launched 0.56 apart)
@@ -267,7 +290,7 @@ fn gather_matches_atomic(
         splat: Splat::Compute,
         ..path(SweepPath::Fragment)
     };
-    let [atomic, gather, again, by_pixels]: [_; 4] = sheared_caustic(
+    let [atomic, gather, again, by_pixels, by_blocks]: [_; 5] = sheared_caustic(
         ctx,
         size,
         spacing,
@@ -278,6 +301,10 @@ fn gather_matches_atomic(
             path(SweepPath::Compute),
             Levers {
                 gather: Gather::Pixels,
+                ..path(SweepPath::Compute)
+            },
+            Levers {
+                gather: Gather::Blocks,
                 ..path(SweepPath::Compute)
             },
         ],
@@ -316,6 +343,21 @@ fn gather_matches_atomic(
             a.pixels == g.pixels,
             "{what}: {:?} at plane {}: the gather by pixels differs from the atomic splat \
              (linear max |Δ| {})",
+            a.buffer,
+            a.plane,
+            linear_max(&a.pixels, &g.pixels)
+        );
+    }
+    let blocks_with = if ctx.info().buffer_int64_atomics {
+        "64-bit atomics"
+    } else {
+        "two-word atomics"
+    };
+    for (a, g) in atomic.dumps.iter().zip(&by_blocks.dumps) {
+        assert!(
+            a.pixels == g.pixels,
+            "{what}: {:?} at plane {}: the scatter of ray blocks ({blocks_with}) differs \
+             from the atomic splat (linear max |Δ| {})",
             a.buffer,
             a.plane,
             linear_max(&a.pixels, &g.pixels)

@@ -514,6 +514,8 @@ mod tests {
                     sweep: crate::render::SweepPath::Auto,
                     gather: if bits % 5 == 0 {
                         crate::render::Gather::Pixels
+                    } else if bits % 3 == 1 {
+                        crate::render::Gather::Blocks
                     } else {
                         crate::render::Gather::Pairs
                     },

@@ -23,6 +23,14 @@ pub const GATHER_FINE_SPAN: u32 = 2;
 // many, one workgroup per chunk.
 pub const GATHER_CHUNK: u32 = 256;
 
+// The compute sweep's scatter of ray blocks (`gather=blocks`, glsl/sweep_scatter.glsl):
+// each workgroup of 8 x 8 light rays sums its deposits into a tile of SCATTER_TILE x
+// SCATTER_TILE pixels in shared memory (seven 64-bit sums a pixel: 7.9 KiB at 12, beside
+// the half block's deposits within the 16 KiB every device gives a workgroup), then adds
+// the tile into the plane's sums. At 2 rays a pixel a block of smooth wavefront covers
+// about 8 x 5 pixels plus its boxes' overhang, so the tile holds it spread by half again.
+pub const SCATTER_TILE: u32 = 12;
+
 // The grouped point sprites (the `splat=groups` lever, glsl/light_splat_groups.glsl): one
 // sprite per 2 x 2 light rays whose deposits fit within SPLAT_GROUP_SPAN pixels a side
 // (its point then at most SPLAT_GROUP_SPAN + 1 wide, below the 64 every device draws);

@@ -38,13 +38,18 @@ impl std::ops::Deref for TestContext {
 /// the suite can be pointed at a real GPU. Holds the process's context lock (a test that
 /// panicked with it poisons nothing: the next test takes it anyway).
 pub fn context() -> TestContext {
+    context_with(ContextDesc::default())
+}
+
+/// [`context`] from `desc` (its validation and device are the tests').
+pub fn context_with(desc: ContextDesc) -> TestContext {
     let lock = CONTEXT_LOCK.lock().unwrap_or_else(|e| e.into_inner());
     let ctx = Context::new(&ContextDesc {
         validate: true,
         device: std::env::var("REFRAKT_DEVICE")
             .ok()
             .filter(|d| !d.is_empty()),
-        ..Default::default()
+        ..desc
     })
     .expect("creating a validated Vulkan context (is scripts/setup.sh run?)");
     TestContext { ctx, _lock: lock }
@@ -64,7 +69,12 @@ pub fn assert_no_validation_messages(log: &Arc<ValidationLog>) {
 
 /// Run `f` with a validated context and fail on any validation message.
 pub fn with_context<R>(f: impl FnOnce(&Context) -> R) -> R {
-    let ctx = context();
+    with_context_from(ContextDesc::default(), f)
+}
+
+/// [`with_context`] on a context made from `desc` ([`context_with`]).
+pub fn with_context_from<R>(desc: ContextDesc, f: impl FnOnce(&Context) -> R) -> R {
+    let ctx = context_with(desc);
     let log = ctx.validation_log();
     let r = f(&ctx);
     drop(ctx);

@@ -40,7 +40,7 @@
 //!
 //! The backward transport is one dispatch per plane with one barrier before it.
 
-use super::pipelines::gather_tiles;
+use super::pipelines::{gather_tiles, ComputeSplat};
 use super::*;
 use crate::render::limits::GATHER_CHUNK;
 use crate::vk::Area;
@@ -223,60 +223,98 @@ impl SweepPass {
                 rec.end_scope();
                 rec.begin_scope("sweep: splat");
             }
-            // Stage B: the rays just written make their deposits and count themselves into
-            // the tile bins (after the previous plane's gather read the last deposits and
-            // lists; the previous scan zeroed the counts). The splat's dispatches read the
-            // write layer: their push names it as the read layer.
-            let splat_buffers = [&self.deposits, &self.bins, &self.bin_list];
-            rec.compute_storage_barriers(&Self::storage(&self.rays), &splat_buffers);
+            // The splat's dispatches read the write layer: their push names it as the
+            // read layer.
             let push = ComputePush {
                 read_layer: i % 2,
                 ..self.push(i, depth, f.unit, ray_area)
             };
             let ray_groups = [f.grid[0].div_ceil(8), f.grid[1].div_ceil(8), 1];
-            let p = &pipelines;
-            // Within the splat's scope, one scope per step, so that a GPU's timings say
-            // which of them to work on.
-            if timed {
-                rec.begin_scope("sweep: splat: deposits");
-            }
-            rec.bind_compute_pipeline(&p.deposit);
-            rec.dispatch_bound(&p.deposit, bytemuck::bytes_of(&push), ray_groups)?;
-            if timed {
-                rec.end_scope();
-                rec.begin_scope("sweep: splat: bins");
-            }
-            // The bins' list offsets, then the lists.
-            rec.compute_storage_barriers(&[], &splat_buffers);
-            rec.bind_compute_pipeline(&p.bin_scan);
-            rec.dispatch_bound(&p.bin_scan, bytemuck::bytes_of(&push), [1, 1, 1])?;
-            rec.compute_storage_barriers(&[], &splat_buffers);
-            rec.bind_compute_pipeline(&p.bin_fill);
-            rec.dispatch_bound(&p.bin_fill, bytemuck::bytes_of(&push), ray_groups)?;
-            if timed {
-                rec.end_scope();
-                rec.begin_scope("sweep: splat: gather");
-            }
-            // Stage C: the gather into irradiance layer i % 2 (after the viewing rays of
-            // plane i - 1 read it as plane i - 2's).
-            rec.compute_storage_barriers(&Self::storage(&self.irradiance), &splat_buffers);
-            rec.bind_compute_pipeline(&p.gather);
-            if p.gather_pairs {
-                // One workgroup per chunk of a tile's candidates: at least one per tile,
-                // and one more per GATHER_CHUNK rays the ray images hold (a workgroup
-                // takes several chunks in turn where there are more), at most 65535, the
-                // dispatch size every device must take (large screens: 2048² has 65536
-                // tiles).
-                let workgroups = (gather_tiles(self.width, self.height)
-                    + (f.ray_image[0] as u64 * f.ray_image[1] as u64).div_ceil(GATHER_CHUNK as u64))
-                .min(65535) as u32;
-                rec.dispatch_bound(&p.gather, bytemuck::bytes_of(&push), [workgroups, 1, 1])?;
-                // The tiles of several chunks, from their sums.
-                rec.compute_storage_barriers(&Self::storage(&self.irradiance), &splat_buffers);
-                rec.bind_compute_pipeline(&p.gather_resolve);
-                rec.dispatch_bound(&p.gather_resolve, bytemuck::bytes_of(&push), groups(screen))?;
-            } else {
-                rec.dispatch_bound(&p.gather, bytemuck::bytes_of(&push), groups(screen))?;
+            match &pipelines.splat {
+                ComputeSplat::Blocks { scatter, resolve } => {
+                    // Stage B: the rays just written scatter their deposits into the sums
+                    // (which the previous plane's resolve zeroed).
+                    rec.compute_storage_barriers(&Self::storage(&self.rays), &[&self.splat_sums]);
+                    if timed {
+                        rec.begin_scope("sweep: splat: scatter");
+                    }
+                    rec.bind_compute_pipeline(scatter);
+                    rec.dispatch_bound(scatter, bytemuck::bytes_of(&push), ray_groups)?;
+                    if timed {
+                        rec.end_scope();
+                        rec.begin_scope("sweep: splat: resolve");
+                    }
+                    // Stage C: the sums into irradiance layer i % 2 (after the viewing rays
+                    // of plane i - 1 read it as plane i - 2's).
+                    rec.compute_storage_barriers(
+                        &Self::storage(&self.irradiance),
+                        &[&self.splat_sums],
+                    );
+                    rec.bind_compute_pipeline(resolve);
+                    let rows = [self.width.div_ceil(64), self.height, 1];
+                    rec.dispatch_bound(resolve, bytemuck::bytes_of(&push), rows)?;
+                }
+                ComputeSplat::Binned {
+                    deposit,
+                    bin_scan,
+                    bin_fill,
+                    gather,
+                    pairs,
+                    resolve,
+                } => {
+                    // Stage B: the rays just written make their deposits and count
+                    // themselves into the tile bins (after the previous plane's gather read
+                    // the last deposits and lists; the previous scan zeroed the counts).
+                    let splat_buffers = [&self.deposits, &self.bins, &self.bin_list];
+                    rec.compute_storage_barriers(&Self::storage(&self.rays), &splat_buffers);
+                    // Within the splat's scope, one scope per step, so that a GPU's
+                    // timings say which of them to work on.
+                    if timed {
+                        rec.begin_scope("sweep: splat: deposits");
+                    }
+                    rec.bind_compute_pipeline(deposit);
+                    rec.dispatch_bound(deposit, bytemuck::bytes_of(&push), ray_groups)?;
+                    if timed {
+                        rec.end_scope();
+                        rec.begin_scope("sweep: splat: bins");
+                    }
+                    // The bins' list offsets, then the lists.
+                    rec.compute_storage_barriers(&[], &splat_buffers);
+                    rec.bind_compute_pipeline(bin_scan);
+                    rec.dispatch_bound(bin_scan, bytemuck::bytes_of(&push), [1, 1, 1])?;
+                    rec.compute_storage_barriers(&[], &splat_buffers);
+                    rec.bind_compute_pipeline(bin_fill);
+                    rec.dispatch_bound(bin_fill, bytemuck::bytes_of(&push), ray_groups)?;
+                    if timed {
+                        rec.end_scope();
+                        rec.begin_scope("sweep: splat: gather");
+                    }
+                    // Stage C: the gather into irradiance layer i % 2 (after the viewing
+                    // rays of plane i - 1 read it as plane i - 2's).
+                    rec.compute_storage_barriers(&Self::storage(&self.irradiance), &splat_buffers);
+                    rec.bind_compute_pipeline(gather);
+                    if *pairs {
+                        // One workgroup per chunk of a tile's candidates: at least one per
+                        // tile, and one more per GATHER_CHUNK rays the ray images hold (a
+                        // workgroup takes several chunks in turn where there are more), at
+                        // most 65535, the dispatch size every device must take (large
+                        // screens: 2048² has 65536 tiles).
+                        let workgroups = (gather_tiles(self.width, self.height)
+                            + (f.ray_image[0] as u64 * f.ray_image[1] as u64)
+                                .div_ceil(GATHER_CHUNK as u64))
+                        .min(65535) as u32;
+                        rec.dispatch_bound(gather, bytemuck::bytes_of(&push), [workgroups, 1, 1])?;
+                        // The tiles of several chunks, from their sums.
+                        rec.compute_storage_barriers(
+                            &Self::storage(&self.irradiance),
+                            &splat_buffers,
+                        );
+                        rec.bind_compute_pipeline(resolve);
+                        rec.dispatch_bound(resolve, bytemuck::bytes_of(&push), groups(screen))?;
+                    } else {
+                        rec.dispatch_bound(gather, bytemuck::bytes_of(&push), groups(screen))?;
+                    }
+                }
             }
             if timed {
                 rec.end_scope();

@@ -74,9 +74,9 @@ impl Deposit {
     }
 }
 
-/// How the compute sweep's splat sums the deposits of a tile's rays (issue 31,
-/// glsl/sweep_gather.comp): both add the same 32.32 fixed-point values, so the two give
-/// the same irradiance bit for bit; only their speed differs. Measured on an H100
+/// How the compute sweep's splat sums the light rays' deposits (issue 31): every way adds
+/// the same 32.32 fixed-point values as 64-bit integers, so all give the same irradiance
+/// bit for bit; only their speed differs. Measured on an H100
 /// (docs/BENCH.md, "the splat rebuilt"): pairs 436 against 531 ms on the supernova row,
 /// 157 against 205 ms on the default scene at 768², but 530 against 474 ms on the piggy
 /// bank.
@@ -90,6 +90,11 @@ pub enum Gather {
     /// in registers (glsl/sweep_gather_pixels.comp: a subgroup evaluates a deposit for
     /// all its pixels where any of them needs it).
     Pixels,
+    /// No bins: each workgroup of 8 × 8 neighbouring rays adds its deposits into a tile
+    /// of pixels in shared memory and then the tile into the plane's sums with global
+    /// integer atomics, one per pixel and channel (glsl/sweep_scatter.comp); two
+    /// dispatches a plane instead of five.
+    Blocks,
 }
 
 impl Gather {
@@ -97,6 +102,7 @@ impl Gather {
         match self {
             Gather::Pairs => "pairs",
             Gather::Pixels => "pixels",
+            Gather::Blocks => "blocks",
         }
     }
 }
@@ -257,9 +263,9 @@ impl Levers {
 
     /// The keys of [`Levers::parse`], with their values, for help texts.
     pub const SYNTAX: &'static str =
-        "region=full|rect|octagon, field=off|on, arrays=off|on, specialize=off|on, splat=raster|groups|compute, \
-         sweep=auto|fragment|compute, clear=off|on, deposit=cells|boxes, gather=pairs|pixels, \
-         rays=all|needed";
+        "region=full|rect|octagon, field=off|on, arrays=off|on, specialize=off|on, \
+         splat=raster|groups|compute, sweep=auto|fragment|compute, clear=off|on, \
+         deposit=cells|boxes, gather=pairs|pixels|blocks, rays=all|needed";
 
     /// `default`, `reference`, or comma-separated `key=value` pairs applied to the
     /// default (e.g. `region=full,field=off`); a pair may also follow `reference,` to
@@ -335,7 +341,8 @@ impl Levers {
                     levers.gather = match value {
                         "pairs" => Gather::Pairs,
                         "pixels" => Gather::Pixels,
-                        _ => bail!("gather={value}: expected pairs or pixels"),
+                        "blocks" => Gather::Blocks,
+                        _ => bail!("gather={value}: expected pairs, pixels or blocks"),
                     }
                 }
                 "rays" => {
@@ -458,6 +465,8 @@ mod tests {
                     region,
                     gather: if bits % 7 == 0 {
                         Gather::Pixels
+                    } else if bits % 3 == 0 {
+                        Gather::Blocks
                     } else {
                         Gather::Pairs
                     },
@@ -503,7 +512,7 @@ mod tests {
             ("splat=gather", "raster, groups or compute"),
             ("sweep=vertex", "auto, fragment or compute"),
             ("deposit=points", "cells or boxes"),
-            ("gather=rays", "pairs or pixels"),
+            ("gather=rays", "pairs, pixels or blocks"),
             ("rays=some", "all or needed"),
             ("field=maybe", "on or off"),
             ("speed=11", "unknown lever 'speed'"),

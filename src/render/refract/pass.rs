@@ -544,7 +544,8 @@ impl SweepPass {
                 ctx,
                 &self.compute_set,
                 features.constants(self.have_gradient),
-                features.gather_pairs,
+                features.gather,
+                features.cells,
             )?;
             self.compute_planes.insert(features, planes);
         }

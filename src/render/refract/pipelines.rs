@@ -26,10 +26,9 @@ pub(crate) struct Features {
     pub(crate) clear: bool,
     /// The `deposit` lever: the forward light rays deposit cells, not boxes.
     pub(crate) cells: bool,
-    /// The `gather` lever: the compute sweep's splat sums by (ray, pixel) pairs
-    /// (glsl/sweep_gather.comp), not by pixels (sweep_gather_pixels.comp). Not a
-    /// constant: it chooses the gather's shader.
-    pub(crate) gather_pairs: bool,
+    /// The `gather` lever: how the compute sweep's splat sums the deposits. Not a
+    /// constant: it chooses the splat's shaders.
+    pub(crate) gather: super::Gather,
 }
 
 impl Features {
@@ -43,7 +42,7 @@ impl Features {
         films: true,
         clear: true,
         cells: true,
-        gather_pairs: true,
+        gather: super::Gather::Pairs,
     };
 
     /// `have_field`: whether the field texture exists (it may not fit in memory);
@@ -56,7 +55,7 @@ impl Features {
             field: levers.field && have_field,
             clear: levers.clear,
             cells: levers.deposit == super::Deposit::Cells,
-            gather_pairs: levers.gather == super::Gather::Pairs,
+            gather: levers.gather,
             ..Self::ALL
         };
         if !levers.specialize {
@@ -276,16 +275,34 @@ pub(crate) struct ComputePlanes {
     pub(crate) light: ComputePipeline,
     pub(crate) light_soft: ComputePipeline,
     pub(crate) view: ComputePipeline,
-    /// The splat, a tile-binned gather (glsl/light_gather.glsl): each ray's deposit and
-    /// its count in the tile bins, the bins' offsets, the bins' lists, each pixel's sum.
-    pub(crate) deposit: ComputePipeline,
-    pub(crate) bin_scan: ComputePipeline,
-    pub(crate) bin_fill: ComputePipeline,
-    pub(crate) gather: ComputePipeline,
-    /// Whether `gather` is the pair gather (the `gather` lever): one workgroup per chunk
-    /// of a tile's candidates, then `gather_resolve` for the tiles of several chunks.
-    pub(crate) gather_pairs: bool,
-    pub(crate) gather_resolve: ComputePipeline,
+    /// The forward transport's splat (the `gather` lever).
+    pub(crate) splat: ComputeSplat,
+}
+
+/// The compute sweep's splat, by the `gather` lever: only the chosen way's pipelines are
+/// made (each is compiled when it is created; on lavapipe that is most of a frame's
+/// setup).
+pub(crate) enum ComputeSplat {
+    /// A tile-binned gather (glsl/light_gather.glsl): each ray's deposit and its count in
+    /// the tile bins, the bins' offsets, the bins' lists, each pixel's sum; with `pairs`
+    /// (glsl/sweep_gather.comp) one workgroup per chunk of a tile's candidates, then
+    /// `resolve` for the tiles of several chunks, else one per tile
+    /// (sweep_gather_pixels.comp).
+    Binned {
+        deposit: ComputePipeline,
+        bin_scan: ComputePipeline,
+        bin_fill: ComputePipeline,
+        gather: ComputePipeline,
+        pairs: bool,
+        resolve: ComputePipeline,
+    },
+    /// Blocks of rays scattered into shared tiles and the tiles into the plane's sums
+    /// (glsl/sweep_scatter.comp), then the sums into the irradiance layer
+    /// (sweep_scatter_resolve.comp).
+    Blocks {
+        scatter: ComputePipeline,
+        resolve: ComputePipeline,
+    },
 }
 
 impl ComputePlanes {
@@ -293,11 +310,60 @@ impl ComputePlanes {
         ctx: &Context,
         set: &DescriptorSet,
         constants: [u32; 10],
-        gather_pairs: bool,
+        gather: super::Gather,
+        cells: bool,
     ) -> Result<Self> {
         let push = std::mem::size_of::<ComputePush>() as u32;
         let make = |spirv, name: &str| {
             ComputePipeline::with_constants(ctx, spirv, set, push, &constants, name)
+        };
+        let splat = match gather {
+            super::Gather::Blocks => ComputeSplat::Blocks {
+                // 64-bit atomics where the device has them (on an H100 the scatter took
+                // 123 ms a frame with them and 335 with two words, the default scene at
+                // 768²), the boxes deposit's own build where it applies.
+                scatter: make(
+                    match (ctx.info().buffer_int64_atomics, cells) {
+                        (true, false) => shaders::SWEEP_SCATTER_INT64_BOXES_COMP,
+                        (true, true) => shaders::SWEEP_SCATTER_INT64_COMP,
+                        (false, _) => shaders::SWEEP_SCATTER_COMP,
+                    },
+                    "light scatter of ray blocks (compute sweep)",
+                )?,
+                resolve: make(
+                    shaders::SWEEP_SCATTER_RESOLVE_COMP,
+                    "light scatter's sums (compute sweep)",
+                )?,
+            },
+            super::Gather::Pairs | super::Gather::Pixels => {
+                let pairs = gather == super::Gather::Pairs;
+                ComputeSplat::Binned {
+                    deposit: make(
+                        shaders::SWEEP_DEPOSIT_COMP,
+                        "light deposits (compute sweep)",
+                    )?,
+                    bin_scan: make(
+                        shaders::SWEEP_BIN_SCAN_COMP,
+                        "light bin offsets (compute sweep)",
+                    )?,
+                    bin_fill: make(
+                        shaders::SWEEP_BIN_FILL_COMP,
+                        "light bin lists (compute sweep)",
+                    )?,
+                    gather: match pairs {
+                        true => make(shaders::SWEEP_GATHER_COMP, "light gather (compute sweep)")?,
+                        false => make(
+                            shaders::SWEEP_GATHER_PIXELS_COMP,
+                            "light gather by pixels (compute sweep)",
+                        )?,
+                    },
+                    pairs,
+                    resolve: make(
+                        shaders::SWEEP_GATHER_RESOLVE_COMP,
+                        "light gather, tiles of several chunks (compute sweep)",
+                    )?,
+                }
+            }
         };
         Ok(Self {
             sweep: make(shaders::SWEEP_COMP, "sweep plane (compute)")?,
@@ -318,30 +384,7 @@ impl ComputePlanes {
                 shaders::SWEEP_VIEW_FORWARD_COMP,
                 "sweep viewing rays (compute)",
             )?,
-            deposit: make(
-                shaders::SWEEP_DEPOSIT_COMP,
-                "light deposits (compute sweep)",
-            )?,
-            bin_scan: make(
-                shaders::SWEEP_BIN_SCAN_COMP,
-                "light bin offsets (compute sweep)",
-            )?,
-            bin_fill: make(
-                shaders::SWEEP_BIN_FILL_COMP,
-                "light bin lists (compute sweep)",
-            )?,
-            gather: match gather_pairs {
-                true => make(shaders::SWEEP_GATHER_COMP, "light gather (compute sweep)")?,
-                false => make(
-                    shaders::SWEEP_GATHER_PIXELS_COMP,
-                    "light gather by pixels (compute sweep)",
-                )?,
-            },
-            gather_pairs,
-            gather_resolve: make(
-                shaders::SWEEP_GATHER_RESOLVE_COMP,
-                "light gather, tiles of several chunks (compute sweep)",
-            )?,
+            splat,
         })
     }
 }
