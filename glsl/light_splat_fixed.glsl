@@ -53,6 +53,31 @@ float fixed_to_float(uvec2 sum) {
     return negative ? -m : m;
 }
 
+// Sums in shared memory (a workgroup's tile) as two words, the low word's old value
+// giving the carry, even where the device has 64-bit atomics: on an H100 one 64-bit
+// shared atomic per sum made the pair gather 1.9 x slower (163.7 against 86.6 ms a frame
+// on the default scene at 768²; docs/bench/2026-11-27-nvidia-h100-blocks.md), while in
+// global memory it is the two words that are slow. Macros, as GLSL passes no shared array
+// to a function: SHARED_SUMS declares `name` [channels][n]; SHARED_SUM_ADD adds the
+// words w (uvec2 lo, hi; a positive value below 1 whose low word does not wrap leaves
+// the high word as it is: one atomic, not two); SHARED_SUM_GET reads them;
+// SHARED_SUM_CLEAR zeroes one.
+#define SHARED_SUMS(name, channels, n) \
+    shared uint name##_lo[channels][n]; \
+    shared uint name##_hi[channels][n]
+#define SHARED_SUM_ADD(name, k, i, w) \
+    { \
+        uint old_ = atomicAdd(name##_lo[k][i], (w).x); \
+        uint h_ = (w).y + (old_ + (w).x < old_ ? 1u : 0u); \
+        if (h_ != 0u) atomicAdd(name##_hi[k][i], h_); \
+    }
+#define SHARED_SUM_GET(name, k, i) uvec2(name##_lo[k][i], name##_hi[k][i])
+#define SHARED_SUM_CLEAR(name, k, i) \
+    { \
+        name##_lo[k][i] = 0u; \
+        name##_hi[k][i] = 0u; \
+    }
+
 #ifdef SPLAT_SUMS_BINDING
 layout(std430, set = 0, binding = SPLAT_SUMS_BINDING) buffer SplatSums {
     uint sums[];

@@ -50,9 +50,9 @@ layout(push_constant) uniform Push {
 
 const uint BATCH = 64u;
 
-// The tile's sums: word [channel][pixel], low and high halves of 32.32 fixed point.
-shared uint sum_lo[SPLAT_GATHER_CHANNELS][64];
-shared uint sum_hi[SPLAT_GATHER_CHANNELS][64];
+// The tile's sums: [channel][pixel], 32.32 fixed point in two words (SHARED_SUMS,
+// light_splat_fixed.glsl).
+SHARED_SUMS(sum, SPLAT_GATHER_CHANNELS, 64);
 // The batch: each candidate's rectangle in the tile (x0, y0, width, height, 8 bits each;
 // zero pixels for a ray that misses the tile), its pairs' running end, and its deposit.
 shared uint candidate_rect[BATCH];
@@ -80,13 +80,10 @@ RayDeposit shared_deposit(uint c) {
 }
 
 // Add v, truncated to 32.32 fixed point as add_fixed_reg does, to the shared sum of
-// (channel, pixel): the low word's old value tells whether it wrapped, and the carry goes
-// into the high word with its half (light_splat_fixed.glsl).
+// (channel, pixel) (SHARED_SUM_ADD, light_splat_fixed.glsl).
 void add_fixed_shared(uint channel, uint px, float v) {
     uvec2 w = to_fixed(v);
-    uint old = atomicAdd(sum_lo[channel][px], w.x);
-    uint carry = old + w.x < old ? 1u : 0u;
-    atomicAdd(sum_hi[channel][px], w.y + carry);
+    SHARED_SUM_ADD(sum, channel, px, w);
 }
 
 // The last tile whose first chunk is at or before `chunk` (first chunks ascend; the loop
@@ -146,15 +143,15 @@ void store_tile_pixel(uint tile_index, ivec2 tile_lo, bool several_chunks, ivec2
     if (several_chunks) {
         for (int k = 0; k < SPLAT_GATHER_CHANNELS; ++k) {
             uint w = tile_sums_word(tile_index, t, uint(k));
-            uint lo_word = sum_lo[k][t];
-            uint old = atomicAdd(bins[w], lo_word);
-            uint carry = old + lo_word < old ? 1u : 0u;
-            atomicAdd(bins[w + 1u], sum_hi[k][t] + carry);
+            uvec2 s = SHARED_SUM_GET(sum, k, t);
+            uint old = atomicAdd(bins[w], s.x);
+            uint carry = old + s.x < old ? 1u : 0u;
+            atomicAdd(bins[w + 1u], s.y + carry);
         }
     } else if (all(lessThan(pixel, size))) {
         float c[SPLAT_GATHER_CHANNELS];
         for (int k = 0; k < SPLAT_GATHER_CHANNELS; ++k) {
-            c[k] = fixed_to_float(uvec2(sum_lo[k][t], sum_hi[k][t])) * pc.unit;
+            c[k] = fixed_to_float(SHARED_SUM_GET(sum, k, t)) * pc.unit;
         }
         ivec3 at = ivec3(pixel, pc.read_layer);
         imageStore(irradiance, at, vec4(c[0], c[1], c[2], 0.0));
@@ -177,10 +174,7 @@ void gather_chunk(uint chunk, ivec2 size) {
     uint begin = (chunk - first_chunk) * GATHER_CHUNK;
     uint end = min(total, begin + GATHER_CHUNK);
 
-    for (int k = 0; k < SPLAT_GATHER_CHANNELS; ++k) {
-        sum_lo[k][t] = 0u;
-        sum_hi[k][t] = 0u;
-    }
+    for (int k = 0; k < SPLAT_GATHER_CHANNELS; ++k) SHARED_SUM_CLEAR(sum, k, t);
     for (uint base = begin; base < end; base += BATCH) {
         // 1. Candidate t and its rectangle in the tile.
         uint k = base + t;

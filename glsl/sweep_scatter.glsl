@@ -1,7 +1,7 @@
 // The compute sweep's splat as a scatter of ray blocks (the `gather=blocks` lever, issue
 // 31): one dispatch over the light-ray grid, a workgroup per block of 8 x 8 neighbouring
 // rays, then sweep_scatter_resolve.comp. Built as sweep_scatter_int64.comp and
-// sweep_scatter_int64_boxes.comp (64-bit atomics, SCATTER_INT64) where the device has
+// sweep_scatter_int64_boxes.comp (64-bit atomics, SPLAT_INT64) where the device has
 // shaderBufferInt64Atomics, else as sweep_scatter.comp (two 32-bit words a sum).
 //
 // Each invocation computes its ray's deposit (light_splat_ray.glsl, the same deposit as
@@ -38,7 +38,7 @@
 #define DEPOSITS_READONLY 1
 #include "light_gather.glsl"
 
-#if SCATTER_INT64
+#if SPLAT_INT64
 // The same sums as 64-bit words (word 2 k + 0 low, 2 k + 1 high is the little-endian
 // uint64 k): an add is one atomic whose result nothing waits for.
 layout(std430, set = 0, binding = SPLAT_SUMS_BINDING) buffer SplatSums64 {
@@ -48,7 +48,7 @@ layout(std430, set = 0, binding = SPLAT_SUMS_BINDING) buffer SplatSums64 {
 
 // Add the 64-bit value w (lo, hi) to the plane's sum at `slot` (an even word index).
 void add_to_plane(uint slot, uvec2 w) {
-#if SCATTER_INT64
+#if SPLAT_INT64
     atomicAdd(sums64[slot / 2u], packUint2x32(w));
 #else
     add_words(slot, w);
@@ -78,11 +78,10 @@ const int SHARED_VEC4S = DEPOSIT_VEC4S_MAX;
 #endif
 const uint HALVES = 64u / HALF;
 
-// The tile's sums: word [channel][pixel], low and high halves of 32.32 fixed point
+// The tile's sums: [channel][pixel], 32.32 fixed point in two words (SHARED_SUMS)
 // (7 x 144 x 8 bytes at SCATTER_TILE 12), and half the block's deposits (32 x 10 vec4s):
 // 13.9 KiB with the rest, within the 16 KiB every device gives a workgroup.
-shared uint tile_lo[SPLAT_CHANNELS][TILE_PIXELS];
-shared uint tile_hi[SPLAT_CHANNELS][TILE_PIXELS];
+SHARED_SUMS(tile, SPLAT_CHANNELS, TILE_PIXELS);
 // The bounds (inclusive, pixels) of the block's deposits on the screen.
 shared int bounds_lo_x, bounds_lo_y, bounds_hi_x, bounds_hi_y;
 // The half's rays: the rectangle of pixels each deposit overlaps (first.xy, extent.xy;
@@ -93,16 +92,13 @@ shared uint ray_end[HALF];
 shared uint ray_in_tile[HALF];
 shared vec4 ray_deposit_v[HALF * uint(SHARED_VEC4S)];
 
-// Add v, truncated to 32.32 fixed point, to the tile's sum of (channel, pixel t): the low
-// word's old value tells whether it wrapped (light_splat_fixed.glsl).
+// Add v, truncated to 32.32 fixed point, to the tile's sum of (channel, pixel t)
+// (light_splat_fixed.glsl's SHARED_SUM_ADD: with two words, a positive deposit below 1,
+// the light's unit, whose low word does not wrap leaves the high word as it is).
 void add_to_tile(uint channel, uint t, float v) {
     if (v == 0.0) return;
     uvec2 w = to_fixed(v);
-    uint old = atomicAdd(tile_lo[channel][t], w.x);
-    uint h = w.y + (old + w.x < old ? 1u : 0u);
-    // A positive deposit below 1 (the light's unit) whose low word does not wrap leaves
-    // the high word as it is: most adds are one atomic, not two.
-    if (h != 0u) atomicAdd(tile_hi[channel][t], h);
+    SHARED_SUM_ADD(tile, channel, t, w);
 }
 
 RayDeposit half_deposit(uint c) {
@@ -147,10 +143,7 @@ void add_pair(uint pair, uint pairs, ivec2 origin, ivec2 size) {
 void main() {
     uint t = gl_LocalInvocationIndex;
     for (uint q = t; q < TILE_PIXELS; q += 64u) {
-        for (uint k = 0u; k < SPLAT_CHANNELS; ++k) {
-            tile_lo[k][q] = 0u;
-            tile_hi[k][q] = 0u;
-        }
+        for (uint k = 0u; k < SPLAT_CHANNELS; ++k) SHARED_SUM_CLEAR(tile, k, q);
     }
     if (t == 0u) {
         bounds_lo_x = 0x7fffffff;
@@ -219,8 +212,8 @@ void main() {
         if (any(lessThan(p, from)) || any(greaterThan(p, to))) continue;
         uint pixel = uint(p.y * size.x + p.x);
         for (uint k = 0u; k < SPLAT_CHANNELS; ++k) {
-            uint w_lo = tile_lo[k][q], w_hi = tile_hi[k][q];
-            if ((w_lo | w_hi) != 0u) add_to_plane(splat_slot(k, pixel, pixels), uvec2(w_lo, w_hi));
+            uvec2 w = SHARED_SUM_GET(tile, k, q);
+            if ((w.x | w.y) != 0u) add_to_plane(splat_slot(k, pixel, pixels), w);
         }
     }
 }

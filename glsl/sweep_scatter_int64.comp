@@ -4,5 +4,5 @@
 #extension GL_EXT_shader_atomic_int64 : require
 // The compute sweep's scatter of ray blocks (sweep_scatter.glsl) with one 64-bit atomic
 // per sum, on devices with shaderBufferInt64Atomics.
-#define SCATTER_INT64 1
+#define SPLAT_INT64 1
 #include "sweep_scatter.glsl"

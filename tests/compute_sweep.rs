@@ -147,7 +147,7 @@ fn the_scatter_of_ray_blocks_sums_exactly_with_two_word_atomics() {
         ..Default::default()
     };
     with_context_from(desc, |ctx| {
-        assert!(!ctx.info().buffer_int64_atomics);
+        assert!(!ctx.info().int64_atomics);
         for (size, spacing, deposit) in [
             ([136, 130], 4.0, Deposit::Boxes),
             ([48, 40], 0.25, Deposit::Cells),
@@ -348,7 +348,7 @@ fn gather_matches_atomic(
             linear_max(&a.pixels, &g.pixels)
         );
     }
-    let blocks_with = if ctx.info().buffer_int64_atomics {
+    let blocks_with = if ctx.info().int64_atomics {
         "64-bit atomics"
     } else {
         "two-word atomics"

@@ -64,6 +64,14 @@ pub fn info(desc: &ContextDesc) -> Result<ExitCode> {
     );
     println!("  max colour attachments: {}", l.max_color_attachments);
     println!(
+        "  64-bit atomics:         {}",
+        if i.int64_atomics {
+            "yes (storage buffers)"
+        } else {
+            "no (sums as two 32-bit words)"
+        }
+    );
+    println!(
         "  timestamps:             {} (period {} ns)",
         if i.timestamps { "yes" } else { "no" },
         l.timestamp_period

@@ -323,7 +323,7 @@ impl ComputePlanes {
                 // 123 ms a frame with them and 335 with two words, the default scene at
                 // 768²), the boxes deposit's own build where it applies.
                 scatter: make(
-                    match (ctx.info().buffer_int64_atomics, cells) {
+                    match (ctx.info().int64_atomics, cells) {
                         (true, false) => shaders::SWEEP_SCATTER_INT64_BOXES_COMP,
                         (true, true) => shaders::SWEEP_SCATTER_INT64_COMP,
                         (false, _) => shaders::SWEEP_SCATTER_COMP,

@@ -94,14 +94,14 @@ impl Context {
         info.large_points = core.large_points == vk::TRUE;
         info.fragment_atomics = core.fragment_stores_and_atomics == vk::TRUE;
         info.multi_draw_indirect = core.multi_draw_indirect == vk::TRUE;
-        info.buffer_int64_atomics = !desc.without_int64_atomics
+        info.int64_atomics = !desc.without_int64_atomics
             && core.shader_int64 == vk::TRUE
             && f12.shader_buffer_int64_atomics == vk::TRUE;
         let core_features = vk::PhysicalDeviceFeatures::default()
             .large_points(info.large_points)
             .fragment_stores_and_atomics(info.fragment_atomics)
             .multi_draw_indirect(info.multi_draw_indirect)
-            .shader_int64(info.buffer_int64_atomics);
+            .shader_int64(info.int64_atomics);
         let priorities = [1.0f32];
         let queue_infos = [vk::DeviceQueueCreateInfo::default()
             .queue_family_index(family)
@@ -109,7 +109,7 @@ impl Context {
         // maintenance4 is required by Vulkan 1.3; glslang targeting 1.3 emits LocalSizeId, which
         // needs it enabled.
         let mut enable12 = vk::PhysicalDeviceVulkan12Features::default()
-            .shader_buffer_int64_atomics(info.buffer_int64_atomics);
+            .shader_buffer_int64_atomics(info.int64_atomics);
         let mut enable13 = vk::PhysicalDeviceVulkan13Features::default()
             .synchronization2(true)
             .maintenance4(true);

@@ -41,7 +41,7 @@ pub struct ContextDesc {
     /// devices whose graphics+compute queue can present to it. None = headless.
     pub window: Option<Arc<dyn WindowSource>>,
     /// Leave 64-bit atomics off even where the device offers them
-    /// ([`DeviceInfo::buffer_int64_atomics`] false), so that tests run the two-word
+    /// ([`DeviceInfo::int64_atomics`] false), so that tests run the two-word
     /// paths the devices without them take.
     pub without_int64_atomics: bool,
 }

@@ -33,8 +33,9 @@ pub struct DeviceInfo {
     /// 64-bit integer atomics on storage buffers (`shaderInt64` and
     /// `shaderBufferInt64Atomics`), enabled when offered: a 64-bit sum is then one atomic
     /// add whose result the shader need not wait for, where two 32-bit words need the low
-    /// word's old value for the carry.
-    pub buffer_int64_atomics: bool,
+    /// word's old value for the carry. (Not in shared memory: on an H100 those were slower
+    /// than two words, glsl/light_splat_fixed.glsl.)
+    pub int64_atomics: bool,
 }
 
 pub fn version_string(v: u32) -> String {
@@ -144,7 +145,7 @@ pub(super) fn query_info(
         large_points: false,
         fragment_atomics: false,
         multi_draw_indirect: false,
-        buffer_int64_atomics: false,
+        int64_atomics: false,
     }
 }
 
