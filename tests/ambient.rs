@@ -14,7 +14,9 @@ use glam::Vec3;
 use refrakt::light::LightSource;
 use refrakt::render::ambient::table::{AmbientTable, TableParams};
 use refrakt::render::ambient::{AmbientOptions, CACHE_SCOPE, EXTINCTION_SCOPE};
-use refrakt::render::{Light, Model, RenderOptions, Renderer, ScatterOptions, SweepOptions};
+use refrakt::render::{
+    Light, Model, RenderOptions, Renderer, ScatterOptions, SweepOptions, SCATTER_ALBEDO, SCATTER_G,
+};
 
 /// A small table (seconds to build) for `albedo`.
 fn small_table(albedo: f32) -> AmbientTable {
@@ -30,12 +32,10 @@ fn small_table(albedo: f32) -> AmbientTable {
 }
 
 fn options(towards: Vec3, g: f32, albedo: f32, radius: f32, size: u32) -> RenderOptions {
-    RenderOptions {
+    let mut opts = RenderOptions {
         width: size,
         height: size,
         background: [0.0, 0.0, 0.0, 1.0],
-        scatter: ScatterOptions { g, albedo },
-        ambient: AmbientOptions { radius },
         lights: vec![Light {
             source: refrakt::light::LightSource::Directional {
                 towards: towards.normalize(),
@@ -47,7 +47,10 @@ fn options(towards: Vec3, g: f32, albedo: f32, radius: f32, size: u32) -> Render
             ..Default::default()
         },
         ..Default::default()
-    }
+    };
+    ScatterOptions { g, albedo }.set_in(&mut opts).unwrap();
+    AmbientOptions { radius }.set_in(&mut opts).unwrap();
+    opts
 }
 
 #[test]
@@ -298,7 +301,7 @@ fn a_change_rebuilds_only_what_depends_on_it() {
             (false, true, false),
             "light"
         );
-        o.scatter.g = 0.5;
+        o.models.set(&SCATTER_G, 0.5).unwrap();
         assert_eq!(
             rebuilt(&mut renderer, &camera, &o),
             (false, true, false),
@@ -310,7 +313,7 @@ fn a_change_rebuilds_only_what_depends_on_it() {
             (false, true, false),
             "another light"
         );
-        o.ambient.radius = 3.0;
+        AmbientOptions { radius: 3.0 }.set_in(&mut o).unwrap();
         assert_eq!(
             rebuilt(&mut renderer, &camera, &o),
             (true, true, false),
@@ -325,7 +328,7 @@ fn a_change_rebuilds_only_what_depends_on_it() {
             "transfer functions"
         );
         // The albedo is the table's: another albedo is refused while this table is set.
-        o.scatter.albedo = 0.5;
+        o.models.set(&SCATTER_ALBEDO, 0.5).unwrap();
         let e = renderer
             .render(Model::Ambient, &camera, &o)
             .unwrap_err()

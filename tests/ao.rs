@@ -126,16 +126,18 @@ fn a_floor_is_darker_beside_a_ball_than_far_from_it() {
             fov_y: 30.0,
             ..Default::default()
         };
-        let opts = RenderOptions {
+        let mut opts = RenderOptions {
             width: 96,
             height: 96,
             background: [0.0, 0.0, 0.0, 1.0],
-            ao: AoOptions {
-                radius: 8,
-                diffuse: 0.0,
-            },
             ..Default::default()
         };
+        AoOptions {
+            radius: 8,
+            diffuse: 0.0,
+        }
+        .set_in(&mut opts)
+        .unwrap();
         let ao = renderer.render(Model::Ao, &camera, &opts).unwrap();
         let ea = renderer.render(Model::Ea, &camera, &opts).unwrap();
         // Floor pixels along the row through the ball's centre: just beside the ball

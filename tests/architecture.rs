@@ -89,3 +89,77 @@ fn the_single_scattering_model_lives_in_its_folder_and_the_registry() {
         found.join("\n")
     );
 }
+
+/// A value `option` takes that is not its default (so that a value dropped on the way
+/// reads back as a failure), and one it refuses.
+fn other_and_refused(option: &refrakt::render::ModelOption) -> (f64, f64) {
+    let d = option.default;
+    let candidates = [d * 2.0, d / 2.0, d + 0.1, d - 0.1, 1.0, 0.5, 2.0, 4.0];
+    let other = candidates
+        .into_iter()
+        .find(|&v| v != d && option.checked(v).is_ok())
+        .unwrap_or_else(|| panic!("{} takes none of {candidates:?}", option.flag));
+    let refused = [1e9, -1e9, 0.5, 3.0]
+        .into_iter()
+        .find(|&v| option.checked(v).is_err())
+        .unwrap_or_else(|| panic!("{} refuses nothing", option.flag));
+    (other, refused)
+}
+
+#[test]
+fn every_model_option_reads_from_its_scene_key_and_is_refused_by_it() {
+    use refrakt::render::declared_options;
+    let options = declared_options();
+    assert!(options.len() >= 5, "{} options declared", options.len());
+    for (o, models) in options {
+        let (other, refused) = other_and_refused(o);
+        let file = |v: f64| {
+            format!(
+                "[volume]\nbuiltin = \"sphere\"\n[render]\nmodel = \"{}\"\n{} = {v:?}\n",
+                models[0].name(),
+                o.key()
+            )
+        };
+        let path = Path::new("options.toml");
+        let scene = refrakt::scene::Scene::parse(&file(other), path)
+            .unwrap_or_else(|e| panic!("{} = {other}: {e:#}", o.key()));
+        assert_eq!(scene.models.get(o), other, "[render] {}", o.key());
+        let e = refrakt::scene::Scene::parse(&file(refused), path).unwrap_err();
+        let said = format!("{e:#}");
+        assert!(said.contains(&format!("[render] {}", o.key())), "{said}");
+        // Given to a model that does not take it, it is refused naming the ones that do.
+        if let Some(m) = refrakt::render::Model::ALL
+            .into_iter()
+            .find(|m| !models.contains(m))
+        {
+            let text = file(other).replace(
+                &format!("model = \"{}\"", models[0].name()),
+                &format!("model = \"{}\"", m.name()),
+            );
+            let e = refrakt::scene::Scene::parse(&text, path).unwrap_err();
+            let said = format!("{e:#}");
+            assert!(
+                said.contains(&o.key()) && said.contains(models[0].name()),
+                "{}: {said}",
+                m.name()
+            );
+        }
+    }
+}
+
+#[test]
+fn model_options_are_written_only_in_their_declarations() {
+    // The CLI, scene files and benchmarks read them from the registry: a flag or scene
+    // key written as a string outside render/ is a model's option declared twice.
+    for (o, _) in refrakt::render::declared_options() {
+        let needles = [format!("\"{}\"", o.flag), format!("\"{}\"", o.key())];
+        let needles: Vec<&str> = needles.iter().map(String::as_str).collect();
+        let found = occurrences(&needles, |f| f.starts_with("render/"));
+        assert!(
+            found.is_empty(),
+            "{} is written outside its declaration:\n{}",
+            o.flag,
+            found.join("\n")
+        );
+    }
+}

@@ -39,7 +39,7 @@ fn a_sweep_submitted_in_batches_of_planes_is_the_whole_frame() {
                     end: w[1],
                 });
                 ctx.execute(|rec| {
-                    renderer.record_in(rec, Slot::Main, Model::Refract, &cam, &o)?;
+                    renderer.record(rec, Slot::Main, Model::Refract, &cam, &o)?;
                     Ok(())
                 })
                 .unwrap();

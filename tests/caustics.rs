@@ -98,6 +98,7 @@ fn power_is_conserved_through_a_focus() {
                         photons_per_pixel: 4,
                         ..Default::default()
                     },
+                    None,
                 )
                 .unwrap();
                 let m =
@@ -553,6 +554,7 @@ fn sphere_on_floor_caustic_matches_the_photon_tracer() {
                         photons_per_pixel: 16,
                         ..Default::default()
                     },
+                    None,
                 )
                 .unwrap();
                 println!("{}", img.summary());
@@ -700,9 +702,11 @@ impl DemoFromAbove {
             photons_per_pixel,
             ..Default::default()
         };
-        refrakt::photons::trace_irradiance(&self.vol, &self.tf, &self.cam, opts, depth, &photons)
-            .unwrap()
-            .pixels
+        refrakt::photons::trace_irradiance(
+            &self.vol, &self.tf, &self.cam, opts, depth, &photons, None,
+        )
+        .unwrap()
+        .pixels
     }
 
     /// The planes at sample distance `sd`, and options that dump the irradiance of the

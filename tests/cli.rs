@@ -912,7 +912,7 @@ fn help_is_grouped_by_topic_with_diagnostics_last() {
                 "Camera:",
                 "Environment:",
                 "Light:",
-                "Scattering models (ao, single, ambient):",
+                "Model options (each says which --model takes it):",
                 "Diagnostics:",
                 "Device:",
             ][..],
@@ -959,7 +959,10 @@ fn help_is_grouped_by_topic_with_diagnostics_last() {
             ("--azimuth", "Camera:"),
             ("--softness", "Light:"),
             ("--env ", "Environment:"),
-            ("--albedo", "Scattering models (ao, single, ambient):"),
+            (
+                "--albedo",
+                "Model options (each says which --model takes it):",
+            ),
             ("--device", "Device:"),
         ] {
             assert_eq!(section_of(flag), heading, "{cmd}: {flag}");

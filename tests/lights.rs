@@ -228,6 +228,7 @@ fn the_photon_tracer_refuses_a_point_light() {
         &opts,
         cam.distance,
         &Default::default(),
+        None,
     )
     .unwrap_err()
     .to_string();

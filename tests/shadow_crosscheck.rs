@@ -301,21 +301,23 @@ fn single_scattering_and_the_sweep_cast_the_same_shadow() {
             colour: [1.0; 3],
             softness,
         };
-        let opts = RenderOptions {
+        let mut opts = RenderOptions {
             width: SIZE,
             height: SIZE,
             sample_distance: SAMPLE_DISTANCE,
             background: [0.0, 0.0, 0.0, 1.0],
-            scatter: ScatterOptions {
-                g: 0.0,
-                albedo: 1.0,
-            },
             lights: vec![lit(0.0)],
             sweep: SweepOptions {
                 ..Default::default()
             },
             ..Default::default()
         };
+        ScatterOptions {
+            g: 0.0,
+            albedo: 1.0,
+        }
+        .set_in(&mut opts)
+        .unwrap();
         let single = renderer.render(Model::Single, &cam, &opts).unwrap();
         let swept = renderer.render(Model::Refract, &cam, &opts).unwrap();
 

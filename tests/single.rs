@@ -27,20 +27,22 @@ fn a_homogeneous_block_matches_the_single_scattering_integral() {
                 .set_transfer_functions(&constant_tf([1.0; 3], alpha as f32))
                 .unwrap();
             let t = glam::Vec3::from(towards.map(|c: f64| c as f32)).normalize();
-            let opts = RenderOptions {
+            let mut opts = RenderOptions {
                 width: 33,
                 height: 33,
                 background: [0.0, 0.0, 0.0, 1.0],
-                scatter: ScatterOptions {
-                    g: g as f32,
-                    albedo: albedo as f32,
-                },
                 lights: vec![Light {
                     softness: 0.0,
                     ..Light::directional(t, [1.0; 3])
                 }],
                 ..Default::default()
             };
+            ScatterOptions {
+                g: g as f32,
+                albedo: albedo as f32,
+            }
+            .set_in(&mut opts)
+            .unwrap();
             let frame = renderer.render(Model::Single, &camera, &opts).unwrap();
             let got = frame.pixel(16, 16)[1] as f64;
             // σ_t per reference step (1/n of the unit cube) → per world unit.

@@ -15,7 +15,7 @@ use std::path::Path;
 use std::process::{Child, Command, Output, Stdio};
 
 use refrakt::output::{self, ToneMap, ToneOperator};
-use refrakt::render::{Camera, Model, RenderOptions, Renderer, ToneMapPass};
+use refrakt::render::{Camera, Model, RenderOptions, Renderer, Slot, ToneMapPass};
 use refrakt::transfer::TransferFunctions;
 use refrakt::vk::{self, Framebuffer, Image, ImageDesc, ImageKind};
 use refrakt::volume::procedural;
@@ -62,7 +62,7 @@ fn gpu_tonemap(
     .unwrap();
     let linear = renderer.render(model, camera, opts).unwrap().pixels;
     ctx.execute(|rec| {
-        let out = renderer.record(rec, model, camera, opts)?;
+        let out = renderer.record(rec, Slot::Main, model, camera, opts)?;
         pass.record(rec, out.image, &target, &fb, tone, None)
     })
     .unwrap();
@@ -172,11 +172,11 @@ fn recorded_frames_equal_rendered_frames() {
             .map(|i| vk::Buffer::readback(ctx, bytes, &format!("readback {i}")).unwrap())
             .collect();
         ctx.execute(|rec| {
-            let out = renderer.record(rec, Model::Ea, &second, &opts)?;
+            let out = renderer.record(rec, Slot::Main, Model::Ea, &second, &opts)?;
             rec.copy_image_to_buffer(out.image, 0, &readbacks[0]);
-            let out = renderer.record(rec, Model::Refract, &first, &opts)?;
+            let out = renderer.record(rec, Slot::Main, Model::Refract, &first, &opts)?;
             rec.copy_image_to_buffer(out.image, 0, &readbacks[1]);
-            let out = renderer.record(rec, Model::Refract, &second, &opts)?;
+            let out = renderer.record(rec, Slot::Main, Model::Refract, &second, &opts)?;
             rec.copy_image_to_buffer(out.image, 0, &readbacks[2]);
             Ok(())
         })

@@ -175,6 +175,7 @@ fn a_weak_smooth_lens_lights_smoothly() {
                             step: 0.5,
                             ..Default::default()
                         },
+                        None,
                     )
                     .unwrap()
                     .pixels

@@ -11,7 +11,7 @@
 use glam::{Quat, Vec3};
 
 use super::*;
-use crate::render::rebuild_scopes;
+use crate::render::{rebuild_scopes, SCATTER_G};
 use crate::scene::FETCHED;
 use crate::transfer::TransferFunctions;
 
@@ -360,8 +360,9 @@ pub fn change_phase_function(opts: &RenderOptions, model: Model) -> Option<Rende
         return None;
     }
     let mut changed = opts.clone();
-    let g = opts.scatter.g;
-    changed.scatter.g = if g > 0.0 { g - 0.01 } else { g + 0.01 };
+    let g = opts.model_option(&SCATTER_G);
+    let moved = if g > 0.0 { g - 0.01 } else { g + 0.01 };
+    changed.models.set(&SCATTER_G, moved).ok()?;
     Some(changed)
 }
 

@@ -128,13 +128,10 @@ pub fn models_markdown(r: &ModelsReport) -> String {
 /// scopes' sum), each with its whole context, as `bench thesis --csv`.
 pub fn write_models_csv(r: &ModelsReport, path: &Path) -> Result<()> {
     // Written into memory, then to the file atomically (finish_csv).
-    let mut w = csv::Writer::from_writer(Vec::new());
-    w.write_record(
-        ["schema", "dataset", "model", "kind", "frame", "ms"]
-            .iter()
-            .chain(&SIZE_HEADER)
-            .chain(&["termination_alpha"])
-            .chain(&META_HEADER),
+    let mut w = csv_with_header(
+        &["schema", "dataset", "model", "kind", "frame", "ms"],
+        &["termination_alpha"],
+        &[],
     )?;
     let sampling = (r.settings.scale, r.settings.sample_distance);
     for row in &r.rows {

@@ -442,15 +442,13 @@ pub fn variants_markdown(r: &VariantsReport) -> String {
 /// whole context, as `bench thesis --csv`.
 pub fn write_variants_csv(r: &VariantsReport, path: &Path) -> Result<()> {
     // Written into memory, then to the file atomically (finish_csv).
-    let mut w = csv::Writer::from_writer(Vec::new());
-    w.write_record(
-        [
+    let mut w = csv_with_header(
+        &[
             "schema", "dataset", "variant", "levers", "frame", "warmup", "order", "frame_ms",
             "sweep_ms",
-        ]
-        .iter()
-        .chain(&SIZE_HEADER)
-        .chain(&META_HEADER),
+        ],
+        &[],
+        &[],
     )?;
     let sampling = (r.settings.scale, r.settings.sample_distance);
     for row in &r.rows {

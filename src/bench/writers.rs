@@ -119,16 +119,12 @@ pub fn markdown(r: &Report) -> String {
 /// context (device, commit, settings), so a file is self-describing and files concatenate.
 pub fn write_csv(r: &Report, path: &Path) -> Result<()> {
     // Written into memory, then to the file atomically (finish_csv).
-    let mut w = csv::Writer::from_writer(Vec::new());
-    w.write_record(
-        [
+    let mut w = csv_with_header(
+        &[
             "schema", "dataset", "variant", "frame", "warmup", "frame_ms",
-        ]
-        .iter()
-        .chain(&SIZE_HEADER)
-        .chain(&["thesis_ms", "thesis_gpu"])
-        .chain(&META_HEADER)
-        .chain(&["levers"]),
+        ],
+        &["thesis_ms", "thesis_gpu"],
+        &["levers"],
     )?;
     let sampling = (r.settings.scale, r.settings.sample_distance);
     for row in &r.rows {
@@ -157,6 +153,24 @@ pub fn write_csv(r: &Report, path: &Path) -> Result<()> {
         }
     }
     finish_csv(w, path)
+}
+
+/// A CSV writer into memory (for [`finish_csv`]) with the header of a report's records:
+/// `lead` (its own first columns), [`SIZE_HEADER`], `mid`, [`META_HEADER`], `tail`.
+pub(crate) fn csv_with_header(
+    lead: &[&str],
+    mid: &[&str],
+    tail: &[&str],
+) -> Result<csv::Writer<Vec<u8>>> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record(
+        lead.iter()
+            .chain(&SIZE_HEADER)
+            .chain(mid)
+            .chain(&META_HEADER)
+            .chain(tail),
+    )?;
+    Ok(w)
 }
 
 /// Writes a CSV built in memory to `path`, atomically (crate::files).

@@ -6,6 +6,7 @@ pub mod args;
 pub mod bench;
 pub mod bench_args;
 pub mod info;
+pub mod model_flags;
 pub mod photons;
 pub mod precompute;
 pub mod render;

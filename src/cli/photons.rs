@@ -63,9 +63,8 @@ pub fn photons(args: &PhotonsArgs) -> Result<ExitCode> {
         bar.set_length(rows);
         bar.set_position(done);
     };
-    let img = photons::trace_irradiance_with_progress(
-        &volume, &tf, &camera, &opts, depth, &popts, &progress,
-    )?;
+    let img =
+        photons::trace_irradiance(&volume, &tf, &camera, &opts, depth, &popts, Some(&progress))?;
     bar.finish_and_clear();
     output::write_pixels(img.width, img.height, &img.pixels, &args.output)?;
     println!(
@@ -96,11 +95,6 @@ fn refuse_unused_flags(a: &SceneArgs) -> Result<()> {
         ("--model", a.model.is_some()),
         ("--no-preintegration", a.no_preintegration),
         ("--background", a.background.is_some()),
-        ("--ao-radius", a.ao_radius.is_some()),
-        ("--ao-diffuse", a.ao_diffuse.is_some()),
-        ("--g", a.g.is_some()),
-        ("--albedo", a.albedo.is_some()),
-        ("--ambient-radius", a.ambient_radius.is_some()),
         ("--add-light", !a.add_light.is_empty()),
         ("--ambient-table", a.ambient_table.is_some()),
         ("--softness", a.softness.is_some()),
@@ -118,6 +112,8 @@ fn refuse_unused_flags(a: &SceneArgs) -> Result<()> {
     ]
     .into_iter()
     .filter_map(|(flag, given)| given.then_some(flag))
+    // The models' own options: the photon tracer follows the sweep's light, which has none.
+    .chain(a.model_options.flags_given())
     .collect();
     if !unused.is_empty() {
         bail!(

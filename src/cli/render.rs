@@ -173,7 +173,7 @@ pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
         let (table, line) = progress.suspend(|| {
             super::ambient::table_for(
                 args.scene.ambient_table.as_deref(),
-                opts.scatter.albedo,
+                refrakt::render::ScatterOptions::of(&opts).albedo,
                 false,
             )
         })?;

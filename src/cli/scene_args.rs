@@ -276,7 +276,7 @@ pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Resu
         );
     }
     s.apply(o);
-    // A flag that belongs to some models (their declarations list it: `Model::flags`),
+    // A flag that belongs to some models (their declarations list it: `Model::takes_flag`),
     // given with a model that does not take it, is an error naming the models that do.
     let given: Vec<scene::Given> = model_flags_given(args)
         .into_iter()
@@ -284,6 +284,8 @@ pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Resu
         .map(scene::Given::flag)
         .collect();
     scene::refuse_what_does_not_apply(s.model, s.light_transport, &given)?;
+    // The models' options' values, checked once the model is known to take them.
+    s.models.merge(&args.model_options.options()?);
     Ok(s)
 }
 
@@ -304,15 +306,11 @@ fn model_flags_given(args: &SceneArgs) -> Vec<&'static str> {
         ("--clip", args.clip.is_some()),
         ("--env", args.env.is_some()),
         ("--env-rotation", args.env_rotation.is_some()),
-        ("--g", args.g.is_some()),
-        ("--albedo", args.albedo.is_some()),
-        ("--ao-radius", args.ao_radius.is_some()),
-        ("--ao-diffuse", args.ao_diffuse.is_some()),
-        ("--ambient-radius", args.ambient_radius.is_some()),
         ("--ambient-table", args.ambient_table.is_some()),
     ]
     .into_iter()
     .filter_map(|(flag, given)| given.then_some(flag))
+    .chain(args.model_options.flags_given())
     .collect()
 }
 

@@ -169,55 +169,13 @@ pub struct SceneArgs {
     /// light's region].
     #[arg(help_heading = "Light", long, value_name = "R,G,B")]
     pub ambient_level: Option<String>,
-    /// Ambient occlusion (--model ao): half-size, in voxels, of the largest cube around a
-    /// sample whose extinction occludes it; a power of two (the cubes double from 1)
-    /// [default: 16].
-    #[arg(
-        help_heading = "Scattering models (ao, single, ambient)",
-        long,
-        value_name = "VOXELS"
-    )]
-    pub ao_radius: Option<u32>,
-    /// Ambient occlusion (--model ao): weight of the light's Lambert term (gradient
-    /// normal, unshadowed) against the ambient term, 0-1 [default: 0.5].
-    #[arg(
-        help_heading = "Scattering models (ao, single, ambient)",
-        long,
-        value_name = "W",
-        allow_negative_numbers = true
-    )]
-    pub ao_diffuse: Option<f32>,
-    /// Scattering models (--model single, ambient): Henyey-Greenstein anisotropy of the phase
-    /// function, -0.99 to 0.99; 0 isotropic, positive forward scattering [default: 0].
-    #[arg(
-        help_heading = "Scattering models (ao, single, ambient)",
-        long,
-        value_name = "G",
-        allow_negative_numbers = true
-    )]
-    pub g: Option<f32>,
-    /// Scattering models (--model single, ambient): albedo, the fraction of the extinguished light
-    /// that is scattered, 0-1 [default: 0.9].
-    #[arg(
-        help_heading = "Scattering models (ao, single, ambient)",
-        long,
-        allow_negative_numbers = true
-    )]
-    pub albedo: Option<f32>,
-    /// Ambient scattering (--model ambient): radius r of the sphere around each sample in
-    /// which light scatters, in voxels, 0.5-64: the size of the soft shadows and of the
-    /// translucency [default: 6].
-    #[arg(
-        help_heading = "Scattering models (ao, single, ambient)",
-        long,
-        value_name = "VOXELS",
-        allow_negative_numbers = true
-    )]
-    pub ambient_radius: Option<f32>,
+    /// The models' own options (`--ao-radius`, `--g`...), from their declarations.
+    #[command(flatten)]
+    pub model_options: super::model_flags::ModelFlags,
     /// Deprecated: give --light again. Another light after the main one, as --light
     /// takes it.
     #[arg(
-        help_heading = "Scattering models (ao, single, ambient)",
+        help_heading = "Light",
         hide = true,
         long,
         value_name = "LIGHT",
@@ -228,7 +186,7 @@ pub struct SceneArgs {
     /// by `refrakt precompute ambient --out` (its albedo must be the scene's). Default: the
     /// cached table for --albedo, built on first use (about a minute on 2 cores).
     #[arg(
-        help_heading = "Scattering models (ao, single, ambient)",
+        help_heading = super::model_flags::HEADING,
         long,
         value_name = "FILE"
     )]

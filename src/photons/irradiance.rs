@@ -4,7 +4,8 @@
 use super::*;
 
 /// Irradiance of the scene's directional light on the view-aligned plane at view depth
-/// `depth` (see the module documentation), as a W × H image of `opts`.
+/// `depth` (see the module documentation), as a W × H image of `opts`; `progress(rows
+/// done, rows)`, if given, is called as launch rows finish (from the worker threads).
 pub fn trace_irradiance(
     volume: &Volume,
     tf: &TransferFunctions,
@@ -12,21 +13,9 @@ pub fn trace_irradiance(
     opts: &RenderOptions,
     depth: f32,
     popts: &PhotonOptions,
+    progress: Option<&(dyn Fn(u64, u64) + Sync)>,
 ) -> Result<PhotonImage> {
-    trace_irradiance_with_progress(volume, tf, camera, opts, depth, popts, &|_, _| {})
-}
-
-/// [`trace_irradiance`], calling `progress(rows done, rows)` as launch rows finish (from
-/// the worker threads).
-pub fn trace_irradiance_with_progress(
-    volume: &Volume,
-    tf: &TransferFunctions,
-    camera: &Camera,
-    opts: &RenderOptions,
-    depth: f32,
-    popts: &PhotonOptions,
-    progress: &(dyn Fn(u64, u64) + Sync),
-) -> Result<PhotonImage> {
+    let progress = progress.unwrap_or(&|_, _| {});
     popts.validate()?;
     // The tracer is the sweep's reference: it takes what the sweep takes, one directional
     // light.

@@ -360,4 +360,4 @@ mod irradiance;
 mod tests;
 
 use field::*;
-pub use irradiance::{trace_irradiance, trace_irradiance_with_progress};
+pub use irradiance::trace_irradiance;

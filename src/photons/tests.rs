@@ -65,7 +65,8 @@ fn empty_volume_gives_the_light_colour() {
     let p = planes(&vol, &camera, &opts).unwrap();
     let depth = p.depth(p.count / 2);
     for jitter in [false, true] {
-        let img = trace_irradiance(&vol, &tf, &camera, &opts, depth, &popts(64, jitter)).unwrap();
+        let img =
+            trace_irradiance(&vol, &tf, &camera, &opts, depth, &popts(64, jitter), None).unwrap();
         assert_eq!(img.photons_per_pixel, 64);
         assert_eq!((img.absorbed, img.backward, img.lost), (0, 0, 0));
         // The launch cells tile the pixels: unobstructed light is exact, jittered or not
@@ -105,7 +106,8 @@ fn slab_follows_beer_lambert_per_channel() {
         let opts = options(32, towards, colour);
         let p = planes(&vol, &camera, &opts).unwrap();
         let depth = p.depth(p.count - 1);
-        let img = trace_irradiance(&vol, &tf, &camera, &opts, depth, &popts(16, false)).unwrap();
+        let img =
+            trace_irradiance(&vol, &tf, &camera, &opts, depth, &popts(16, false), None).unwrap();
         let (eye, forward, right, up) = camera.frame();
         let travel = -towards.normalize().as_dvec3();
         let half = DVec3::splat(0.5);
@@ -180,7 +182,8 @@ fn glass_ball_conserves_power_and_focuses_paraxially() {
         eta: Piecewise::new(vec![(0.0, [1.33]), (1.0, [1.5])]),
         ..Default::default()
     };
-    let img = trace_irradiance(&vol, &water, &camera, &opts, depth, &popts(16, false)).unwrap();
+    let img =
+        trace_irradiance(&vol, &water, &camera, &opts, depth, &popts(16, false), None).unwrap();
     assert_eq!((img.absorbed, img.backward, img.lost), (0, 0, 0));
     let (mut total, mut disc, mut disc_px, mut peak) = (0.0, 0.0, 0usize, 0.0f32);
     for y in 0..32 {
@@ -217,7 +220,7 @@ fn glass_ball_conserves_power_and_focuses_paraxially() {
     // flux (up to rim rays bent out of the viewport), and only rays through the ramp
     // (R - w/2 < |y| < R + w/2 + 1 voxel of trilinear support) can turn back.
     let tf = glass();
-    let img = trace_irradiance(&vol, &tf, &camera, &opts, depth, &popts(16, false)).unwrap();
+    let img = trace_irradiance(&vol, &tf, &camera, &opts, depth, &popts(16, false), None).unwrap();
     assert_eq!((img.absorbed, img.lost), (0, 0));
     let cell = pix * pix / 16.0;
     let landed: f64 = img.pixels.iter().map(|p| p[1] as f64 * pix * pix).sum();
@@ -335,6 +338,7 @@ fn measure_tracer_error() {
         &opts,
         2.5,
         &popts(64, true),
+        None,
     )
     .unwrap();
     let rms = (img
@@ -348,7 +352,8 @@ fn measure_tracer_error() {
     // Caustic convergence against photons per pixel.
     let vol = ball(64, 0.3, 2.0);
     let depth = 2.2 + 0.45;
-    let reference = trace_irradiance(&vol, &tf, &camera, &opts, depth, &popts(1024, true)).unwrap();
+    let reference =
+        trace_irradiance(&vol, &tf, &camera, &opts, depth, &popts(1024, true), None).unwrap();
     eprintln!("reference: {:.1} s", reference.seconds);
     let mean =
         reference.pixels.iter().map(|p| p[0] as f64).sum::<f64>() / reference.pixels.len() as f64;
@@ -363,6 +368,7 @@ fn measure_tracer_error() {
                 seed: 7,
                 ..popts(ppp, true)
             },
+            None,
         )
         .unwrap();
         let rms = (img

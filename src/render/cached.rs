@@ -14,6 +14,8 @@ pub(crate) struct CachedImage {
     set: DescriptorSet,
     pipeline: ComputePipeline,
     built_for: Option<Vec<u32>>,
+    /// How many times it has been built (for tests and diagnostics).
+    builds: u64,
 }
 
 impl CachedImage {
@@ -35,6 +37,7 @@ impl CachedImage {
             set,
             pipeline,
             built_for: None,
+            builds: 0,
         })
     }
 
@@ -61,7 +64,25 @@ impl CachedImage {
             )
         })?;
         self.built_for = Some(key);
+        self.builds += 1;
         Ok(true)
+    }
+
+    /// Record a build under `scope` whatever it was built from (its owner tracks what
+    /// changed: the field texture, rebuilt with the volume or the transfer functions).
+    pub(crate) fn record_always(
+        &mut self,
+        rec: &mut Recorder,
+        scope: &str,
+        push: &[u8],
+    ) -> Result<()> {
+        self.built_for = None;
+        self.record(rec, scope, Vec::new(), push).map(|_| ())
+    }
+
+    /// How many times it has been built.
+    pub(crate) fn builds(&self) -> u64 {
+        self.builds
     }
 
     /// The image (R32F or as `desc` said), once built.

@@ -21,17 +21,14 @@
 
 use anyhow::Result;
 
+use super::cached::CachedImage;
 use crate::shaders;
-use crate::vk::{
-    self, Binding, ComputePipeline, Context, DescriptorSet, Image, ImageDesc, ImageKind, Recorder,
-    Sampler,
-};
+use crate::vk::{self, Binding, Context, Image, ImageDesc, ImageKind, Recorder, Sampler};
 
+/// The field texture: one dispatch of `glsl/field.comp` over the volume into an RGBA32F
+/// 3D image, rebuilt when the renderer says its inputs changed.
 pub struct FieldTexture {
-    image: Image,
-    pipeline: ComputePipeline,
-    set: DescriptorSet,
-    builds: u64,
+    build: CachedImage,
 }
 
 impl FieldTexture {
@@ -49,44 +46,33 @@ impl FieldTexture {
             volume.extent(),
             1,
         );
-        let image = Image::new(ctx, desc, "field texture")?;
-        let set = DescriptorSet::new(
+        let build = CachedImage::new(
             ctx,
+            desc,
             &[
                 Binding::Texture(volume, sampler),
                 Binding::Texture(tf, sampler),
-                Binding::StorageImage(&image),
             ],
+            shaders::FIELD_COMP,
+            0,
             "field texture",
         )?;
-        let pipeline = ComputePipeline::new(ctx, shaders::FIELD_COMP, &set, 0, "field texture")?;
-        Ok(Self {
-            image,
-            pipeline,
-            set,
-            builds: 0,
-        })
+        Ok(Self { build })
     }
 
-    /// Record a rebuild from `volume` and `tf` (the images it was made with).
+    /// Record a rebuild from `volume` and `tf` (the images it was made with). The set's
+    /// bindings declare their uses (Recorder::dispatch); the sweep's declared sampled read
+    /// transitions the result.
     pub fn record_build(&mut self, rec: &mut Recorder) -> Result<()> {
-        let [w, h, d] = self.image.extent();
-        let (pipeline, set, _image) = (&self.pipeline, &self.set, &self.image);
-        // The set binds volume, tf and the field: its bindings declare their uses
-        // (Recorder::dispatch); the sweep's declared sampled read transitions the result.
-        rec.pass("field texture", &[], |rec| {
-            rec.dispatch(pipeline, set, &[], [w.div_ceil(8), h.div_ceil(8), d])
-        })?;
-        self.builds += 1;
-        Ok(())
+        self.build.record_always(rec, "field texture", &[])
     }
 
     /// How many times it has been built (for tests and diagnostics).
     pub fn builds(&self) -> u64 {
-        self.builds
+        self.build.builds()
     }
 
     pub fn image(&self) -> &Image {
-        &self.image
+        self.build.image()
     }
 }

@@ -7,8 +7,8 @@
 use anyhow::Result;
 use bytemuck::{Pod, Zeroable};
 
-use super::model::{Inputs, Recorded};
-use super::{FrameTarget, RenderOptions};
+use super::model::{no_state_buffers, Inputs, OpticalModel, Recorded};
+use super::{FrameTarget, LightSupport, RenderOptions};
 use crate::vk::{Binding, Buffer, ComputePipeline, DescriptorSet, Recorder};
 
 /// std140 mirror of `Params` in glsl/ea.comp: what the shared march (glsl/march.glsl)
@@ -101,6 +101,49 @@ macro_rules! assert_params_block {
 #[cfg(test)]
 pub(crate) use assert_params_block;
 
+/// What a ray-marched model declares unless its declaration says otherwise (each ends
+/// with `..RAY_MARCHER`): unlit, no phase function, neither the gradient nor the
+/// extinction volume, no state buffers to dump, no options, other flags, rebuilds or
+/// state of its own. Its name, summary and pass it always gives.
+pub(crate) const RAY_MARCHER: OpticalModel = OpticalModel {
+    name: "",
+    summary: "",
+    lights: LightSupport::NONE,
+    phase_function: false,
+    gradient: false,
+    extinction: None,
+    check: no_state_buffers,
+    make_pass: |_| anyhow::bail!("a ray-marched model's declaration gives its pass"),
+    options: &[],
+    flags: &[],
+    rebuild_scopes: &[],
+    state: None,
+};
+
+/// A ray-marched model's test that its host blocks match its shaders: its `Params` block
+/// (`params:`, [`assert_params_block`]) and each push-constant struct of its own kernels
+/// (`push:`, the whole block, exact size). One test per model, at the module's level:
+/// `test_blocks_match_the_shaders!(params: SPV, Params { a, b }; push: SPV2, Push { c });`.
+macro_rules! test_blocks_match_the_shaders {
+    (params: $spirv:expr, $ty:ident { $($field:ident),* $(,)? }
+     $(; push: $push_spirv:expr, $push:ident { $($push_field:ident),* $(,)? })* $(;)?) => {
+        #[cfg(test)]
+        #[test]
+        fn blocks_match_the_shaders() {
+            $crate::render::march::assert_params_block!($spirv, $ty { $($field),* });
+            $(
+                $crate::assert_host_block!(
+                    $push_spirv,
+                    "Push",
+                    $push { $($push_field),* },
+                    exact_size = true
+                );
+            )*
+        }
+    };
+}
+pub(crate) use test_blocks_match_the_shaders;
+
 /// What every ray-marched model's pass has: its parameter block, frame, descriptor set
 /// (bindings 0–4 as glsl/march.glsl's users declare them: params, volume, transfer
 /// functions, preintegration table, frame; then the model's own) and compute pipeline.
@@ -135,14 +178,12 @@ impl RayMarchPass {
     /// `P` is the shader's `Params` block; `extra` are the bindings from 5 on.
     pub(crate) fn new<P: Pod>(
         inputs: &Inputs,
-        width: u32,
-        height: u32,
         spirv: &[u8],
         name: &str,
         extra: &[Binding<'_>],
     ) -> Result<Self> {
-        let ctx = inputs.ctx;
-        let sampler = inputs.linear;
+        let (ctx, sampler) = (inputs.ctx, inputs.linear);
+        let (width, height) = (inputs.opts.width, inputs.opts.height);
         let params = Buffer::uniform::<P>(ctx, &format!("{name} params"))?;
         let output = FrameTarget::new(ctx, width, height, &format!("{name} frame"))?;
         let mut bindings = vec![
@@ -175,20 +216,18 @@ impl RayMarchPass {
         &self.output
     }
 
-    pub(crate) fn size(&self) -> (u32, u32) {
-        (self.width, self.height)
-    }
-
-    /// Record the march with `params` (the shader's block); `extra` are the model's own
-    /// images it reads. The most steps a ray takes is the box diagonal's.
-    pub(crate) fn record(
+    /// Record the march with the shader's block `P`, which `params` makes from the
+    /// frame's camera, box and march ([`MarchParams`], for this pass's size) and the
+    /// model's own fields. The most steps a ray takes is the box diagonal's.
+    pub(crate) fn record<P: Pod>(
         &self,
         rec: &mut Recorder,
         inputs: &Inputs,
-        params: &[u8],
+        params: impl FnOnce(MarchParams) -> P,
     ) -> Result<Recorded> {
         let (info, opts) = (inputs.info, inputs.opts);
-        rec.update_uniform(&self.params, params)?;
+        let params = params(MarchParams::new(inputs, self.width, self.height));
+        rec.update_uniform(&self.params, bytemuck::bytes_of(&params))?;
         // The set binds the volume, tf, preintegration table, output and what the model
         // adds: its bindings declare their uses (Recorder::dispatch).
         let groups = [self.width.div_ceil(8), self.height.div_ceil(8), 1];

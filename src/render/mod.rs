@@ -18,6 +18,7 @@ pub mod gradient;
 pub mod limits;
 mod march;
 mod model;
+mod model_options;
 mod options;
 pub mod preintegration;
 pub mod refract;
@@ -45,6 +46,7 @@ use crate::vk::{
     self, Buffer, Context, Filter, Image, ImageDesc, ImageKind, Recorder, Sampler, Timings,
 };
 use crate::volume::Volume;
+pub use model_options::{declared_options, find_option, ModelOption, ModelOptions};
 pub use options::*;
 pub use registry::{LightSupport, Model};
 pub use sat::SummedAreaTable;
@@ -353,15 +355,20 @@ impl Renderer {
         opts: &RenderOptions,
         observe: Option<&mut dyn FnMut(f64)>,
     ) -> Result<Frame> {
-        self.check(model, camera, opts)?;
-        self.ensure_gradient(model)?;
-        self.ensure_field(model, opts)?;
-        self.ensure_extinction(model)?;
-        self.ensure_state(model, opts)?;
+        self.prepare(model, camera, opts)?;
         let ctx = self.ctx.clone();
         let mut recorded = None;
         let record = |rec: &mut Recorder| {
-            let r = self.record_inner(rec, Slot::Main, model, camera, opts, true)?;
+            let r = self.record_frame(
+                rec,
+                FrameAsk {
+                    slot: Slot::Main,
+                    model,
+                    camera,
+                    opts,
+                    read_back: true,
+                },
+            )?;
             self.target(model, Slot::Main)?.record_copy(rec);
             recorded = Some(r);
             Ok(())
@@ -395,21 +402,10 @@ impl Renderer {
     /// in the same recording if the transfer functions changed. Parameters travel in the
     /// command stream, so earlier frames may still be in flight; the caller keeps the
     /// renderer alive (and must not resize or replace its inputs) until they complete.
-    /// State-buffer dumps need [`Renderer::render`].
+    /// State-buffer dumps need [`Renderer::render`]. `slot`: whose pass records it, so
+    /// that the viewer's previews ([`Slot::Preview`]) and full frames ([`Slot::Main`])
+    /// keep their own passes and switching between their sizes rebuilds nothing.
     pub fn record(
-        &mut self,
-        rec: &mut Recorder,
-        model: Model,
-        camera: &Camera,
-        opts: &RenderOptions,
-    ) -> Result<RecordedFrame<'_>> {
-        self.record_in(rec, Slot::Main, model, camera, opts)
-    }
-
-    /// [`Renderer::record`] with the pass of `slot`: the viewer records its previews in
-    /// [`Slot::Preview`], so that switching between a preview's size and the full one
-    /// rebuilds nothing.
-    pub fn record_in(
         &mut self,
         rec: &mut Recorder,
         slot: Slot,
@@ -421,12 +417,17 @@ impl Renderer {
             opts.sweep.dumps.is_empty(),
             "state-buffer dumps are read back by Renderer::render, not recorded frames"
         );
-        self.check(model, camera, opts)?;
-        self.ensure_gradient(model)?;
-        self.ensure_field(model, opts)?;
-        self.ensure_extinction(model)?;
-        self.ensure_state(model, opts)?;
-        let r = self.record_inner(rec, slot, model, camera, opts, false)?;
+        self.prepare(model, camera, opts)?;
+        let r = self.record_frame(
+            rec,
+            FrameAsk {
+                slot,
+                model,
+                camera,
+                opts,
+                read_back: false,
+            },
+        )?;
         Ok(RecordedFrame {
             image: &self.target(model, slot)?.image,
             max_steps: r.max_steps,
@@ -452,16 +453,25 @@ impl Renderer {
         self.passes.retain(|(m, _), _| *m != model);
     }
 
-    /// The recording shared by `render` and `record`; arguments already checked.
-    fn record_inner(
-        &mut self,
-        rec: &mut Recorder,
-        slot: Slot,
-        model: Model,
-        camera: &Camera,
-        opts: &RenderOptions,
-        read_back: bool,
-    ) -> Result<Recorded> {
+    /// Outside any recording, before a frame: check what it asks for and make what the
+    /// model reads that is missing (gradient, field, extinction volume, its state).
+    fn prepare(&mut self, model: Model, camera: &Camera, opts: &RenderOptions) -> Result<()> {
+        self.check(model, camera, opts)?;
+        self.ensure_gradient(model)?;
+        self.ensure_field(model, opts)?;
+        self.ensure_extinction(model)?;
+        self.ensure_state(model, opts)
+    }
+
+    /// The recording shared by `render` and `record`, after [`Self::prepare`].
+    fn record_frame(&mut self, rec: &mut Recorder, ask: FrameAsk) -> Result<Recorded> {
+        let FrameAsk {
+            slot,
+            model,
+            camera,
+            opts,
+            read_back,
+        } = ask;
         if self.tf_dirty {
             self.preint.record_build(rec, &self.tf)?;
             self.tf_dirty = false;
@@ -526,6 +536,16 @@ impl Renderer {
         rec.end_scope();
         recorded
     }
+}
+
+/// What a frame asks of [`Renderer::record_frame`]: whose pass records it, the model, the
+/// camera and options (checked), and whether the same submission reads it back.
+struct FrameAsk<'a> {
+    slot: Slot,
+    model: Model,
+    camera: &'a Camera,
+    opts: &'a RenderOptions,
+    read_back: bool,
 }
 
 /// A frame recorded by [`Renderer::record`].

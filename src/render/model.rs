@@ -19,6 +19,7 @@
 use anyhow::{bail, ensure, Result};
 
 use super::extinction::Extinction;
+use super::model_options::ModelOption;
 use super::target::EnvInputs;
 use super::{Camera, FrameTarget, LightSupport, Model, RenderOptions, VolumeInfo};
 use super::{Dump, SweepStats};
@@ -160,9 +161,14 @@ pub(crate) struct OpticalModel {
     pub check: fn(&OpticalModel, VolumeInfo, &Camera, &RenderOptions) -> Result<()>,
     /// Its pass for the frames `inputs.opts` asks for.
     pub make_pass: fn(&Inputs) -> Result<Box<dyn ModelPass>>,
-    /// The command-line flags it takes beyond those every model takes (camera, size,
-    /// sampling, tone...): the CLI refuses a flag given with a model that does not list
-    /// it, naming the models that do.
+    /// Its own options ([`ModelOption`]: flag, scene key, default, check), each a
+    /// `static` in its folder (or a shared one, as the scattering pair): the CLI and scene
+    /// files offer them from here.
+    pub options: &'static [&'static ModelOption],
+    /// The other command-line flags it takes beyond those every model takes (camera,
+    /// size, sampling, tone...) and the light's, which every lit model takes: the sweep's
+    /// settings, the ambient table. With its options, the CLI refuses a flag given with a
+    /// model that does not take it, naming the models that do.
     pub flags: &'static [&'static str],
     /// The timestamp scopes of what it rebuilds only when its inputs change (outside the
     /// frame's "render" scope; see `render::rebuild_scopes`).

@@ -31,12 +31,10 @@ pub struct RenderOptions {
     pub termination_alpha: f32,
     /// Light, specular, clipping and diagnostics of the refractive model.
     pub sweep: SweepOptions,
-    /// Radius and diffuse weight of the ambient-occlusion model.
-    pub ao: super::ao::AoOptions,
-    /// Phase function and albedo of the scattering models.
-    pub scatter: ScatterOptions,
-    /// Radius of the ambient-scattering model.
-    pub ambient: super::ambient::AmbientOptions,
+    /// The models' declared options' values ([`super::ModelOption`]; the ambient-
+    /// occlusion model's radius, the scattering models' phase function...), each model
+    /// reading its own through its typed view ([`ScatterOptions::of`]).
+    pub models: ModelOptions,
     /// The lights, the main one first (the only one of the models that take one; see
     /// [`Model::light_support`]): never empty, at most [`super::limits::MAX_LIGHTS`].
     pub lights: Vec<Light>,
@@ -58,15 +56,65 @@ pub const MAX_ANISOTROPY: f32 = 0.99;
 
 impl Default for ScatterOptions {
     fn default() -> Self {
-        // Ament et al.'s table is built for an albedo of 0.9.
+        // The declared defaults (the flags' and scene keys').
         Self {
-            g: 0.0,
-            albedo: 0.9,
+            g: SCATTER_G.default as f32,
+            albedo: SCATTER_ALBEDO.default as f32,
         }
     }
 }
 
+/// `--g` (scene key `g`): [`ScatterOptions::g`], an option of both scattering models.
+pub static SCATTER_G: ModelOption = ModelOption {
+    flag: "--g",
+    value_name: "G",
+    help: "Scattering: Henyey-Greenstein anisotropy of the phase function, -0.99 to 0.99; \
+           0 isotropic, positive forward scattering",
+    default: 0.0,
+    integer: false,
+    check: |v| {
+        ScatterOptions {
+            g: v as f32,
+            ..Default::default()
+        }
+        .validate()
+    },
+};
+
+/// `--albedo` (scene key `albedo`): [`ScatterOptions::albedo`], an option of both
+/// scattering models.
+pub static SCATTER_ALBEDO: ModelOption = ModelOption {
+    flag: "--albedo",
+    value_name: "ALBEDO",
+    help: "Scattering: albedo, the fraction of the extinguished light that is scattered, \
+           0-1",
+    // Ament et al.'s table is built for an albedo of 0.9.
+    default: 0.9,
+    integer: false,
+    check: |v| {
+        ScatterOptions {
+            albedo: v as f32,
+            ..Default::default()
+        }
+        .validate()
+    },
+};
+
 impl ScatterOptions {
+    /// The scattering options `opts` asks for (the declared options' values).
+    pub fn of(opts: &RenderOptions) -> Self {
+        Self {
+            g: opts.model_option(&SCATTER_G) as f32,
+            albedo: opts.model_option(&SCATTER_ALBEDO) as f32,
+        }
+    }
+
+    /// Ask these in `opts` (refused as the flags would be).
+    pub fn set_in(&self, opts: &mut RenderOptions) -> Result<()> {
+        opts.models.set(&SCATTER_G, self.g as f64)?;
+        opts.models.set(&SCATTER_ALBEDO, self.albedo as f64)
+    }
+
     pub fn validate(&self) -> Result<()> {
         ensure!(
             self.g.is_finite() && self.g.abs() <= MAX_ANISOTROPY,
@@ -92,9 +140,7 @@ impl Default for RenderOptions {
             background: [0.08, 0.08, 0.1, 1.0],
             termination_alpha: 0.99,
             sweep: SweepOptions::default(),
-            ao: Default::default(),
-            scatter: Default::default(),
-            ambient: Default::default(),
+            models: Default::default(),
             // The default camera's default light (thesis scenes set their own).
             lights: vec![Light::for_camera(&crate::camera::Camera::default())],
         }
@@ -143,9 +189,6 @@ impl RenderOptions {
             "termination alpha {} must be in [0, 1]",
             self.termination_alpha
         );
-        self.ao.validate()?;
-        self.scatter.validate()?;
-        self.ambient.validate()?;
         ensure!(
             !self.lights.is_empty(),
             "no light given: every frame has at least its main light"

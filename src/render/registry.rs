@@ -4,12 +4,12 @@
 //! viewer and benchmarks pass around, and [`Model::declaration`] finds a model's
 //! declaration.
 //!
-//! Adding a model: a folder under `render/` with its `ModelPass` and its [`OpticalModel`]
-//! `static`, a variant below, its line in [`Model::ALL`] and in
-//! [`Model::declaration`]. (Its own options, flags and scene keys still live in
-//! `RenderOptions`, `cli/` and `scene/`: issue 34 item 1.)
+//! Adding a model: a folder under `render/` with its `ModelPass`, its [`OpticalModel`]
+//! `static` and its options' `static`s ([`ModelOption`]: flags and scene keys follow from
+//! them), a variant below, its line in [`Model::ALL`] and in [`Model::declaration`].
 
 use super::model::OpticalModel;
+use super::model_options::ModelOption;
 use super::{ambient, ao, ea, refract, single};
 
 /// What lights a model takes: [`Model::light_support`].
@@ -33,6 +33,10 @@ impl LightSupport {
         point: false,
     };
 }
+
+/// The flags that give lights (`--light` repeated, the main light's colour): taken by
+/// every model that takes lights ([`OpticalModel::lights`]).
+const LIGHT_FLAGS: [&str; 2] = ["--light", "--light-colour"];
 
 /// Rendering models `refrakt render --model` offers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -72,10 +76,19 @@ impl Model {
         Model::ALL[(i + 1) % Model::ALL.len()]
     }
 
-    /// The command-line flags the model takes beyond those every model takes (its
-    /// declaration's list).
-    pub fn flags(self) -> &'static [&'static str] {
-        self.declaration().flags
+    /// Whether the model takes the command-line flag `flag` ("--ao-radius"), of those
+    /// that some models take and others refuse: the light's (a model that takes lights),
+    /// its options' flags and the other flags its declaration lists.
+    pub fn takes_flag(self, flag: &str) -> bool {
+        let d = self.declaration();
+        (LIGHT_FLAGS.contains(&flag) && self.uses_light())
+            || d.flags.contains(&flag)
+            || d.options.iter().any(|o| o.flag == flag)
+    }
+
+    /// The options the model declares (its folder's [`ModelOption`]s).
+    pub fn options(self) -> &'static [&'static ModelOption] {
+        self.declaration().options
     }
 
     /// One line for `--help`.

@@ -1,7 +1,7 @@
 //! Settings that belong to some models only, or to the forward light transport only: given
 //! with another model (or the backward transport) they are refused by name, never silently
 //! ignored — on the command line and in scene files alike. Which model takes which setting
-//! is each model's declaration (`Model::flags`, the registry).
+//! is each model's declaration (`Model::takes_flag`: its options and flags, the registry).
 
 use anyhow::{ensure, Result};
 
@@ -39,12 +39,12 @@ pub fn refuse_what_does_not_apply(
     // (settings, the models that take them), grouped by those models.
     let mut refused: Vec<(Vec<&str>, Vec<&str>)> = Vec::new();
     for g in given {
-        if model.flags().contains(&g.flag) {
+        if model.takes_flag(g.flag) {
             continue;
         }
         let owners: Vec<&str> = Model::ALL
             .iter()
-            .filter(|m| m.flags().contains(&g.flag))
+            .filter(|m| m.takes_flag(g.flag))
             .map(|m| m.name())
             .collect();
         if owners.is_empty() {

@@ -4,6 +4,7 @@
 
 use super::*;
 use crate::light::LightSource;
+use crate::render::{declared_options, find_option};
 
 // ---- the file format -------------------------------------------------------------------
 
@@ -14,8 +15,7 @@ use crate::light::LightSource;
 macro_rules! copy_plain_render_overrides {
     ($o:expr, $from:expr) => {
         $crate::copy_plain_render_overrides!(@fields $o, $from; width, height,
-            sample_distance, roughness, specular, eta_scale, light_rays, light_spacing,
-            ao_radius, ao_diffuse, g, albedo, ambient_radius)
+            sample_distance, roughness, specular, eta_scale, light_rays, light_spacing)
     };
     (@fields $o:expr, $from:expr; $($field:ident),*) => {
         $( $o.$field = $from.$field; )*
@@ -33,7 +33,7 @@ pub(super) struct SceneFile {
     /// as a value, then as [`LightTable`]s.
     light: Option<toml::Value>,
     environment: Option<EnvTable>,
-    render: Option<RenderTable>,
+    render: Option<RenderSection>,
 }
 
 #[derive(Deserialize)]
@@ -133,14 +133,43 @@ struct RenderTable {
     clip: Option<[f32; 4]>,
     exposure: Option<f32>,
     tonemap: Option<String>,
-    ao_radius: Option<u32>,
-    ao_diffuse: Option<f32>,
-    g: Option<f32>,
-    albedo: Option<f32>,
-    ambient_radius: Option<f32>,
     /// Deprecated (`[[light]]` tables): lights beside the main one, "dir:X,Y,Z@R,G,B" or
     /// "point:X,Y,Z@R,G,B".
     lights: Option<Vec<String>>,
+}
+
+/// The `[render]` table: the settings every scene has ([`RenderTable`]) and the models'
+/// declared options' keys (`ao_radius`, `g`...: [`crate::render::ModelOption`]), found
+/// by name in the registry rather than listed here.
+struct RenderSection {
+    table: RenderTable,
+    /// (key, value) of each model option given, in the order the models declare them.
+    models: Vec<(String, toml::Value)>,
+}
+
+impl<'de> Deserialize<'de> for RenderSection {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let mut rest = toml::Table::deserialize(d)?;
+        // In the declarations' order (a TOML table does not keep the file's).
+        let keys: Vec<String> = declared_options()
+            .into_iter()
+            .map(|(o, _)| o.key())
+            .filter(|k| rest.contains_key(k))
+            .collect();
+        let models = keys
+            .into_iter()
+            .filter_map(|k| rest.remove(&k).map(|v| (k, v)))
+            .collect();
+        let table = RenderTable::deserialize(toml::Value::Table(rest)).map_err(|e| {
+            let mut said = e.to_string().trim_end().to_string();
+            if said.contains("unknown field") {
+                let keys: Vec<String> = declared_options().iter().map(|(o, _)| o.key()).collect();
+                said = format!("{said}; or a model's option: {}", keys.join(", "));
+            }
+            serde::de::Error::custom(said)
+        })?;
+        Ok(Self { table, models })
+    }
 }
 
 /// The scene file's `light`: one `[light]` table or `[[light]]` tables, each with the
@@ -252,7 +281,12 @@ impl SceneFile {
                 add("--env-rotation", "[environment] rotation".into());
             }
         }
-        if let Some(r) = &self.render {
+        if let Some(RenderSection { table: r, models }) = &self.render {
+            for (key, _) in models {
+                if let Some(o) = find_option(key) {
+                    add(o.flag, format!("[render] {key}"));
+                }
+            }
             for (flag, key, set) in [
                 ("--roughness", "roughness", r.roughness.is_some()),
                 ("--specular", "specular", r.specular.is_some()),
@@ -270,15 +304,6 @@ impl SceneFile {
                 ),
                 ("--reflections", "reflections", r.reflections.is_some()),
                 ("--clip", "clip", r.clip.is_some()),
-                ("--g", "g", r.g.is_some()),
-                ("--albedo", "albedo", r.albedo.is_some()),
-                ("--ao-radius", "ao_radius", r.ao_radius.is_some()),
-                ("--ao-diffuse", "ao_diffuse", r.ao_diffuse.is_some()),
-                (
-                    "--ambient-radius",
-                    "ambient_radius",
-                    r.ambient_radius.is_some(),
-                ),
                 ("--light", "lights", r.lights.is_some()),
             ] {
                 if set {
@@ -566,7 +591,20 @@ impl SceneFile {
             }
             o.env_rotation = e.rotation;
         }
-        if let Some(r) = self.render {
+        // The models' options' values, checked once the model is known to take them.
+        let mut model_values = Vec::new();
+        if let Some(RenderSection { table: r, models }) = self.render {
+            for (key, value) in models {
+                let v = match value {
+                    toml::Value::Integer(i) => i as f64,
+                    toml::Value::Float(f) => f,
+                    other => bail!(
+                        "[render] {key}: expected a number, got {} {other}",
+                        other.type_str()
+                    ),
+                };
+                model_values.push((key, v));
+            }
             if let Some(m) = r.model {
                 o.model = Some(parse_model(&m).context("[render]")?);
             }
@@ -617,6 +655,10 @@ impl SceneFile {
         s.apply(o);
         // A setting of other models is refused, as its flag is (the file's own model).
         super::refuse_what_does_not_apply(s.model, s.light_transport, &given)?;
+        for (key, v) in model_values {
+            let option = find_option(&key).expect("kept by name");
+            s.models.set_as(option, v, &format!("[render] {key}"))?;
+        }
         // Everything checkable without the GPU, now, with the scene's name on it.
         s.render_options()?;
         s.tone_map()?;

@@ -14,9 +14,8 @@ use serde::Deserialize;
 
 use crate::environment::EnvironmentMap;
 use crate::output::{ToneMap, ToneOperator};
-use crate::render::ao::AoOptions;
 use crate::render::{
-    Camera, Light, LightTransport, Model, RenderOptions, ScatterOptions, SweepOptions,
+    Camera, Light, LightTransport, Model, ModelOptions, RenderOptions, SweepOptions,
 };
 use crate::transfer::TransferFunctions;
 use crate::volume::formats::DeviceLimits;
@@ -148,12 +147,8 @@ pub struct Scene {
     pub clip: Option<(Vec3, f32)>,
     pub exposure: f32,
     pub tonemap: ToneOperator,
-    /// The ambient-occlusion model's radius and diffuse weight.
-    pub ao: AoOptions,
-    /// The scattering models' phase function and albedo.
-    pub scatter: ScatterOptions,
-    /// The ambient-scattering model's radius.
-    pub ambient: crate::render::ambient::AmbientOptions,
+    /// The models' declared options' values (`--ao-radius`, `--g`...).
+    pub models: ModelOptions,
     /// The lights after the main one (the ambient-scattering model takes several).
     pub extra_lights: Vec<Light>,
     /// The scene file this came from, if any (the viewer reloads when it changes).
@@ -183,11 +178,6 @@ pub struct Overrides {
     pub clip: Option<Option<(Vec3, f32)>>,
     pub exposure: Option<f32>,
     pub tonemap: Option<ToneOperator>,
-    pub ao_radius: Option<u32>,
-    pub ao_diffuse: Option<f32>,
-    pub g: Option<f32>,
-    pub albedo: Option<f32>,
-    pub ambient_radius: Option<f32>,
     pub extra_lights: Option<Vec<Light>>,
     pub azimuth: Option<f32>,
     pub elevation: Option<f32>,
@@ -233,11 +223,6 @@ impl Scene {
         set(&mut self.clip, o.clip);
         set(&mut self.exposure, o.exposure);
         set(&mut self.tonemap, o.tonemap);
-        set(&mut self.ao.radius, o.ao_radius);
-        set(&mut self.ao.diffuse, o.ao_diffuse);
-        set(&mut self.scatter.g, o.g);
-        set(&mut self.scatter.albedo, o.albedo);
-        set(&mut self.ambient.radius, o.ambient_radius);
         set(&mut self.extra_lights, o.extra_lights);
         set(&mut self.camera.azimuth, o.azimuth);
         set(&mut self.camera.elevation, o.elevation);
@@ -346,9 +331,7 @@ impl Default for Scene {
             clip: None,
             exposure: 0.0,
             tonemap: ToneOperator::Aces,
-            ao: AoOptions::default(),
-            scatter: ScatterOptions::default(),
-            ambient: Default::default(),
+            models: ModelOptions::default(),
             extra_lights: Vec::new(),
             file: None,
         }
@@ -483,9 +466,7 @@ impl Scene {
                 ambient: self.ambient_level.unwrap_or([0.0; 3]),
                 ..Default::default()
             },
-            ao: self.ao,
-            scatter: self.scatter,
-            ambient: self.ambient,
+            models: self.models.clone(),
             lights: std::iter::once(self.light())
                 .chain(self.extra_lights.iter().copied())
                 .collect(),

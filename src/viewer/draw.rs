@@ -101,8 +101,7 @@ impl RenderLoop {
             let image = match record {
                 false => renderer.frame_image(view.model, slot)?,
                 true => {
-                    let out =
-                        renderer.record_in(rec, slot, view.model, &view.camera, &view.opts)?;
+                    let out = renderer.record(rec, slot, view.model, &view.camera, &view.opts)?;
                     planes = out.sweep.as_ref().map(|s| s.planes.count);
                     out.image
                 }

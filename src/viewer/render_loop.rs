@@ -302,7 +302,7 @@ impl RenderLoop {
         } = gpu;
         let t = ctx.execute(|rec| {
             rec.begin_scope("frame");
-            let out = renderer.record_in(rec, slot, view.model, &view.camera, &view.opts)?;
+            let out = renderer.record(rec, slot, view.model, &view.camera, &view.opts)?;
             let axes = view.axes.then_some(&view.camera);
             tonemap.record(rec, out.image, &target, &framebuffer, &view.tone, axes)?;
             rec.end_scope();
@@ -366,7 +366,7 @@ impl RenderLoop {
             let mut planes = None;
             let t = ctx.execute(|rec| {
                 rec.begin_scope("frame");
-                let out = renderer.record_in(rec, slot, batch.model, &batch.camera, &batch.opts)?;
+                let out = renderer.record(rec, slot, batch.model, &batch.camera, &batch.opts)?;
                 planes = out.sweep.as_ref().map(|s| s.planes.count);
                 rec.end_scope();
                 Ok(())

@@ -39,6 +39,9 @@ pub struct DescriptorSet {
     pub(crate) images: Vec<BoundImage>,
     /// The storage buffers the set binds (read and written by its dispatches).
     pub(crate) storage_buffers: Vec<TrackedBuffer>,
+    /// Whether its dispatches take the barriers its bindings declare (the default) or its
+    /// user records them itself ([`DescriptorSet::with_explicit_barriers`]).
+    pub(crate) explicit_barriers: bool,
     name: String,
 }
 
@@ -140,6 +143,7 @@ impl DescriptorSet {
                     _ => None,
                 })
                 .collect(),
+            explicit_barriers: false,
             name: name.to_owned(),
         };
         set.write(bindings);
@@ -178,6 +182,14 @@ impl DescriptorSet {
             );
         }
         Ok(())
+    }
+
+    /// This set's dispatches take no barriers from its bindings: its user records them
+    /// (the plane sweep, whose sets bind both layers of the ping-pong images, one read and
+    /// one written per plane, so no single use per binding describes them).
+    pub fn with_explicit_barriers(mut self) -> Self {
+        self.explicit_barriers = true;
+        self
     }
 
     pub(crate) fn name(&self) -> &str {

@@ -31,12 +31,11 @@ use anyhow::{ensure, Result};
 use bytemuck::{Pod, Zeroable};
 
 use super::cached::CachedImage;
-use super::march::{delegate_to_march, RayMarchPass};
-use super::model::{
-    no_state_buffers, Inputs, ModelPass, ModelState, ModelStateDecl, OpticalModel, Recorded, Shared,
-};
+use super::march::{delegate_to_march, RayMarchPass, RAY_MARCHER};
+use super::model::{Inputs, ModelPass, ModelState, ModelStateDecl, OpticalModel, Recorded, Shared};
+use super::model_options::ModelOption;
 use super::LightSupport;
-use super::RenderOptions;
+use super::{RenderOptions, ScatterOptions, SCATTER_ALBEDO, SCATTER_G};
 use crate::light::LightSource;
 use crate::shaders;
 use crate::vk::{self, Binding, Context, Filter, Image, ImageDesc, ImageKind, Recorder, Sampler};
@@ -68,11 +67,37 @@ pub struct AmbientOptions {
 
 impl Default for AmbientOptions {
     fn default() -> Self {
-        Self { radius: 6.0 }
+        // The declared default (the flag's and scene key's).
+        Self {
+            radius: AMBIENT_RADIUS.default as f32,
+        }
     }
 }
 
+/// `--ambient-radius` (scene key `ambient_radius`): [`AmbientOptions::radius`].
+pub static AMBIENT_RADIUS: ModelOption = ModelOption {
+    flag: "--ambient-radius",
+    value_name: "VOXELS",
+    help: "Ambient scattering: radius r of the sphere around each sample in which light \
+           scatters, in voxels, 0.5-64: the size of the soft shadows and of the translucency",
+    default: 6.0,
+    integer: false,
+    check: |v| AmbientOptions { radius: v as f32 }.validate(),
+};
+
 impl AmbientOptions {
+    /// The options `opts` asks of this model (its declared options' values).
+    pub fn of(opts: &RenderOptions) -> Self {
+        Self {
+            radius: opts.model_option(&AMBIENT_RADIUS) as f32,
+        }
+    }
+
+    /// Ask these of the model in `opts` (refused as the flag would be).
+    pub fn set_in(&self, opts: &mut RenderOptions) -> Result<()> {
+        opts.models.set(&AMBIENT_RADIUS, self.radius as f64)
+    }
+
     pub fn validate(&self) -> Result<()> {
         ensure!(
             self.radius.is_finite() && (MIN_RADIUS..=MAX_RADIUS).contains(&self.radius),
@@ -240,7 +265,7 @@ pub fn cache_extent(dims: [u32; 3]) -> [u32; 3] {
 }
 
 impl AmbientPass {
-    pub fn new(inputs: &Inputs, width: u32, height: u32) -> Result<Self> {
+    pub fn new(inputs: &Inputs) -> Result<Self> {
         let ctx = inputs.ctx;
         let (ext, table) = inputs_of(inputs)?;
         let nearest = Sampler::new(ctx, Filter::Nearest, "ambient SAT")?;
@@ -271,8 +296,6 @@ impl AmbientPass {
         )?;
         let march = RayMarchPass::new::<Params>(
             inputs,
-            width,
-            height,
             shaders::AMBIENT_COMP,
             "ambient",
             &[
@@ -300,20 +323,11 @@ pub(crate) static AMBIENT: OpticalModel = OpticalModel {
         point: true,
     },
     phase_function: true,
-    gradient: false,
     extinction: Some(true),
-    check: no_state_buffers,
-    make_pass: |inputs| {
-        let o = inputs.opts;
-        Ok(Box::new(AmbientPass::new(inputs, o.width, o.height)?))
-    },
-    flags: &[
-        "--light", "--light-colour",
-        "--g",
-        "--albedo",
-        "--ambient-radius",
-        "--ambient-table",
-    ],
+    make_pass: |inputs| Ok(Box::new(AmbientPass::new(inputs)?)),
+    options: &[&SCATTER_G, &SCATTER_ALBEDO, &AMBIENT_RADIUS],
+    // Its table is a file the front end loads or builds (`Renderer::set_ambient_table`).
+    flags: &["--ambient-table"],
     rebuild_scopes: &[EXTINCTION_SCOPE, CACHE_SCOPE],
     state: Some(ModelStateDecl {
         what: "the ambient-scattering tables",
@@ -321,6 +335,7 @@ pub(crate) static AMBIENT: OpticalModel = OpticalModel {
         bytes: |_| 0,
         make: |_| Ok(Box::new(AmbientTables::default())),
     }),
+    ..RAY_MARCHER
 };
 
 /// The model's state: the tables in use, set by the caller
@@ -343,7 +358,7 @@ impl ModelState for AmbientTables {
     /// parameters; built on first use, then read from the disk cache: see
     /// [`table::load_or_build`]); a table the caller set for another albedo is an error.
     fn prepare(&mut self, shared: &Shared, opts: &RenderOptions) -> Result<bool> {
-        let albedo = opts.scatter.albedo;
+        let albedo = ScatterOptions::of(opts).albedo;
         if let Some(t) = &self.table {
             if t.params().albedo == albedo {
                 return Ok(false);
@@ -408,7 +423,7 @@ impl ModelPass for AmbientPass {
         let (info, opts) = (inputs.info, inputs.opts);
         let (ext, table) = inputs_of(inputs)?;
         let sat = ext.sat()?;
-        let radius = opts.ambient.radius;
+        let radius = AmbientOptions::of(opts).radius;
         let [x, y, z] = info.dims.map(|d| d as i32);
         let push = ExtinctionPush {
             dims: [x, y, z, 0],
@@ -431,7 +446,7 @@ impl ModelPass for AmbientPass {
         )?;
         let (n, at, colours) = lights(opts);
         let r_world = radius * info.ref_step;
-        let g = opts.scatter.g;
+        let g = ScatterOptions::of(opts).g;
         let h = info.half_extent;
         let cache_push = CachePush {
             lights: at,
@@ -448,58 +463,26 @@ impl ModelPass for AmbientPass {
         cache_key.push(table.scattered.id() as u32);
         self.radiance
             .record(rec, CACHE_SCOPE, cache_key, bytemuck::bytes_of(&cache_push))?;
-        let (width, height) = self.march.size();
-        let p = Params {
-            march: super::march::MarchParams::new(inputs, width, height),
+        self.march.record(rec, inputs, |march| Params {
+            march,
             lights: at,
             colours,
-            ambient: [r_world, radius, g, opts.scatter.albedo],
+            ambient: [r_world, radius, g, ScatterOptions::of(opts).albedo],
             table: table.dims(),
             counts: [n as u32, 0, 0, 0],
-        };
-        self.march.record(rec, inputs, bytemuck::bytes_of(&p))
+        })
     }
 }
+
+crate::render::march::test_blocks_match_the_shaders!(
+    params: shaders::AMBIENT_COMP, Params { lights, colours, ambient, table, counts };
+    push: shaders::RADIANCE_CACHE_COMP, CachePush { lights, half_extent, table, misc };
+    push: shaders::AMBIENT_EXTINCTION_COMP, ExtinctionPush { dims, inv_scale, side, pad }
+);
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn blocks_match_the_shaders() {
-        crate::assert_host_block!(
-            shaders::RADIANCE_CACHE_COMP,
-            "Push",
-            CachePush {
-                lights,
-                half_extent,
-                table,
-                misc
-            },
-            exact_size = true
-        );
-        crate::assert_host_block!(
-            shaders::AMBIENT_EXTINCTION_COMP,
-            "Push",
-            ExtinctionPush {
-                dims,
-                inv_scale,
-                side,
-                pad
-            },
-            exact_size = true
-        );
-        crate::render::march::assert_params_block!(
-            shaders::AMBIENT_COMP,
-            Params {
-                lights,
-                colours,
-                ambient,
-                table,
-                counts
-            }
-        );
-    }
 
     #[test]
     fn radius_limits_are_refused_by_name() {

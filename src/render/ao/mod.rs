@@ -18,9 +18,10 @@ use bytemuck::{Pod, Zeroable};
 
 use super::cached::CachedImage;
 use super::extinction::Extinction;
-use super::march::{delegate_to_march, RayMarchPass};
-use super::model::{no_state_buffers, Inputs, ModelPass, OpticalModel, Recorded};
-use super::LightSupport;
+use super::march::{delegate_to_march, RayMarchPass, RAY_MARCHER};
+use super::model::{Inputs, ModelPass, OpticalModel, Recorded};
+use super::model_options::ModelOption;
+use super::{LightSupport, RenderOptions};
 
 use crate::shaders;
 use crate::vk::{self, Binding, Filter, ImageDesc, ImageKind, Recorder, Sampler};
@@ -37,9 +38,10 @@ pub struct AoOptions {
 
 impl Default for AoOptions {
     fn default() -> Self {
+        // The declared defaults (the flags' and scene keys').
         Self {
-            radius: 16,
-            diffuse: 0.5,
+            radius: AO_RADIUS.default as u32,
+            diffuse: AO_DIFFUSE.default as f32,
         }
     }
 }
@@ -47,7 +49,55 @@ impl Default for AoOptions {
 /// Largest [`AoOptions::radius`].
 pub const MAX_RADIUS: u32 = 256;
 
+/// `--ao-radius` (scene key `ao_radius`): [`AoOptions::radius`].
+pub static AO_RADIUS: ModelOption = ModelOption {
+    flag: "--ao-radius",
+    value_name: "VOXELS",
+    help: "Ambient occlusion: half-size, in voxels, of the largest cube around a sample \
+           whose extinction occludes it; a power of two (the cubes double from 1)",
+    default: 16.0,
+    integer: true,
+    check: |v| {
+        AoOptions {
+            radius: v as u32,
+            ..Default::default()
+        }
+        .validate()
+    },
+};
+
+/// `--ao-diffuse` (scene key `ao_diffuse`): [`AoOptions::diffuse`].
+pub static AO_DIFFUSE: ModelOption = ModelOption {
+    flag: "--ao-diffuse",
+    value_name: "W",
+    help: "Ambient occlusion: weight of the light's Lambert term (gradient normal, \
+           unshadowed) against the ambient term, 0-1",
+    default: 0.5,
+    integer: false,
+    check: |v| {
+        AoOptions {
+            diffuse: v as f32,
+            ..Default::default()
+        }
+        .validate()
+    },
+};
+
 impl AoOptions {
+    /// The options `opts` asks of this model (its declared options' values).
+    pub fn of(opts: &RenderOptions) -> Self {
+        Self {
+            radius: opts.model_option(&AO_RADIUS) as u32,
+            diffuse: opts.model_option(&AO_DIFFUSE) as f32,
+        }
+    }
+
+    /// Ask these of the model in `opts` (refused as the flags would be).
+    pub fn set_in(&self, opts: &mut RenderOptions) -> Result<()> {
+        opts.models.set(&AO_RADIUS, self.radius as f64)?;
+        opts.models.set(&AO_DIFFUSE, self.diffuse as f64)
+    }
+
     pub fn validate(&self) -> Result<()> {
         ensure!(
             self.radius.is_power_of_two() && self.radius <= MAX_RADIUS,
@@ -131,7 +181,7 @@ fn extinction<'a>(inputs: &Inputs<'a>) -> Result<&'a Extinction> {
 }
 
 impl AoPass {
-    pub fn new(inputs: &Inputs, width: u32, height: u32) -> Result<Self> {
+    pub fn new(inputs: &Inputs) -> Result<Self> {
         let ctx = inputs.ctx;
         let sat = extinction(inputs)?.sat()?;
         let nearest = Sampler::new(ctx, Filter::Nearest, "ao table")?;
@@ -151,8 +201,6 @@ impl AoPass {
         )?;
         let march = RayMarchPass::new::<Params>(
             inputs,
-            width,
-            height,
             shaders::AO_COMP,
             "ao",
             &[Binding::Texture(cache.image(), inputs.linear)],
@@ -171,17 +219,11 @@ pub(crate) static AO: OpticalModel = OpticalModel {
     summary: "Volumetric ambient occlusion (3D summed-area table of extinction) with a Lambert term from --light (Ament et al.'s comparison; --ao-radius, --ao-diffuse).",
     // One directional light: the unshadowed diffuse term through the gradient.
     lights: LightSupport::ONE_DIRECTIONAL,
-    phase_function: false,
-    gradient: false,
     extinction: Some(true),
-    check: no_state_buffers,
-    make_pass: |inputs| {
-        let o = inputs.opts;
-        Ok(Box::new(AoPass::new(inputs, o.width, o.height)?))
-    },
-    flags: &["--light", "--light-colour", "--ao-radius", "--ao-diffuse"],
+    make_pass: |inputs| Ok(Box::new(AoPass::new(inputs)?)),
+    options: &[&AO_RADIUS, &AO_DIFFUSE],
     rebuild_scopes: &[CACHE_SCOPE],
-    state: None,
+    ..RAY_MARCHER
 };
 
 impl ModelPass for AoPass {
@@ -192,7 +234,7 @@ impl ModelPass for AoPass {
         let ambient = extinction(inputs)?;
         let [x, y, z] = info.dims.map(|d| d as i32);
         let builds = ambient.builds();
-        let shells = opts.ao.shells();
+        let shells = AoOptions::of(opts).shells();
         let sat = ambient.sat()?;
         let push = CachePush {
             dims: [x, y, z, shells],
@@ -207,42 +249,23 @@ impl ModelPass for AoPass {
         )?;
         let towards = opts.light().towards().normalize();
         let c = opts.light().colour;
-        let (width, height) = self.march.size();
-        let p = Params {
-            march: super::march::MarchParams::new(inputs, width, height),
-            light: [towards.x, towards.y, towards.z, opts.ao.diffuse],
+        self.march.record(rec, inputs, |march| Params {
+            march,
+            light: [towards.x, towards.y, towards.z, AoOptions::of(opts).diffuse],
             light_colour: [c[0], c[1], c[2], 0.0],
             dims: [x, y, z, 0],
-        };
-        self.march.record(rec, inputs, bytemuck::bytes_of(&p))
+        })
     }
 }
+
+crate::render::march::test_blocks_match_the_shaders!(
+    params: shaders::AO_COMP, Params { light, light_colour, dims };
+    push: shaders::AO_CACHE_COMP, CachePush { dims, inv_scale, pad }
+);
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn blocks_match_the_shaders() {
-        crate::assert_host_block!(
-            shaders::AO_CACHE_COMP,
-            "Push",
-            CachePush {
-                dims,
-                inv_scale,
-                pad
-            },
-            exact_size = true
-        );
-        crate::render::march::assert_params_block!(
-            shaders::AO_COMP,
-            Params {
-                light,
-                light_colour,
-                dims
-            }
-        );
-    }
 
     #[test]
     fn radii_are_powers_of_two_and_give_their_shells() {

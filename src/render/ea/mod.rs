@@ -3,9 +3,8 @@
 
 use anyhow::Result;
 
-use super::march::{delegate_to_march, MarchParams, RayMarchPass};
-use super::model::{no_state_buffers, Inputs, ModelPass, OpticalModel, Recorded};
-use super::LightSupport;
+use super::march::{delegate_to_march, MarchParams, RayMarchPass, RAY_MARCHER};
+use super::model::{Inputs, ModelPass, OpticalModel, Recorded};
 use crate::shaders;
 use crate::vk::Recorder;
 
@@ -14,16 +13,9 @@ pub(super) struct EaPass {
 }
 
 impl EaPass {
-    pub fn new(inputs: &Inputs, width: u32, height: u32) -> Result<Self> {
+    pub fn new(inputs: &Inputs) -> Result<Self> {
         Ok(Self {
-            march: RayMarchPass::new::<MarchParams>(
-                inputs,
-                width,
-                height,
-                shaders::EA_COMP,
-                "ea",
-                &[],
-            )?,
+            march: RayMarchPass::new::<MarchParams>(inputs, shaders::EA_COMP, "ea", &[])?,
         })
     }
 }
@@ -32,28 +24,15 @@ impl EaPass {
 pub(crate) static EA: OpticalModel = OpticalModel {
     name: "ea",
     summary: "Emission-absorption ray marcher (the baseline).",
-    // Unlit: emission only.
-    lights: LightSupport::NONE,
-    phase_function: false,
-    gradient: false,
-    extinction: None,
-    check: no_state_buffers,
-    make_pass: |inputs| {
-        let o = inputs.opts;
-        Ok(Box::new(EaPass::new(inputs, o.width, o.height)?))
-    },
-    flags: &[],
-    rebuild_scopes: &[],
-    state: None,
+    make_pass: |inputs| Ok(Box::new(EaPass::new(inputs)?)),
+    ..RAY_MARCHER
 };
 
 impl ModelPass for EaPass {
     delegate_to_march!();
 
     fn record(&mut self, rec: &mut Recorder, inputs: &Inputs) -> Result<Recorded> {
-        let (width, height) = self.march.size();
-        let p = MarchParams::new(inputs, width, height);
-        self.march.record(rec, inputs, bytemuck::bytes_of(&p))
+        self.march.record(rec, inputs, |march: MarchParams| march)
     }
 }
 

@@ -237,9 +237,8 @@ pub(crate) static REFRACT: OpticalModel = OpticalModel {
         let o = inputs.opts;
         Ok(Box::new(SweepPass::new(inputs, o.width, o.height, o.sweep.light_rays)?))
     },
+    options: &[],
     flags: &[
-        "--light",
-        "--light-colour",
         "--ambient-level",
         "--softness",
         "--roughness",

@@ -385,14 +385,20 @@ impl SweepPass {
         plane_bindings.push(Binding::Storage(&sprite_groups));
         plane_bindings.push(Binding::Storage(&sprite_fallback));
         plane_bindings.push(Binding::Storage(&sprite_draws));
+        // Every set of the sweep is made `with_explicit_barriers`: the sweep records its
+        // per-plane barriers itself (the design's explicit barriers between planes; its
+        // sets bind both layers of the ping-pong images, one read and one written per
+        // plane, so a binding cannot declare one use).
         // The first set to bind the buffers that grow with the image (the splat's sums,
         // the deposits): where one exceeds the device's binding range, say what to change.
-        let sweep_set = DescriptorSet::new(ctx, &plane_bindings, "sweep").with_context(|| {
-            format!(
-                "the plane sweep at {width}x{height} with {rays_per_pixel} light rays per \
+        let sweep_set = DescriptorSet::new(ctx, &plane_bindings, "sweep")
+            .with_context(|| {
+                format!(
+                    "the plane sweep at {width}x{height} with {rays_per_pixel} light rays per \
                      pixel: use a smaller image"
-            )
-        })?;
+                )
+            })?
+            .with_explicit_barriers();
         // The compute sweep's set: the same bindings, with every image a plane writes
         // (states 4-9, irradiance 10-11, rays 13-14) a storage image.
         let mut compute_bindings = plane_bindings.clone();
@@ -403,7 +409,8 @@ impl SweepPass {
         compute_bindings[11] = Binding::StorageImage(&irradiance[1].image);
         compute_bindings[13] = Binding::StorageImage(&rays[0].image);
         compute_bindings[14] = Binding::StorageImage(&rays[1].image);
-        let compute_set = DescriptorSet::new(ctx, &compute_bindings, "sweep (compute)")?;
+        let compute_set =
+            DescriptorSet::new(ctx, &compute_bindings, "sweep (compute)")?.with_explicit_barriers();
         let output = FrameTarget::new(ctx, width, height, "sweep frame")?;
         let env_params = Buffer::uniform::<EnvParams>(ctx, "environment params")?;
         let mut composite_bindings = sampled.clone();
@@ -411,7 +418,8 @@ impl SweepPass {
         composite_bindings.push(Binding::Texture(env.map, sampler));
         composite_bindings.push(Binding::Texture(env.sat, sampler));
         composite_bindings.push(Binding::Uniform(&env_params));
-        let composite_set = DescriptorSet::new(ctx, &composite_bindings, "sweep composite")?;
+        let composite_set = DescriptorSet::new(ctx, &composite_bindings, "sweep composite")?
+            .with_explicit_barriers();
         let mut setup_bindings: Vec<Binding> = common.to_vec();
         for s in &states {
             setup_bindings.push(Binding::StorageImage(&s.image));
@@ -422,7 +430,8 @@ impl SweepPass {
         for r in &rays {
             setup_bindings.push(Binding::StorageImage(&r.image));
         }
-        let setup_set = DescriptorSet::new(ctx, &setup_bindings, "sweep setup")?;
+        let setup_set =
+            DescriptorSet::new(ctx, &setup_bindings, "sweep setup")?.with_explicit_barriers();
         let splat_resolve_set = DescriptorSet::new(
             ctx,
             &[
@@ -431,7 +440,8 @@ impl SweepPass {
                 Binding::StorageImage(&irradiance[1].image),
             ],
             "light splat resolve",
-        )?;
+        )?
+        .with_explicit_barriers();
 
         let setup =
             ComputePipeline::new(ctx, shaders::SWEEP_SETUP_COMP, &setup_set, 0, "sweep setup")?;

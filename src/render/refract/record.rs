@@ -252,7 +252,7 @@ impl SweepPass {
                 }
                 // The setup covers the screen and the ray images (rays_per_pixel times taller).
                 let setup_groups = [ray_image[0].div_ceil(8), ray_image[1].div_ceil(8), 1];
-                rec.dispatch_explicit(&self.setup, &self.setup_set, &[], setup_groups)?;
+                rec.dispatch(&self.setup, &self.setup_set, &[], setup_groups)?;
                 // Both layers become sampled: every draw's set names both (see module docs).
                 // (The compute planes declare their storage uses themselves.)
                 if !compute {
@@ -441,7 +441,7 @@ impl SweepPass {
         uses.push(Use::all(&self.output.image, Access::ComputeStorage));
         if last_batch {
             rec.pass("composite", &uses, |rec| {
-                rec.dispatch_explicit(
+                rec.dispatch(
                     &self.composite,
                     &self.composite_set,
                     &last.to_le_bytes(),

@@ -175,7 +175,7 @@ impl SweepPass {
                         pad: first_wg,
                         ..splat_push
                     };
-                    rec.dispatch_explicit(
+                    rec.dispatch(
                         &fp.group_deposits,
                         &self.sweep_set,
                         bytemuck::bytes_of(&deposits_push),
@@ -238,7 +238,7 @@ impl SweepPass {
                     pad: unit.to_bits(),
                     ..push
                 };
-                rec.dispatch_explicit(
+                rec.dispatch(
                     &fp.splat_compute,
                     &self.sweep_set,
                     bytemuck::bytes_of(&splat_push),
@@ -253,7 +253,7 @@ impl SweepPass {
                     (&self.irradiance[1].image, 0..2, Access::ComputeStorage),
                 ]);
                 let resolve_push = [write, self.width, self.height, unit.to_bits()];
-                rec.dispatch_explicit(
+                rec.dispatch(
                     &f.splat_resolve,
                     &self.splat_resolve_set,
                     bytemuck::bytes_of(&resolve_push),

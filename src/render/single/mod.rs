@@ -17,12 +17,10 @@ use glam::Vec3;
 
 use super::cached::CachedImage;
 use super::extinction::Extinction;
-use super::march::{delegate_to_march, RayMarchPass};
-use super::model::{
-    no_state_buffers, Inputs, ModelPass, ModelState, ModelStateDecl, OpticalModel, Recorded, Shared,
-};
+use super::march::{delegate_to_march, RayMarchPass, RAY_MARCHER};
+use super::model::{Inputs, ModelPass, ModelState, ModelStateDecl, OpticalModel, Recorded, Shared};
 use super::LightSupport;
-use super::{RenderOptions, VolumeInfo};
+use super::{RenderOptions, ScatterOptions, VolumeInfo, SCATTER_ALBEDO, SCATTER_G};
 use crate::shaders;
 use crate::vk::{self, Binding, Context, Image, ImageDesc, ImageKind, Recorder, Sampler};
 
@@ -126,13 +124,11 @@ pub(super) struct SinglePass {
 }
 
 impl SinglePass {
-    pub fn new(inputs: &Inputs, width: u32, height: u32) -> Result<Self> {
+    pub fn new(inputs: &Inputs) -> Result<Self> {
         let cache = transmittance(inputs)?;
         Ok(Self {
             march: RayMarchPass::new::<Params>(
                 inputs,
-                width,
-                height,
                 shaders::SINGLE_COMP,
                 "single",
                 &[Binding::Texture(cache.image(), inputs.linear)],
@@ -184,15 +180,10 @@ pub(crate) static SINGLE: OpticalModel = OpticalModel {
     // One directional light: the transmittance cache is built for one direction.
     lights: LightSupport::ONE_DIRECTIONAL,
     phase_function: true,
-    gradient: false,
     // The extinction volume, no SAT: the cache marches it.
     extinction: Some(false),
-    check: no_state_buffers,
-    make_pass: |inputs| {
-        let o = inputs.opts;
-        Ok(Box::new(SinglePass::new(inputs, o.width, o.height)?))
-    },
-    flags: &["--light", "--light-colour", "--g", "--albedo"],
+    make_pass: |inputs| Ok(Box::new(SinglePass::new(inputs)?)),
+    options: &[&SCATTER_G, &SCATTER_ALBEDO],
     rebuild_scopes: &[CACHE_SCOPE],
     state: Some(ModelStateDecl {
         what: "the transmittance cache",
@@ -202,6 +193,7 @@ pub(crate) static SINGLE: OpticalModel = OpticalModel {
             Ok(Box::new(TransmittanceCache::new(shared.ctx, e, shared.linear)?))
         },
     }),
+    ..RAY_MARCHER
 };
 
 impl ModelPass for SinglePass {
@@ -212,37 +204,16 @@ impl ModelPass for SinglePass {
         let _cache = transmittance(inputs)?;
         let towards = light_towards(opts);
         let c = opts.light().colour;
-        let (width, height) = self.march.size();
-        let p = Params {
-            march: super::march::MarchParams::new(inputs, width, height),
-            light: [towards.x, towards.y, towards.z, opts.scatter.g],
-            light_colour: [c[0], c[1], c[2], opts.scatter.albedo],
-        };
-        self.march.record(rec, inputs, bytemuck::bytes_of(&p))
+        let scatter = ScatterOptions::of(opts);
+        self.march.record(rec, inputs, |march| Params {
+            march,
+            light: [towards.x, towards.y, towards.z, scatter.g],
+            light_colour: [c[0], c[1], c[2], scatter.albedo],
+        })
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn blocks_match_the_shaders() {
-        crate::assert_host_block!(
-            shaders::TRANSMITTANCE_COMP,
-            "Push",
-            CachePush {
-                towards,
-                half_extent
-            },
-            exact_size = true
-        );
-        crate::render::march::assert_params_block!(
-            shaders::SINGLE_COMP,
-            Params {
-                light,
-                light_colour
-            }
-        );
-    }
-}
+crate::render::march::test_blocks_match_the_shaders!(
+    params: shaders::SINGLE_COMP, Params { light, light_colour };
+    push: shaders::TRANSMITTANCE_COMP, CachePush { towards, half_extent }
+);

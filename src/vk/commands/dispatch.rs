@@ -1,6 +1,6 @@
 //! Compute work: binding a pipeline with its set and dispatching, with the barriers the
-//! set's bindings declare (`Recorder::dispatch`) or without (the sweep's explicit
-//! per-plane barriers).
+//! set's bindings declare (`Recorder::dispatch`), or without them for a set made
+//! `with_explicit_barriers` (the sweep's explicit per-plane barriers).
 
 use super::*;
 
@@ -69,7 +69,8 @@ impl Recorder<'_> {
     /// once per dispatch and buffer, in one batch with the images'). So a pass of
     /// dispatches declares each resource once, in its bindings, and a dispatch reading
     /// what the one before it wrote is ordered after it. Errors if the set binds an image
-    /// or buffer destroyed since the set was made.
+    /// or buffer destroyed since the set was made. A set made
+    /// [`DescriptorSet::with_explicit_barriers`] takes none: its user records them.
     pub fn dispatch(
         &mut self,
         pipeline: &ComputePipeline,
@@ -77,6 +78,16 @@ impl Recorder<'_> {
         push: &[u8],
         groups: [u32; 3],
     ) -> Result<()> {
+        if !set.explicit_barriers {
+            self.take_bindings(set)?;
+        }
+        self.bind_compute(pipeline, set);
+        self.dispatch_bound(pipeline, push, groups)
+    }
+
+    /// The barriers that take `set`'s bound images and storage buffers to the uses its
+    /// bindings declare ([`Self::dispatch`]).
+    fn take_bindings(&mut self, set: &DescriptorSet) -> Result<()> {
         let mut barriers = Vec::new();
         for bound in &set.images {
             let Some(state) = bound.image.state.upgrade() else {
@@ -118,20 +129,6 @@ impl Recorder<'_> {
             // SAFETY: recording; the barriers reference images and buffers that are alive.
             unsafe { self.device().cmd_pipeline_barrier2(self.cmd, &dep) };
         }
-        self.dispatch_explicit(pipeline, set, push, groups)
-    }
-
-    /// [`Recorder::dispatch`] without the derived barriers: for the plane sweep, whose
-    /// per-plane barriers are explicit (they change roles layer by layer, and its sets
-    /// bind both layers of the ping-pong images).
-    pub fn dispatch_explicit(
-        &mut self,
-        pipeline: &ComputePipeline,
-        set: &DescriptorSet,
-        push: &[u8],
-        groups: [u32; 3],
-    ) -> Result<()> {
-        self.bind_compute(pipeline, set);
-        self.dispatch_bound(pipeline, push, groups)
+        Ok(())
     }
 }
