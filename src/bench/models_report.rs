@@ -127,16 +127,16 @@ pub fn models_markdown(r: &ModelsReport) -> String {
 /// applicable change (kind `tf-change`, `ls-change`, `pf-change`: ms is the rebuild
 /// scopes' sum), each with its whole context, as `bench thesis --csv`.
 pub fn write_models_csv(r: &ModelsReport, path: &Path) -> Result<()> {
-    // Written into memory, then to the file atomically (finish_csv).
-    let mut w = csv_with_header(
+    let mut csv = ReportCsv::new(
         &["schema", "dataset", "model", "kind", "frame", "ms"],
         &["termination_alpha"],
         &[],
+        &r.meta,
+        (r.settings.scale, r.settings.sample_distance),
     )?;
-    let sampling = (r.settings.scale, r.settings.sample_distance);
+    let alpha = [r.settings.termination_alpha.to_string()];
     for row in &r.rows {
         for m in &row.models {
-            let size = size_columns(row.resolution, row.viewport, m.max_steps, sampling);
             let frames = m
                 .warmup_ms
                 .iter()
@@ -150,22 +150,23 @@ pub fn write_models_csv(r: &ModelsReport, path: &Path) -> Result<()> {
             .into_iter()
             .filter_map(|(k, c)| c.as_ref().map(|c| (k, Some(c.ms))));
             for (k, (kind, ms)) in frames.chain(changes).enumerate() {
-                let mut record = vec![
-                    MODELS_SCHEMA.to_string(),
-                    row.dataset.clone(),
-                    m.model.clone(),
-                    kind.to_string(),
-                    k.to_string(),
-                    ms.map(|t| format!("{t:.6}")).unwrap_or_default(),
-                ];
-                record.extend(size.clone());
-                record.push(r.settings.termination_alpha.to_string());
-                record.extend(meta_columns(&r.meta));
-                w.write_record(&record)?;
+                csv.record(
+                    vec![
+                        MODELS_SCHEMA.to_string(),
+                        row.dataset.clone(),
+                        m.model.clone(),
+                        kind.to_string(),
+                        k.to_string(),
+                        ms.map(|t| format!("{t:.6}")).unwrap_or_default(),
+                    ],
+                    (row.resolution, row.viewport, m.max_steps),
+                    &alpha,
+                    &[],
+                )?;
             }
         }
     }
-    finish_csv(w, path)
+    csv.finish(path)
 }
 
 /// Median rendering ms per model per row as an SVG bar chart (log scale).

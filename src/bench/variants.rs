@@ -441,19 +441,18 @@ pub fn variants_markdown(r: &VariantsReport) -> String {
 /// One CSV record per frame (warm-up included) of every row and variant, each with its
 /// whole context, as `bench thesis --csv`.
 pub fn write_variants_csv(r: &VariantsReport, path: &Path) -> Result<()> {
-    // Written into memory, then to the file atomically (finish_csv).
-    let mut w = csv_with_header(
+    let mut csv = ReportCsv::new(
         &[
             "schema", "dataset", "variant", "levers", "frame", "warmup", "order", "frame_ms",
             "sweep_ms",
         ],
         &[],
         &[],
+        &r.meta,
+        (r.settings.scale, r.settings.sample_distance),
     )?;
-    let sampling = (r.settings.scale, r.settings.sample_distance);
     for row in &r.rows {
         for v in &row.variants {
-            let size = size_columns(row.resolution, row.viewport, row.planes, sampling);
             let warm = v
                 .warmup_ms
                 .iter()
@@ -466,24 +465,26 @@ pub fn write_variants_csv(r: &VariantsReport, path: &Path) -> Result<()> {
                 .zip(v.sweep_ms.iter().map(Some).chain(std::iter::repeat(None)))
                 .map(|((t, o), sw)| (false, t, o, sw));
             for (k, (warmup, t, o, sweep)) in warm.chain(measured).enumerate() {
-                let mut record = vec![
-                    VARIANTS_SCHEMA.to_string(),
-                    row.dataset.clone(),
-                    v.variant.clone(),
-                    v.levers.clone(),
-                    k.to_string(),
-                    warmup.to_string(),
-                    o.to_string(),
-                    format!("{t:.6}"),
-                    sweep.map(|x| format!("{x:.6}")).unwrap_or_default(),
-                ];
-                record.extend(size.clone());
-                record.extend(meta_columns(&r.meta));
-                w.write_record(&record)?;
+                csv.record(
+                    vec![
+                        VARIANTS_SCHEMA.to_string(),
+                        row.dataset.clone(),
+                        v.variant.clone(),
+                        v.levers.clone(),
+                        k.to_string(),
+                        warmup.to_string(),
+                        o.to_string(),
+                        format!("{t:.6}"),
+                        sweep.map(|x| format!("{x:.6}")).unwrap_or_default(),
+                    ],
+                    (row.resolution, row.viewport, row.planes),
+                    &[],
+                    &[],
+                )?;
             }
         }
     }
-    finish_csv(w, path)
+    csv.finish(path)
 }
 
 #[cfg(test)]

@@ -118,59 +118,104 @@ pub fn markdown(r: &Report) -> String {
 /// One CSV record per measured or warm-up frame of every variant, each carrying the whole
 /// context (device, commit, settings), so a file is self-describing and files concatenate.
 pub fn write_csv(r: &Report, path: &Path) -> Result<()> {
-    // Written into memory, then to the file atomically (finish_csv).
-    let mut w = csv_with_header(
+    let mut csv = ReportCsv::new(
         &[
             "schema", "dataset", "variant", "frame", "warmup", "frame_ms",
         ],
         &["thesis_ms", "thesis_gpu"],
         &["levers"],
+        &r.meta,
+        (r.settings.scale, r.settings.sample_distance),
     )?;
-    let sampling = (r.settings.scale, r.settings.sample_distance);
+    let levers = [r.settings.variant.clone().unwrap_or_default()];
     for row in &r.rows {
+        let thesis = [row.thesis.ms.to_string(), row.thesis.gpu.clone()];
         for v in row.variants() {
-            let size = size_columns(row.resolution, row.viewport, row.planes, sampling);
             let all = v
                 .warmup_ms
                 .iter()
                 .map(|t| (true, t))
                 .chain(v.frames_ms.iter().map(|t| (false, t)));
             for (k, (warm, t)) in all.enumerate() {
-                let mut record = vec![
-                    SCHEMA.to_string(),
-                    row.dataset.clone(),
-                    v.variant.clone(),
-                    k.to_string(),
-                    warm.to_string(),
-                    format!("{t:.6}"),
-                ];
-                record.extend(size.clone());
-                record.extend([row.thesis.ms.to_string(), row.thesis.gpu.clone()]);
-                record.extend(meta_columns(&r.meta));
-                record.push(r.settings.variant.clone().unwrap_or_default());
-                w.write_record(&record)?;
+                csv.record(
+                    vec![
+                        SCHEMA.to_string(),
+                        row.dataset.clone(),
+                        v.variant.clone(),
+                        k.to_string(),
+                        warm.to_string(),
+                        format!("{t:.6}"),
+                    ],
+                    (row.resolution, row.viewport, row.planes),
+                    &thesis,
+                    &levers,
+                )?;
             }
         }
     }
-    finish_csv(w, path)
+    csv.finish(path)
 }
 
-/// A CSV writer into memory (for [`finish_csv`]) with the header of a report's records:
-/// `lead` (its own first columns), [`SIZE_HEADER`], `mid`, [`META_HEADER`], `tail`.
-pub(crate) fn csv_with_header(
-    lead: &[&str],
-    mid: &[&str],
-    tail: &[&str],
-) -> Result<csv::Writer<Vec<u8>>> {
-    let mut w = csv::Writer::from_writer(Vec::new());
-    w.write_record(
-        lead.iter()
-            .chain(&SIZE_HEADER)
-            .chain(mid)
-            .chain(&META_HEADER)
-            .chain(tail),
-    )?;
-    Ok(w)
+/// A report's CSV file, built in memory and written atomically ([`ReportCsv::finish`]):
+/// every record is the report's own first columns, the row's size and the run's sampling
+/// ([`SIZE_HEADER`]), the report's middle columns, the device and build ([`META_HEADER`],
+/// the same in every record) and its last columns, so a file is self-describing and files
+/// concatenate.
+pub(crate) struct ReportCsv {
+    w: csv::Writer<Vec<u8>>,
+    meta: [String; 6],
+    sampling: (f64, f32),
+}
+
+/// A row's size as [`size_columns`] takes it: volume resolution, viewport, planes (or
+/// steps).
+pub(crate) type RowSize = ([u32; 3], [u32; 2], u32);
+
+impl ReportCsv {
+    /// The header: `lead`, [`SIZE_HEADER`], `mid`, [`META_HEADER`], `tail`.
+    pub(crate) fn new(
+        lead: &[&str],
+        mid: &[&str],
+        tail: &[&str],
+        meta: &Meta,
+        sampling: (f64, f32),
+    ) -> Result<Self> {
+        let mut w = csv::Writer::from_writer(Vec::new());
+        w.write_record(
+            lead.iter()
+                .chain(&SIZE_HEADER)
+                .chain(mid)
+                .chain(&META_HEADER)
+                .chain(tail),
+        )?;
+        Ok(Self {
+            w,
+            meta: meta_columns(meta),
+            sampling,
+        })
+    }
+
+    /// One record, its columns in the header's order.
+    pub(crate) fn record(
+        &mut self,
+        lead: Vec<String>,
+        (resolution, viewport, planes): RowSize,
+        mid: &[String],
+        tail: &[String],
+    ) -> Result<()> {
+        let mut record = lead;
+        record.extend(size_columns(resolution, viewport, planes, self.sampling));
+        record.extend_from_slice(mid);
+        record.extend_from_slice(&self.meta);
+        record.extend_from_slice(tail);
+        self.w.write_record(&record)?;
+        Ok(())
+    }
+
+    /// Write the file to `path`, atomically.
+    pub(crate) fn finish(self, path: &Path) -> Result<()> {
+        finish_csv(self.w, path)
+    }
 }
 
 /// Writes a CSV built in memory to `path`, atomically (crate::files).
