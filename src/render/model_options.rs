@@ -100,11 +100,6 @@ impl ModelOptions {
     pub fn merge(&mut self, other: &ModelOptions) {
         self.0.extend(other.0.iter().map(|(k, v)| (*k, *v)));
     }
-
-    /// Every value set here, with its option (in name order).
-    pub fn set_values(&self) -> impl Iterator<Item = (&'static str, f64)> + '_ {
-        self.0.iter().map(|(k, v)| (*k, *v))
-    }
 }
 
 impl RenderOptions {

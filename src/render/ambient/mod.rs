@@ -446,7 +446,8 @@ impl ModelPass for AmbientPass {
         )?;
         let (n, at, colours) = lights(opts);
         let r_world = radius * info.ref_step;
-        let g = ScatterOptions::of(opts).g;
+        let scatter = ScatterOptions::of(opts);
+        let g = scatter.g;
         let h = info.half_extent;
         let cache_push = CachePush {
             lights: at,
@@ -467,7 +468,7 @@ impl ModelPass for AmbientPass {
             march,
             lights: at,
             colours,
-            ambient: [r_world, radius, g, ScatterOptions::of(opts).albedo],
+            ambient: [r_world, radius, g, scatter.albedo],
             table: table.dims(),
             counts: [n as u32, 0, 0, 0],
         })

@@ -234,7 +234,8 @@ impl ModelPass for AoPass {
         let ambient = extinction(inputs)?;
         let [x, y, z] = info.dims.map(|d| d as i32);
         let builds = ambient.builds();
-        let shells = AoOptions::of(opts).shells();
+        let ao = AoOptions::of(opts);
+        let shells = ao.shells();
         let sat = ambient.sat()?;
         let push = CachePush {
             dims: [x, y, z, shells],
@@ -251,7 +252,7 @@ impl ModelPass for AoPass {
         let c = opts.light().colour;
         self.march.record(rec, inputs, |march| Params {
             march,
-            light: [towards.x, towards.y, towards.z, AoOptions::of(opts).diffuse],
+            light: [towards.x, towards.y, towards.z, ao.diffuse],
             light_colour: [c[0], c[1], c[2], 0.0],
             dims: [x, y, z, 0],
         })
