@@ -1,6 +1,6 @@
 //! Issue 34 item 5: docs/ARCHITECTURE.md's "How to add a model" held honest. A model is
-//! a folder plus its line in render/registry.rs: the renderer (render/mod.rs) names no
-//! model, and the single-scattering model, the one the issue asked to move as proof, is
+//! a folder plus its lines in render/registry.rs: the renderer (render/mod.rs) names no
+//! model and declares no model's folder, and the single-scattering model, the one the issue asked to move as proof, is
 //! named nowhere outside its folder and the registry (comments aside). A special case
 //! by model added anywhere else fails here, with the file and line.
 
@@ -88,6 +88,28 @@ fn the_single_scattering_model_lives_in_its_folder_and_the_registry() {
         "the single-scattering model is named outside render/single/ and the registry:\n{}",
         found.join("\n")
     );
+}
+
+/// Every model is a folder `render/<name>/` declared (`mod <name>;`) in the registry
+/// alone: render/mod.rs, which declares the renderer's own modules, declares no model.
+#[test]
+fn only_the_registry_declares_the_models_folders() {
+    let render = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/render");
+    for m in refrakt::render::Model::ALL {
+        let name = m.name();
+        assert!(
+            render.join(name).join("mod.rs").is_file(),
+            "model {name} has no folder src/render/{name}/"
+        );
+        let found = occurrences(&[&format!("mod {name};")], |f| {
+            !f.starts_with("render/") || f == "render/registry.rs"
+        });
+        assert!(
+            found.is_empty(),
+            "model {name}'s folder is declared outside render/registry.rs:\n{}",
+            found.join("\n")
+        );
+    }
 }
 
 /// A value `option` takes that is not its default (so that a value dropped on the way

@@ -5,12 +5,10 @@
 //!
 //! Layout: the renderer's shared inputs (uploads, preintegration table, gradient volume,
 //! environment SAT) are files here; each optical model is a folder (`ea/`, `refract/`)
-//! behind the interface in `model.rs`.
+//! behind the interface in `model.rs`, declared in `registry.rs` (the one place that
+//! lists the models; re-exported here, so `render::ao` is the folder `render/ao/`).
 
-pub mod ambient;
-pub mod ao;
 mod cached;
-mod ea;
 pub mod extinction;
 pub mod field;
 pub mod gradient;
@@ -21,12 +19,10 @@ mod model;
 mod model_options;
 mod options;
 pub mod preintegration;
-pub mod refract;
 mod registry;
 pub mod sat;
 pub mod sat3d;
 mod shared;
-pub mod single;
 mod target;
 mod tonemap;
 pub mod upload;
@@ -48,7 +44,8 @@ use crate::vk::{
 use crate::volume::Volume;
 pub use model_options::{declared_options, find_option, ModelOption, ModelOptions};
 pub use options::*;
-pub use registry::{LightSupport, Model};
+// The registry: `Model`, `LightSupport` and the models' folders (`render::ao`, ...).
+pub use registry::*;
 pub use sat::SummedAreaTable;
 
 pub use preintegration::{PreintegrationTable, TABLE_SIZE};

@@ -6,11 +6,28 @@
 //!
 //! Adding a model: a folder under `render/` with its `ModelPass`, its [`OpticalModel`]
 //! `static` and its options' `static`s ([`ModelOption`]: flags and scene keys follow from
-//! them), a variant below, its line in [`Model::ALL`] and in [`Model::declaration`].
+//! them), its `mod` line below, a variant, its line in [`Model::ALL`] and in
+//! [`Model::declaration`]; its shaders in `glsl/` (build.rs compiles every file there).
+
+// The models' folders. They lie beside this file, under `render/` (`#[path]`: without it
+// Rust would look under `render/registry/`), and are declared here so that this file is
+// the one that lists them. Their module parent is this one, so a model's `super::x`
+// reaches `render`'s items through the glob below.
+#[path = "ambient/mod.rs"]
+pub mod ambient;
+#[path = "ao/mod.rs"]
+pub mod ao;
+#[path = "ea/mod.rs"]
+mod ea;
+#[path = "refract/mod.rs"]
+pub mod refract;
+#[path = "single/mod.rs"]
+pub mod single;
+
+use super::*;
 
 use super::model::OpticalModel;
 use super::model_options::ModelOption;
-use super::{ambient, ao, ea, refract, single};
 
 /// What lights a model takes: [`Model::light_support`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
