@@ -19,6 +19,7 @@ mod model;
 mod model_options;
 mod options;
 pub mod preintegration;
+pub mod ray_equation;
 mod registry;
 pub mod sat;
 pub mod sat3d;
