@@ -63,11 +63,10 @@ float ray_eta(vec3 w) {
 
 // grad eta' at w (per world unit): central differences RAY_GRADIENT_STEP voxels apart of
 // eta'(value(x)), eta applied before differencing (thesis sect. 5.2), as the CPU tracer
-// takes it. The exact derivative of the interpolants (eta_tf' k grad value) was tried
-// first: it converged, as the step shrank, to exits up to 1.5 voxels and 64 mrad from the
-// CPU tracer's on one ray of fourteen through a glass ball (tests/ray_equation.rs), where
-// these differences agree within 0.002 voxel; why is not understood yet (docs/NOTES.md,
-// "The ray equation on the GPU").
+// takes it. They are continuous where the trilinear interpolant's own derivative jumps
+// (at every cell face), which suits RK4; the exact derivative (eta_tf' k grad value) was
+// tried first and sent a ray that ran 0.02 voxel beside a cell face, along it, 64 mrad
+// away from the CPU tracer's (docs/NOTES.md, "The ray equation on the GPU").
 const float RAY_GRADIENT_STEP = 0.05;
 vec3 ray_grad_eta(vec3 w) {
     vec3 h = RAY_GRADIENT_STEP * 2.0 * RAY_HALF / RAY_DIMS;
