@@ -104,6 +104,26 @@ void ray_rk4(inout vec3 x, inout vec3 v, float h) {
     v += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
 }
 
+// One RK4 step of time dt of the equi-temporal ray equation (seed 001 eqs. 13-15):
+// dx/dt = v / eta^2, dv/dt = grad eta / eta. |dx/dt| = 1 / eta, so a step of dt advances
+// every particle by the same optical path dt (eta ds = dt): particles launched on a
+// wavefront stay on one (the intensity law, eq. 16, needs that of a stream tube's ends).
+void ray_rk4_temporal(inout vec3 x, inout vec3 v, float dt) {
+    float e1 = ray_eta(x);
+    vec3 k1x = v / (e1 * e1), k1v = ray_grad_eta(x) / e1;
+    vec3 x2 = x + 0.5 * dt * k1x, v2 = v + 0.5 * dt * k1v;
+    float e2 = ray_eta(x2);
+    vec3 k2x = v2 / (e2 * e2), k2v = ray_grad_eta(x2) / e2;
+    vec3 x3 = x + 0.5 * dt * k2x, v3 = v + 0.5 * dt * k2v;
+    float e3 = ray_eta(x3);
+    vec3 k3x = v3 / (e3 * e3), k3v = ray_grad_eta(x3) / e3;
+    vec3 x4 = x + dt * k3x, v4 = v + dt * k3v;
+    float e4 = ray_eta(x4);
+    vec3 k4x = v4 / (e4 * e4), k4v = ray_grad_eta(x4) / e4;
+    x += dt / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
+    v += dt / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+}
+
 // The optical depth per channel along the chord from a to b (length `len`): two-point
 // Gauss-Legendre, exact for rates that are cubic along it.
 vec3 ray_optical_depth(vec3 a, vec3 b, float len) {

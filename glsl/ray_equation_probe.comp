@@ -1,6 +1,6 @@
 #version 460
 // Rays traced through the volume's refractive-index field by glsl/ray_equation.glsl to a
-// target plane, one per invocation: the GPU integrator's check against the CPU photon
+// target plane, or wavefront particles advanced for a time, one per invocation: the GPU integrator's check against the CPU photon
 // tracer (tests/ray_equation.rs; render/ray_equation.rs) and its first user.
 #extension GL_GOOGLE_include_directive : require
 layout(local_size_x = 64) in;
@@ -18,9 +18,11 @@ layout(push_constant) uniform Push {
     vec4 half_extent;  // xyz: the box's half extent; w: the reference step
     vec4 dims;         // xyz: voxels per axis; w: the eta scale k
     vec4 target;       // xyz: the target plane's unit normal n; w: c (n . x = c on it)
-    float step;        // RK4 step, world units
+    float step;        // RK4 step: arc length (mode 0) or time (mode 1), world units
     uint max_steps;
     uint count;
+    uint mode;         // 0: arc-length steps to the target plane; 1: max_steps
+                       //    equi-temporal steps (eqs. 14-15), the plane unused
 } pc;
 
 #define RAY_VOLUME volume
@@ -43,6 +45,20 @@ void main() {
     // not reach the plane never will (no backward rays are traced here).
     vec3 bound = pc.half_extent.xyz + vec3(2.0 * pc.step);
     float on_plane = 0.0;
+    if (pc.mode == 1u) {
+        // The wavefront's particle: a fixed time, attenuation along each step's chord.
+        for (uint k = 0u; k < pc.max_steps; ++k) {
+            vec3 x0 = x;
+            ray_rk4_temporal(x, v, pc.step);
+            float len = length(x - x0);
+            tau += ray_optical_depth(x0, x, len);
+            s += len;
+        }
+        ends[3 * i] = vec4(x, s);
+        ends[3 * i + 1] = vec4(normalize(v), length(v));
+        ends[3 * i + 2] = vec4(exp(-tau), 1.0);
+        return;
+    }
     for (uint k = 0u; k < pc.max_steps; ++k) {
         vec3 x0 = x, v0 = v;
         ray_rk4(x, v, pc.step);

@@ -4,7 +4,8 @@
 //! the integrator issue 35's light simulator (the wavefront's corners, seed 001 eqs.
 //! 14–15) and view renderer (eqs. 11–12) are to be built on; [`Renderer::trace_rays_on_gpu`]
 //! traces a list of rays to a plane, which is how tests/ray_equation.rs holds it to the
-//! CPU tracer and to closed forms.
+//! CPU tracer and to closed forms, and [`Renderer::advance_wavefront_on_gpu`] advances
+//! wavefront particles for a time (the equi-temporal form the light simulator needs).
 
 use anyhow::{ensure, Result};
 use bytemuck::{Pod, Zeroable};
@@ -27,7 +28,16 @@ struct ProbePush {
     step: f32,
     max_steps: u32,
     count: u32,
-    pad: u32,
+    mode: u32,
+}
+
+/// How the probe advances its rays (`mode` in `glsl/ray_equation_probe.comp`).
+#[derive(Clone, Copy)]
+enum Advance {
+    /// Arc-length steps until the target plane.
+    ToPlane = 0,
+    /// A fixed number of equi-temporal steps (seed 001 eqs. 14–15).
+    ForTime = 1,
 }
 
 /// A ray to trace: world origin and direction (any length but zero).
@@ -74,13 +84,47 @@ impl Renderer {
         max_steps: u32,
     ) -> Result<Vec<Option<GpuRayEnd>>> {
         ensure!(
-            step.is_finite() && step > 0.0,
-            "ray step {step} must be a positive number of voxels"
-        );
-        ensure!(
             target.normal.is_finite() && (target.normal.length() - 1.0).abs() < 1e-4,
             "target plane normal {:?} must be a unit vector",
             target.normal
+        );
+        self.probe(opts, rays, target, step, max_steps, Advance::ToPlane)
+    }
+
+    /// Advance wavefront particles (`rays`: positions and directions) for `steps` RK4
+    /// steps of the equi-temporal ray equation (seed 001 eqs. 14–15), each an optical path
+    /// of `dt` voxels (reference steps): every particle ends `steps · dt` of optical path
+    /// from its start, so particles launched on a wavefront end on one.
+    pub fn advance_wavefront_on_gpu(
+        &self,
+        opts: &RenderOptions,
+        rays: &[RayStart],
+        dt: f32,
+        steps: u32,
+    ) -> Result<Vec<GpuRayEnd>> {
+        let unused = TargetPlane {
+            normal: Vec3::Z,
+            offset: 0.0,
+        };
+        let ends = self.probe(opts, rays, unused, dt, steps, Advance::ForTime)?;
+        Ok(ends
+            .into_iter()
+            .map(|e| e.expect("a wavefront particle always ends"))
+            .collect())
+    }
+
+    fn probe(
+        &self,
+        opts: &RenderOptions,
+        rays: &[RayStart],
+        target: TargetPlane,
+        step: f32,
+        max_steps: u32,
+        mode: Advance,
+    ) -> Result<Vec<Option<GpuRayEnd>>> {
+        ensure!(
+            step.is_finite() && step > 0.0,
+            "ray step {step} must be a positive number of voxels"
         );
         ensure!(
             opts.sweep.clip.is_none(),
@@ -146,7 +190,7 @@ impl Renderer {
             step: step * info.ref_step,
             max_steps,
             count: count as u32,
-            pad: 0,
+            mode: mode as u32,
         };
         ctx.execute(|rec| {
             rec.pass("ray equation", &[], |rec| {
@@ -191,7 +235,8 @@ mod tests {
                 target,
                 step,
                 max_steps,
-                count
+                count,
+                mode
             },
             exact_size = false
         );
