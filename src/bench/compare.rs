@@ -522,19 +522,7 @@ pub fn compare_markdown(c: &Comparison) -> String {
          and by more than {} % of the old median; otherwise \"within noise\".\n\n",
         100.0 * c.options.min_change
     );
-    s += &table_head(
-        &[
-            "Row",
-            "Variant",
-            "Mean ms, old → new",
-            "Δ mean",
-            "Median ms, old → new",
-            "Δ median",
-            &format!("Noise ({k}·se) ms"),
-            "Verdict",
-        ],
-        "llrrrrrl",
-    );
+    s += &table_head(&format!("Row | Variant | Mean ms, old → new | Δ mean | Median ms, old → new | Δ median | Noise ({k}·se) ms | Verdict"), "llrrrrrl");
     for l in &c.lines {
         match &l.outcome {
             Outcome::Compared(d) => {

@@ -49,28 +49,7 @@ pub fn models_markdown(r: &ModelsReport) -> String {
         st.pf_change,
         st.ratio_to
     );
-    s += &table_head(
-        &[
-            "Dataset",
-            "Resolution",
-            "Model",
-            "Median ms",
-            "Mean ms",
-            "Min",
-            "Max",
-            "FPS",
-            &format!("Ratio to {}", st.ratio_to),
-            "TF change ms",
-            "LS change ms",
-            "PF change ms",
-            "Paper ms",
-            "Paper ratio",
-            "Paper TF ms",
-            "Paper LS ms",
-            "Paper PF ms",
-        ],
-        "lllrrrrrrrrrrrrrr",
-    );
+    s += &table_head(&format!("Dataset | Resolution | Model | Median ms | Mean ms | Min | Max | FPS | Ratio to {} | TF change ms | LS change ms | PF change ms | Paper ms | Paper ratio | Paper TF ms | Paper LS ms | Paper PF ms", st.ratio_to), "lllrrrrrrrrrrrrrr");
     for row in &r.rows {
         let res = format!(
             "{}{}",

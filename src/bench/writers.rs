@@ -7,15 +7,19 @@ pub(super) fn dims(d: [u32; 3]) -> String {
     format!("{}×{}×{}", d[0], d[1], d[2])
 }
 
-/// A Markdown table's head: the header row and the alignment row, one letter of `align`
-/// per column (`l` left, `r` right: numbers).
-pub(crate) fn table_head(columns: &[&str], align: &str) -> String {
-    assert_eq!(columns.len(), align.len(), "one alignment per column");
+/// A Markdown table's head: the header row (`columns`, separated by " | ") and the
+/// alignment row, one letter of `align` per column (`l` left, `r` right: numbers).
+pub(crate) fn table_head(columns: &str, align: &str) -> String {
+    assert_eq!(
+        columns.split(" | ").count(),
+        align.len(),
+        "one alignment per column"
+    );
     let rule = align
         .chars()
         .map(|a| if a == 'r' { "---:" } else { "---" })
         .collect::<Vec<_>>();
-    format!("| {} |\n|{}|\n", columns.join(" | "), rule.join("|"))
+    format!("| {columns} |\n|{}|\n", rule.join("|"))
 }
 
 /// The report as Markdown: the thesis table beside ours, the per-pass breakdown, and the
@@ -49,25 +53,7 @@ pub fn markdown(r: &Report) -> String {
         r.settings.variant.as_deref().unwrap_or("not recorded"),
         r.settings.light_transport.as_deref().unwrap_or("not recorded")
     );
-    s += &table_head(
-        &[
-            "Dataset",
-            "Thesis resolution",
-            "Ours",
-            "Viewport",
-            "Planes",
-            "Thesis ms",
-            "Thesis FPS",
-            "Thesis GPU",
-            "Mean ms",
-            "FPS",
-            "Median",
-            "Min",
-            "Max",
-            "Std-dev",
-        ],
-        "llllrrrlrrrrrr",
-    );
+    s += &table_head("Dataset | Thesis resolution | Ours | Viewport | Planes | Thesis ms | Thesis FPS | Thesis GPU | Mean ms | FPS | Median | Min | Max | Std-dev", "llllrrrlrrrrrr");
     for row in &r.rows {
         let st = &row.refract.stats;
         s += &format!(
@@ -90,21 +76,7 @@ pub fn markdown(r: &Report) -> String {
         );
     }
     s += "\nPer pass (mean GPU ms) and state-buffer traffic:\n\n";
-    s += &table_head(
-        &[
-            "Dataset",
-            "Preintegration",
-            "Setup",
-            "Sweep",
-            "Composite",
-            "ms/plane",
-            "Plane-pixels/s",
-            "B/plane-pixel",
-            "Compulsory B/plane-pixel",
-            "Effective GB/s",
-        ],
-        "lrrrrrrrrr",
-    );
+    s += &table_head("Dataset | Preintegration | Setup | Sweep | Composite | ms/plane | Plane-pixels/s | B/plane-pixel | Compulsory B/plane-pixel | Effective GB/s", "lrrrrrrrrr");
     for row in &r.rows {
         let p = &row.refract.passes;
         s += &format!(
@@ -125,20 +97,7 @@ pub fn markdown(r: &Report) -> String {
         s += "\nBaselines in the same run (mean GPU ms per frame; the floor only moves the \
               state, the skeleton makes Algorithm 1's fetches and plain arithmetic, none of \
               the optics past it: docs/BENCH.md):\n\n";
-        s += &table_head(
-            &[
-                "Dataset",
-                "Refract",
-                "EA ray marcher",
-                "Sweep floor",
-                "Skeleton",
-                "Refract / EA",
-                "Refract / floor",
-                "Skeleton / floor",
-                "Skeleton / EA",
-            ],
-            "lrrrrrrrr",
-        );
+        s += &table_head("Dataset | Refract | EA ray marcher | Sweep floor | Skeleton | Refract / EA | Refract / floor | Skeleton / floor | Skeleton / EA", "lrrrrrrrr");
         for row in &r.rows {
             let f = |v: &Option<Variant>| {
                 v.as_ref()
@@ -492,7 +451,7 @@ mod tests {
     #[test]
     fn table_heads_align_each_column() {
         assert_eq!(
-            table_head(&["Row", "Mean ms", "Verdict"], "lrl"),
+            table_head("Row | Mean ms | Verdict", "lrl"),
             "| Row | Mean ms | Verdict |\n|---|---:|---|\n"
         );
     }

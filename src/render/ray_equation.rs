@@ -34,10 +34,10 @@ struct ProbePush {
 /// How the probe advances its rays (`mode` in `glsl/ray_equation_probe.comp`).
 #[derive(Clone, Copy)]
 enum Advance {
-    /// Arc-length steps until the target plane.
-    ToPlane = 0,
-    /// A fixed number of equi-temporal steps (seed 001 eqs. 14–15).
-    ForTime = 1,
+    /// Arc-length steps until the target plane (mode 0).
+    ToPlane(TargetPlane),
+    /// A fixed number of equi-temporal steps (seed 001 eqs. 14–15; mode 1).
+    ForTime,
 }
 
 /// A ray to trace: world origin and direction (any length but zero).
@@ -88,7 +88,7 @@ impl Renderer {
             "target plane normal {:?} must be a unit vector",
             target.normal
         );
-        self.probe(opts, rays, target, step, max_steps, Advance::ToPlane)
+        self.probe(opts, rays, Advance::ToPlane(target), step, max_steps)
     }
 
     /// Advance wavefront particles (`rays`: positions and directions) for `steps` RK4
@@ -102,25 +102,21 @@ impl Renderer {
         dt: f32,
         steps: u32,
     ) -> Result<Vec<GpuRayEnd>> {
-        let unused = TargetPlane {
-            normal: Vec3::Z,
-            offset: 0.0,
-        };
-        let ends = self.probe(opts, rays, unused, dt, steps, Advance::ForTime)?;
+        let ends = self.probe(opts, rays, Advance::ForTime, dt, steps)?;
         Ok(ends
             .into_iter()
             .map(|e| e.expect("a wavefront particle always ends"))
             .collect())
     }
 
+    /// The probe's dispatch: `max_steps` steps of `step` voxels, `how` says of what.
     fn probe(
         &self,
         opts: &RenderOptions,
         rays: &[RayStart],
-        target: TargetPlane,
+        how: Advance,
         step: f32,
         max_steps: u32,
-        mode: Advance,
     ) -> Result<Vec<Option<GpuRayEnd>>> {
         ensure!(
             step.is_finite() && step > 0.0,
@@ -186,11 +182,17 @@ impl Renderer {
                 info.dims[2] as f32,
                 opts.sweep.eta_scale,
             ],
-            target: target.normal.extend(target.offset).into(),
+            target: match how {
+                Advance::ToPlane(t) => t.normal.extend(t.offset).into(),
+                Advance::ForTime => [0.0; 4],
+            },
             step: step * info.ref_step,
             max_steps,
             count: count as u32,
-            mode: mode as u32,
+            mode: match how {
+                Advance::ToPlane(_) => 0,
+                Advance::ForTime => 1,
+            },
         };
         ctx.execute(|rec| {
             rec.pass("ray equation", &[], |rec| {
