@@ -462,11 +462,17 @@ impl Field {
     pub(super) fn brick_exit(&self, p: DVec3, d: DVec3, lo: DVec3, hi: DVec3) -> f64 {
         let x = p * self.vox_scale + self.vox_offset;
         let dv = d * self.vox_scale;
+        // An axis the ray is all but parallel to gives no exit: a ray on a brick's face
+        // (x = 0 of a symmetric scene) whose direction picked up a component of 1e-17
+        // towards it from rounding would otherwise exit at distance 0 on every
+        // iteration, move by eps · 1e-17 (nothing) and be lost at the iteration limit.
+        // Over a brick it drifts by less than 1e-8 voxel along such an axis.
+        let parallel = 1e-9 * dv.abs().max_element();
         let mut t = f64::INFINITY;
         for k in 0..3 {
-            if dv[k] > 0.0 {
+            if dv[k] > parallel {
                 t = t.min((hi[k] - x[k]) / dv[k]);
-            } else if dv[k] < 0.0 {
+            } else if dv[k] < -parallel {
                 t = t.min((lo[k] - x[k]) / dv[k]);
             }
         }
