@@ -28,4 +28,19 @@ vec2 preint_coord(float front, float back) {
     return (clamp(vec2(front, back), 0.0, 1.0) * float(PREINT_SIZE - 1u) + 0.5) / float(PREINT_SIZE);
 }
 
+// The eight voxels of the trilinear cell around texture coordinate t in a volume of
+// `dims` voxels, fetched unfiltered (clamp to edge; c[k] at offset (k & 1, (k >> 1) & 1,
+// k >> 2)), and t's fraction f within the cell: for interpolants and their exact
+// derivatives computed in f32 (the sweep's value_gradient, ray_equation.glsl).
+void cell_voxels(sampler3D vol, vec3 t, vec3 dims, out float c[8], out vec3 f) {
+    vec3 x = t * dims - 0.5;
+    ivec3 i = ivec3(floor(x));
+    f = x - vec3(i);
+    ivec3 hi = ivec3(dims) - 1;
+    for (int k = 0; k < 8; ++k) {
+        ivec3 o = ivec3(k & 1, (k >> 1) & 1, k >> 2);
+        c[k] = texelFetch(vol, clamp(i + o, ivec3(0), hi), 0).r;
+    }
+}
+
 #endif

@@ -31,15 +31,9 @@ vec3 ray_tex(vec3 w) { return w / (2.0 * RAY_HALF) + 0.5; }
 float ray_value(vec3 w) {
     vec3 t = ray_tex(w);
     if (any(lessThan(t, vec3(0.0))) || any(greaterThan(t, vec3(1.0)))) return 0.0;
-    vec3 x = t * RAY_DIMS - 0.5;
-    ivec3 i = ivec3(floor(x));
-    vec3 f = x - vec3(i);
-    ivec3 hi = ivec3(RAY_DIMS) - 1;
     float c[8];
-    for (int k = 0; k < 8; ++k) {
-        ivec3 o = ivec3(k & 1, (k >> 1) & 1, k >> 2);
-        c[k] = texelFetch(RAY_VOLUME, clamp(i + o, ivec3(0), hi), 0).r;
-    }
+    vec3 f;
+    cell_voxels(RAY_VOLUME, t, RAY_DIMS, c, f);
     float y0 = mix(mix(c[0], c[1], f.x), mix(c[2], c[3], f.x), f.y);
     float y1 = mix(mix(c[4], c[5], f.x), mix(c[6], c[7], f.x), f.y);
     return mix(y0, y1, f.z);

@@ -140,15 +140,9 @@ vec3 value_gradient(vec3 p) {
     vec3 t = to_tex(p);
     if (any(lessThan(t, vec3(0.0))) || any(greaterThan(t, vec3(1.0)))) return vec3(0.0);
     vec3 dims = P.volume_dims.xyz;
-    vec3 x = t * dims - 0.5;
-    ivec3 i = ivec3(floor(x));
-    vec3 f = x - vec3(i);
-    ivec3 hi = ivec3(dims) - 1;
     float c[8];
-    for (int k = 0; k < 8; ++k) {
-        ivec3 o = ivec3(k & 1, (k >> 1) & 1, k >> 2);
-        c[k] = texelFetch(volume, clamp(i + o, ivec3(0), hi), 0).r;
-    }
+    vec3 f;
+    cell_voxels(volume, t, dims, c, f);
     // d/dx, d/dy, d/dz of the trilinear interpolant, per voxel.
     float x00 = mix(c[0], c[1], f.x), x10 = mix(c[2], c[3], f.x);
     float x01 = mix(c[4], c[5], f.x), x11 = mix(c[6], c[7], f.x);
