@@ -85,6 +85,55 @@ impl Recorder<'_> {
         self.dispatch_bound(pipeline, push, groups)
     }
 
+    /// [`Self::dispatch`] with the workgroup counts read on the device from `args` at
+    /// byte `offset` (a VkDispatchIndirectCommand: three u32) that an earlier compute
+    /// shader wrote: work whose size a shader decided (a list compacted on the GPU)
+    /// without a readback. `args` needs INDIRECT_BUFFER usage; the barrier that orders
+    /// compute writes to it before the indirect read is recorded here.
+    pub fn dispatch_indirect(
+        &mut self,
+        pipeline: &ComputePipeline,
+        set: &DescriptorSet,
+        push: &[u8],
+        args: &Buffer,
+        offset: u64,
+    ) -> Result<()> {
+        if offset % 4 != 0 || offset + 12 > args.size() {
+            bail!(
+                "indirect dispatch at byte {offset} of '{}' ({} bytes) is out of range or \
+                 unaligned",
+                args.name(),
+                args.size()
+            );
+        }
+        if !set.explicit_barriers {
+            self.take_bindings(set)?;
+        }
+        let barrier = [raw_buffer_barrier(
+            args.raw,
+            vk::PipelineStageFlags2::COMPUTE_SHADER,
+            vk::AccessFlags2::SHADER_STORAGE_WRITE,
+            vk::PipelineStageFlags2::DRAW_INDIRECT,
+            vk::AccessFlags2::INDIRECT_COMMAND_READ,
+        )];
+        // SAFETY: recording; the barrier references a live buffer.
+        unsafe {
+            self.device().cmd_pipeline_barrier2(
+                self.cmd,
+                &vk::DependencyInfo::default().buffer_memory_barriers(&barrier),
+            )
+        };
+        self.bind_compute(pipeline, set);
+        self.push_constants(&pipeline.core, push)?;
+        // SAFETY: recording with the pipeline and its set bound; the command lies within
+        // the buffer (checked above), which the caller made with INDIRECT_BUFFER usage.
+        unsafe {
+            self.device()
+                .cmd_dispatch_indirect(self.cmd, args.raw, offset)
+        };
+        Ok(())
+    }
+
     /// The barriers that take `set`'s bound images and storage buffers to the uses its
     /// bindings declare ([`Self::dispatch`]).
     fn take_bindings(&mut self, set: &DescriptorSet) -> Result<()> {

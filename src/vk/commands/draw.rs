@@ -339,6 +339,72 @@ impl Recorder<'_> {
         unsafe { self.device().cmd_pipeline_barrier2(self.cmd, &dep) };
     }
 
+    /// Copy `size` bytes from `src` (host-written, made with `Memory::Upload` and
+    /// TRANSFER_SRC usage) at `src_offset` into the storage buffer `dst` (TRANSFER_DST
+    /// usage) at `dst_offset`, after every earlier shader access to `dst` and before every
+    /// later compute access: a shader's initial data uploaded within the recording.
+    pub fn upload_to_storage(
+        &mut self,
+        src: &Buffer,
+        src_offset: u64,
+        dst: &Buffer,
+        dst_offset: u64,
+        size: u64,
+    ) -> Result<()> {
+        if src_offset + size > src.size() || dst_offset + size > dst.size() {
+            bail!(
+                "copy of {size} bytes from byte {src_offset} of '{}' ({} bytes) to byte \
+                 {dst_offset} of '{}' ({} bytes) is out of range",
+                src.name(),
+                src.size(),
+                dst.name(),
+                dst.size()
+            );
+        }
+        if size == 0 {
+            return Ok(());
+        }
+        let shaders = vk::PipelineStageFlags2::VERTEX_SHADER
+            | vk::PipelineStageFlags2::FRAGMENT_SHADER
+            | vk::PipelineStageFlags2::COMPUTE_SHADER;
+        let rw = vk::AccessFlags2::SHADER_STORAGE_READ | vk::AccessFlags2::SHADER_STORAGE_WRITE;
+        let before = [buffer_barrier(
+            dst,
+            shaders | vk::PipelineStageFlags2::DRAW_INDIRECT,
+            rw | vk::AccessFlags2::INDIRECT_COMMAND_READ,
+            vk::PipelineStageFlags2::COPY,
+            vk::AccessFlags2::TRANSFER_WRITE,
+        )];
+        let after = [buffer_barrier(
+            dst,
+            vk::PipelineStageFlags2::COPY,
+            vk::AccessFlags2::TRANSFER_WRITE,
+            vk::PipelineStageFlags2::COMPUTE_SHADER | vk::PipelineStageFlags2::DRAW_INDIRECT,
+            rw | vk::AccessFlags2::INDIRECT_COMMAND_READ,
+        )];
+        let region = vk::BufferCopy {
+            src_offset,
+            dst_offset,
+            size,
+        };
+        // SAFETY: recording; src has TRANSFER_SRC and dst TRANSFER_DST usage (the
+        // caller's), the region lies within both (checked above); the host wrote src
+        // before submission, which vkQueueSubmit makes visible.
+        unsafe {
+            let d = self.device();
+            d.cmd_pipeline_barrier2(
+                self.cmd,
+                &vk::DependencyInfo::default().buffer_memory_barriers(&before),
+            );
+            d.cmd_copy_buffer(self.cmd, src.raw, dst.raw, &[region]);
+            d.cmd_pipeline_barrier2(
+                self.cmd,
+                &vk::DependencyInfo::default().buffer_memory_barriers(&after),
+            );
+        }
+        Ok(())
+    }
+
     /// Copy a storage buffer that shaders wrote into a host-visible `dst` (made with
     /// [`Buffer::readback`]) and make it visible to the host.
     pub fn copy_storage_to_host(&mut self, src: &Buffer, dst: &Buffer) {
