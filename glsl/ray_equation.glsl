@@ -14,7 +14,8 @@
 //   RAY_HALF     the box's half extent (world units; the box is centred at the origin),
 //   RAY_DIMS     the volume's size in voxels (vec3),
 //   RAY_REF_STEP the reference step (world units: the smallest voxel side),
-//   RAY_ETA_SCALE the refractive-index scale k: eta' = 1 + k (eta_tf - 1).
+//   RAY_ETA_SCALE the refractive-index scale k: eta' = 1 + k (eta_tf - 1),
+// and optionally RAY_FIELD (below).
 #ifndef REFRAKT_RAY_EQUATION_GLSL
 #define REFRAKT_RAY_EQUATION_GLSL
 #include "common.glsl"
@@ -26,9 +27,30 @@ vec3 ray_tex(vec3 w) { return w / (2.0 * RAY_HALF) + 0.5; }
 // weigh texels with 8-bit fractions (the Vulkan spec allows it), and differences 0.05
 // voxels apart taken from such values would be steps, not slopes.
 
+#ifdef RAY_FIELD
+// With RAY_FIELD defined (a sampler3D of the field texture, glsl/field.comp: per voxel the
+// value and grad eta_tf by central differences one voxel apart, per unit texture
+// coordinate) and RAY_USE_FIELD true (a specialization constant, so the other way is
+// compiled out), value and grad eta come from one filtered fetch each: the paper's stored
+// refractive-index and gradient volumes (seed 001 sect. 5.1), about a fifteenth of the
+// fetches of the differences below and a gradient continuous across cell faces, but a
+// surface sharper than a voxel or two is blurred by the one-voxel differences (the glass
+// sphere's shadow 1.4 % R off the photon tracer's, measured: tests/light_simulator.rs).
+// The light simulator offers it (`RayGradient::FieldTexture`); the probe, held to the
+// CPU tracer, does not.
+vec4 ray_field(vec3 w) {
+    vec3 t = ray_tex(w);
+    if (any(lessThan(t, vec3(0.0))) || any(greaterThan(t, vec3(1.0)))) return vec4(0.0);
+    return textureLod(RAY_FIELD, t, 0.0);
+}
+#endif
+
 // The value at world point w: the trilinear interpolant of the voxels (clamp to edge),
 // zero outside the box (as the sweep's value_at_tex and the CPU tracer).
 float ray_value(vec3 w) {
+#ifdef RAY_FIELD
+    if (RAY_USE_FIELD) return ray_field(w).x;
+#endif
     vec3 t = ray_tex(w);
     if (any(lessThan(t, vec3(0.0))) || any(greaterThan(t, vec3(1.0)))) return 0.0;
     float c[8];
@@ -63,6 +85,10 @@ float ray_eta(vec3 w) {
 // away from the CPU tracer's (docs/NOTES.md, "The ray equation on the GPU").
 const float RAY_GRADIENT_STEP = 0.05;
 vec3 ray_grad_eta(vec3 w) {
+#ifdef RAY_FIELD
+    // eta' = 1 + k (eta_tf - 1); d/dw = d/dt / (2 half).
+    if (RAY_USE_FIELD) return RAY_ETA_SCALE * ray_field(w).yzw / (2.0 * RAY_HALF);
+#endif
     vec3 h = RAY_GRADIENT_STEP * 2.0 * RAY_HALF / RAY_DIMS;
     vec3 g;
     for (int k = 0; k < 3; ++k) {

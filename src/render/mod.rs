@@ -12,6 +12,7 @@ mod cached;
 pub mod extinction;
 pub mod field;
 pub mod gradient;
+pub mod light_simulator;
 /// Limits shared with the shaders (build.rs defines each as a GLSL macro).
 pub mod limits;
 mod march;

@@ -4,6 +4,8 @@
 
 use std::sync::Arc;
 
+pub mod floor;
+
 use refrakt::render::{Camera, Frame, Light, Model, RenderOptions, Renderer};
 use refrakt::transfer::TransferFunctions;
 use refrakt::vk::{Context, ContextDesc, ValidationLog};

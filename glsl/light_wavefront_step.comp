@@ -1,0 +1,254 @@
+#version 460
+// The light simulator's patch update (seed 001 sect. 5.2.1), its deposits (5.2.2) and its
+// tessellation analysis (5.2.3), one invocation per patch of the current list: advance
+// the four corners `substeps` equi-temporal RK4 steps, attenuate the flux by the corners'
+// mean optical depth (eq. 18), count the flux crossing each receiver plane over the area
+// the patch spans there, deposit it into the fluence volume, then classify the patch.
+#extension GL_GOOGLE_include_directive : require
+layout(local_size_x = 256) in;
+#include "light_wavefront.glsl"
+#include "light_splat_fixed.glsl"
+#include "triangle_coverage.glsl"
+
+// Add v (|v| < 2^31) to the 32.32 sum at words (slot, slot + 1) of buffer `buf`.
+#define ADD_FIXED(buf, slot, v) \
+    { \
+        float v_ = (v); \
+        if (v_ != 0.0) { \
+            uvec2 w_ = to_fixed(v_); \
+            uint old_ = atomicAdd(buf[slot], w_.x); \
+            uint h_ = w_.y + (old_ + w_.x < old_ ? 1u : 0u); \
+            if (h_ != 0u) atomicAdd(buf[(slot) + 1u], h_); \
+        } \
+    }
+
+void add_control_rgb(uint at, vec3 f) {
+    for (uint c = 0u; c < 3u; ++c) ADD_FIXED(control, at + 2u * c, f[c]);
+}
+
+// A receiver's widest patch footprint covered exactly, pixels per side; wider ones (a
+// patch not yet tessellated, grazing the plane) put their flux in the pixel under their
+// centre and are counted (CTRL_COARSE).
+const int MAX_FOOTPRINT = 12;
+
+// The flux `f` of the patch whose corners cross receiver r at q[0..3] (pixels), spread
+// over the two triangles (0, 1, 2) and (0, 2, 3) with a uniform density (the patch's
+// irradiance), each pixel taking its exact share (triangle_weights).
+void deposit_on_receiver(uint r, vec2 q[4], vec3 f) {
+    vec4 o = receivers[4u * r];
+    vec4 u = receivers[4u * r + 1u];
+    vec4 vv = receivers[4u * r + 2u];
+    int w = int(o.w), h = int(u.w);
+    uint base = uint(vv.w);  // this receiver's first slot: 3 x the pixels before it
+    uint pixels = uint(w * h);
+    float a1 = abs(cross2(q[1] - q[0], q[2] - q[0]));
+    float a2 = abs(cross2(q[2] - q[0], q[3] - q[0]));
+    float total = a1 + a2;
+    // Shares of the flux by area; a patch of no area (a perfect focus) splits it evenly.
+    float s1 = total > 0.0 ? a1 / total : 0.5;
+    vec2 lo = floor(min(min(q[0], q[1]), min(q[2], q[3])));
+    vec2 hi = floor(max(max(q[0], q[1]), max(q[2], q[3])));
+    if (any(greaterThan(hi - lo, vec2(float(MAX_FOOTPRINT - 1))))) {
+        ivec2 p = ivec2(floor(0.25 * (q[0] + q[1] + q[2] + q[3])));
+        if (all(greaterThanEqual(p, ivec2(0))) && all(lessThan(p, ivec2(w, h)))) {
+            uint px = uint(p.y * w + p.x);
+            for (uint c = 0u; c < 3u; ++c)
+                ADD_FIXED(receiver_sums, 2u * (base + c * pixels + px), f[c]);
+        }
+        atomicAdd(control[CTRL_COARSE], 1u);
+        return;
+    }
+    ivec2 l = max(ivec2(lo), ivec2(0)), m = min(ivec2(hi), ivec2(w - 1, h - 1));
+    for (int y = l.y; y <= m.y; ++y) {
+        for (int x = l.x; x <= m.x; ++x) {
+            vec2 p = vec2(x, y);
+            vec3 t1 = triangle_weights(q[0], q[1], q[2], p);
+            vec3 t2 = triangle_weights(q[0], q[2], q[3], p);
+            // Each weight sums to 1/3 over the triangle: the three make its fraction.
+            float share = s1 * (t1.x + t1.y + t1.z) + (1.0 - s1) * (t2.x + t2.y + t2.z);
+            if (share <= 0.0) continue;
+            uint px = uint(y * w + x);
+            for (uint c = 0u; c < 3u; ++c)
+                ADD_FIXED(receiver_sums, 2u * (base + c * pixels + px), f[c] * share);
+        }
+    }
+}
+
+// Where corner k's step from a to b meets the plane n . x = c: on its chord, linearly (the
+// corners cross at slightly different times; extrapolated where one has not reached it).
+vec3 on_plane(vec3 a, vec3 b, vec3 n, float c) {
+    float da = dot(n, a) - c, db = dot(n, b) - c;
+    float t = db != da ? da / (da - db) : 0.0;
+    return mix(a, b, t);
+}
+
+// Trilinear deposit of `amount` (rgb) and direction `dir` weighted by its luminance at
+// world point p into the fluence volume.
+void deposit_fluence(vec3 p, vec3 amount, vec3 dir) {
+    vec3 g = (p / (2.0 * pc.half_extent.xyz) + 0.5) * pc.dims.xyz - 0.5;
+    vec3 b = floor(g), f = g - b;
+    ivec3 d = ivec3(pc.dims.xyz);
+    uint voxels = uint(d.x * d.y * d.z);
+    float lum = dot(amount, vec3(0.2126, 0.7152, 0.0722));
+    float ch[6] = float[6](amount.r, amount.g, amount.b, dir.x * lum, dir.y * lum, dir.z * lum);
+    for (int k = 0; k < 8; ++k) {
+        ivec3 o = ivec3(k & 1, (k >> 1) & 1, (k >> 2) & 1);
+        ivec3 c = ivec3(b) + o;
+        if (any(lessThan(c, ivec3(0))) || any(greaterThanEqual(c, d))) continue;
+        vec3 wv = mix(1.0 - f, f, vec3(o));
+        float wt = wv.x * wv.y * wv.z;
+        if (wt <= 0.0) continue;
+        uint vox = uint((c.z * d.y + c.y) * d.x + c.x);
+        for (uint q = 0u; q < 6u; ++q) ADD_FIXED(fluence_sums, 2u * (q * voxels + vox), ch[q] * wt);
+    }
+}
+
+vec3 bilinear(vec3 a, vec3 b, vec3 c, vec3 d, vec2 t) {
+    return mix(mix(a, b, t.x), mix(d, c, t.x), t.y);
+}
+
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    uint count = control[CTRL_COUNT + pc.parity];
+    if (i >= count) return;
+    uint at = list_index(pc.parity, i);
+    Patch p = patches[at];
+    float ref = pc.half_extent.w;
+    // Launched patches (x[3].w < 0) carry unit directions: v = eta dx/ds starts at the
+    // local eta (the ray equation keeps |v| = eta from there).
+    // The receivers a patch has reached (v[1].w, a bit mask below 2^24: exact as a
+    // float). A receiver counts a patch's flux once, when its centre first lies beyond
+    // the plane: children inherit the mask, so a split patch straddling a plane (some
+    // children's centres on each side) is counted neither twice nor never.
+    uint reached = uint(p.v[1].w);
+    if (p.x[3].w < 0.0) {
+        for (int k = 0; k < 4; ++k) p.v[k].xyz = normalize(p.v[k].xyz) * ray_eta(p.x[k].xyz);
+        // A plane the light starts beyond is one it never reaches.
+        vec3 c = 0.25 * (p.x[0].xyz + p.x[1].xyz + p.x[2].xyz + p.x[3].xyz);
+        for (uint r = 0u; r < pc.receiver_count; ++r) {
+            vec4 n = receivers[4u * r + 3u];
+            if (dot(n.xyz, c) - n.w >= 0.0) reached |= 1u << r;
+        }
+    }
+    vec3 flux = p.flux.rgb;
+    for (uint s = 0u; s < pc.substeps; ++s) {
+        vec3 x0[4];
+        vec3 tau = vec3(0.0);
+        for (int k = 0; k < 4; ++k) {
+            vec3 x = p.x[k].xyz, v = p.v[k].xyz;
+            x0[k] = x;
+            ray_rk4_temporal(x, v, pc.dt);
+            tau += ray_optical_depth(x0[k], x, length(x - x0[k]));
+            p.x[k].xyz = x;
+            p.v[k].xyz = v;
+        }
+        // Eq. 18 over the step: the corners' mean optical depth (the patch's light is
+        // dimmed as the medium it sweeps, to first order in its size).
+        vec3 before = flux;
+        flux *= exp(-0.25 * tau);
+        vec3 flux_mid = 0.5 * (before + flux);
+        for (uint r = 0u; r < pc.receiver_count; ++r) {
+            vec4 n = receivers[4u * r + 3u];
+            vec3 c0 = 0.25 * (x0[0] + x0[1] + x0[2] + x0[3]);
+            vec3 c1 = 0.25 * (p.x[0].xyz + p.x[1].xyz + p.x[2].xyz + p.x[3].xyz);
+            float d0 = dot(n.xyz, c0) - n.w, d1 = dot(n.xyz, c1) - n.w;
+            if ((reached & (1u << r)) != 0u || d1 < 0.0) continue;
+            reached |= 1u << r;
+            vec4 o = receivers[4u * r];
+            vec3 u = receivers[4u * r + 1u].xyz, vv = receivers[4u * r + 2u].xyz;
+            vec2 q[4];
+            for (int k = 0; k < 4; ++k) {
+                vec3 w = on_plane(x0[k], p.x[k].xyz, n.xyz, n.w) - o.xyz;
+                q[k] = vec2(dot(w, u) / dot(u, u), dot(w, vv) / dot(vv, vv));
+            }
+            // The flux where the centre crosses, in the light's irradiance times pixel
+            // areas: the sums then read as irradiance per pixel.
+            float t = d0 < 0.0 ? d0 / (d0 - d1) : 0.0;
+            vec3 f = mix(before, flux, t) * (ref * ref) / length(cross(u, vv));
+            deposit_on_receiver(r, q, f);
+        }
+        if (pc.fluence == 1u) {
+            // Flux x path length / voxel volume at four points of the patch (its quarters'
+            // centres), half way along the step: the irradiance its stream tube brings
+            // to the voxels it sweeps.
+            vec3 vox = 2.0 * pc.half_extent.xyz / pc.dims.xyz;
+            float volume = vox.x * vox.y * vox.z;
+            vec3 dir = normalize(p.v[0].xyz + p.v[1].xyz + p.v[2].xyz + p.v[3].xyz);
+            for (int k = 0; k < 4; ++k) {
+                vec2 t = vec2((k & 1) == 0 ? 0.25 : 0.75, (k & 2) == 0 ? 0.25 : 0.75);
+                vec3 a = bilinear(x0[0], x0[1], x0[2], x0[3], t);
+                vec3 b = bilinear(p.x[0].xyz, p.x[1].xyz, p.x[2].xyz, p.x[3].xyz, t);
+                vec3 amount = 0.25 * flux_mid * (ref * ref) * length(b - a) / volume;
+                deposit_fluence(0.5 * (a + b), amount, dir);
+            }
+        }
+    }
+    p.flux.rgb = flux;
+    p.v[1].w = float(reached);
+
+    // Tessellation analysis (sect. 5.2.3).
+    vec3 e0 = p.x[1].xyz - p.x[0].xyz, e1 = p.x[2].xyz - p.x[1].xyz;
+    vec3 e2 = p.x[3].xyz - p.x[2].xyz, e3 = p.x[0].xyz - p.x[3].xyz;
+    // The longest edge along each of the patch's two parameters (u: edges 0-1 and 3-2;
+    // v: edges 1-2 and 0-3), in reference steps: a patch is split along each as often
+    // as that edge needs, so a needle-thin patch near a caustic splits along its
+    // length alone (k x k children would cost k² patches where one edge alone is long).
+    float span_u = max(length(e0), length(e2)) / ref;
+    float span_v = max(length(e1), length(e3)) / ref;
+    float span = max(span_u, span_v);
+    vec3 mean_v = p.v[0].xyz + p.v[1].xyz + p.v[2].xyz + p.v[3].xyz;
+    // The oriented area along the light: its sign turns where the patch crossed a focus.
+    float oriented = dot(cross(p.x[2].xyz - p.x[0].xyz, p.x[3].xyz - p.x[1].xyz), mean_v);
+    float sign_now = oriented >= 0.0 ? 1.0 : -1.0;
+    bool crossed = sign_now != p.x[2].w;
+    p.x[2].w = sign_now;
+    vec3 share = p.x[0].w * pc.colour.rgb;
+    float transmitted = 0.0;
+    for (int c = 0; c < 3; ++c)
+        transmitted = max(transmitted, share[c] > 0.0 ? flux[c] / share[c] : 0.0);
+    bool outside = true;
+    for (int k = 0; k < 4; ++k) {
+        vec3 x = p.x[k].xyz, v = p.v[k].xyz;
+        bvec3 beyond = greaterThan(abs(x), pc.half_extent.xyz);
+        bvec3 away = greaterThan(x * v, vec3(0.0));
+        outside = outside && any(bvec3(beyond.x && away.x, beyond.y && away.y, beyond.z && away.z));
+    }
+    uint ku = 1u, kv = 1u;
+    bool keep = true;
+    if (crossed) {
+        atomicAdd(control[CTRL_FOCI], 1u);
+        add_control_rgb(CTRL_AT_FOCI, flux);
+        p.v[0].w += 1.0;
+    }
+    if (outside) {
+        keep = false;
+        add_control_rgb(CTRL_LEFT, flux);
+    } else if (crossed && pc.discard_at_foci == 1u) {
+        keep = false;
+    } else if (transmitted < pc.colour.w) {
+        keep = false;
+        add_control_rgb(CTRL_ABSORBED, flux);
+    } else if (span > pc.tear_span) {
+        // Torn: at most a voxel a cycle ago and now many apart, its corners went
+        // different ways (either side of a silhouette, or one trapped by total
+        // reflection): the wavefront between them is not this patch, and splitting it
+        // would place patches where no light goes, and multiply them every cycle.
+        keep = false;
+        add_control_rgb(CTRL_TORN, flux);
+    } else if (span > 1.0) {
+        if (uint(p.x[1].w) < pc.max_level) {
+            ku = clamp(uint(ceil(span_u)), 1u, 4u);
+            kv = clamp(uint(ceil(span_v)), 1u, 4u);
+        } else {
+            atomicAdd(control[CTRL_UNSPLIT], 1u);
+        }
+    }
+    if (keep) {
+        float worst = max(span_u / float(ku), span_v / float(kv));
+        atomicMax(control[CTRL_WORST_SPAN], floatBitsToUint(worst));
+    }
+    // Children per side for the emit: ku + 8 kv (0: retired).
+    p.x[3].w = keep ? float(ku + 8u * kv) : 0.0;
+    counts[i] = keep ? ku * kv : 0u;
+    patches[at] = p;
+}

@@ -1,0 +1,813 @@
+//! The eikonal light simulator (issue 35; seed 001, Ihrke et al., *Eikonal Rendering*,
+//! sect. 4.2 and 5.2), on the GPU: a wavefront of patches, four corner particles each,
+//! launched as a plane wave covering the box, advanced by the equi-temporal ray equation
+//! (eqs. 14–15, `glsl/ray_equation.glsl`) through the same refractive-index field as the
+//! sweep and the photon tracer, each patch carrying its flux (so its irradiance is
+//! flux / area: the intensity law, eqs. 16–17) dimmed by the medium (eq. 18), split into
+//! k × k where it grows past a voxel and retired where its light is spent or has left the
+//! box, the list compacted and expanded on the GPU by a prefix sum (`glsl/light_wavefront*`).
+//!
+//! **Past the paper at foci.** The paper discards a patch whose orientation turns (it
+//! crossed a focus: "non-physical caustics"). Here it is kept, with its flux, as the
+//! sweep's forward transport keeps light through a focus; [`FocusPolicy::Discard`] does
+//! what the paper does, so the difference can be measured ([`SimulationStats::at_foci`]).
+//!
+//! **What it deposits.** Receivers: planes on which the flux crossing them is counted,
+//! each patch spreading its flux over the area it spans there (exact pixel coverage, as
+//! the sweep's cells deposit), so a receiver reads irradiance in the light's units, as the
+//! photon tracer's image does. The fluence volume: per voxel the flux × path length of
+//! the stream tubes through it over its volume (the irradiance their light brings, summed
+//! over crossing wavefronts, where the paper keeps the strongest) and their
+//! luminance-weighted direction: what a view renderer's in-scattering reads.
+//!
+//! Units: positions are world units (the box centred at the origin); the step is an
+//! optical path in reference steps (smallest voxel sides); a patch's flux is in the
+//! light's colour × reference step², so a launched patch one reference step on a side
+//! carries the light's colour.
+
+use anyhow::{bail, ensure, Result};
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+
+use super::{RenderOptions, Renderer};
+use crate::camera::Camera;
+use crate::light::{Light, LightSource};
+use crate::shaders;
+use crate::vk::{self, Binding, Buffer, ComputePipeline, DescriptorSet, Memory};
+
+/// Patches per workgroup and per scan block (`WAVEFRONT_GROUP` in the shaders).
+const GROUP: u32 = 256;
+/// Bytes per patch (`Patch` in glsl/light_wavefront.glsl: nine vec4).
+const PATCH_BYTES: u64 = 9 * 16;
+/// Words of the control buffer (`CTRL_*` in glsl/light_wavefront.glsl).
+const CTRL_DISPATCH: usize = 0;
+const CTRL_COUNT: usize = 8;
+const CTRL_NEEDED: usize = 10;
+const CTRL_WORST_SPAN: usize = 11;
+const CTRL_UNSPLIT: usize = 12;
+const CTRL_FOCI: usize = 13;
+const CTRL_COARSE: usize = 14;
+const CTRL_PEAK: usize = 15;
+const CTRL_ABSORBED: usize = 16;
+const CTRL_LEFT: usize = 22;
+const CTRL_AT_FOCI: usize = 28;
+const CTRL_DROPPED: usize = 34;
+const CTRL_TORN: usize = 40;
+const CTRL_WORDS: usize = 46;
+/// Receiver planes at most (a patch keeps one bit per receiver in a float's mantissa).
+pub const MAX_RECEIVERS: usize = 16;
+/// Cycles recorded per submission: the host reads the list's size after each, to stop
+/// when it is empty and to report progress.
+const CYCLES_PER_SUBMIT: u32 = 8;
+
+/// What the simulator does with a patch that crossed a focus (its orientation turned).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FocusPolicy {
+    /// Keep it with its flux (the sweep's forward transport does the same): the light
+    /// beyond a caustic is conserved.
+    Keep,
+    /// Retire it, as the paper does (sect. 5.2.3).
+    Discard,
+}
+
+/// Where the wavefront's corners take the refractive index and its gradient from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RayGradient {
+    /// Central differences 0.05 voxel apart of η over the trilinear field, as the photon
+    /// tracer and `trace_rays_on_gpu` take it: the medium the volume defines, faces
+    /// and all.
+    Differences,
+    /// The field texture (η and ∇η per voxel, by differences one voxel apart, filtered):
+    /// the paper's stored volumes (sect. 5.1); about a fifteenth of the fetches, a
+    /// smoother wavefront, surfaces sharper than a voxel or two blurred.
+    FieldTexture,
+}
+
+/// The simulator's settings.
+#[derive(Clone, Debug)]
+pub struct WavefrontSettings {
+    /// Optical path per RK4 step, in reference steps.
+    pub step: f32,
+    /// RK4 steps per cycle (each cycle ends with the tessellation analysis).
+    pub substeps: u32,
+    /// The launched patches' side, in reference steps (at most 1: a patch may span a
+    /// voxel).
+    pub launch_spacing: f32,
+    /// A patch retires when every channel's transmittance is below this.
+    pub threshold: f32,
+    /// Splits per patch at most (a patch longer than a voxel at this level is kept whole
+    /// and counted, [`SimulationStats::unsplit`]).
+    pub max_level: u32,
+    /// Patches the list holds at most (each half; 144 bytes each, twice): a simulation
+    /// that needs more is refused, naming how many it needed. `None`: as many as the
+    /// device binds at once (maxStorageBufferRange; 466 033 on lavapipe), at most 2^20.
+    pub max_patches: Option<u32>,
+    pub at_foci: FocusPolicy,
+    /// Deposit into the fluence volume ([`LightSimulation::fluence`]).
+    pub fluence: bool,
+    /// Cycles at most; light still travelling then is reported
+    /// ([`SimulationStats::live_at_end`]). `None`: enough for a straight path through
+    /// the box at η 3.
+    pub max_cycles: Option<u32>,
+    /// A patch longer than this after a cycle (reference steps) is torn: its corners
+    /// went different ways (either side of a silhouette); it is retired and its flux
+    /// counted ([`SimulationStats::torn`]). At least 2.
+    pub tear_span: f32,
+    pub gradient: RayGradient,
+    /// A beam: only the patches whose centres lie within this radius (world units) of
+    /// the line along the light through the box's centre are launched. `None`: the whole
+    /// box is lit.
+    pub aperture: Option<f32>,
+}
+
+impl Default for WavefrontSettings {
+    fn default() -> Self {
+        Self {
+            step: 0.5,
+            substeps: 4,
+            launch_spacing: 1.0,
+            threshold: 1e-4,
+            max_level: 8,
+            max_patches: None,
+            at_foci: FocusPolicy::Keep,
+            fluence: false,
+            max_cycles: None,
+            aperture: None,
+            tear_span: 4.0,
+            gradient: RayGradient::Differences,
+        }
+    }
+}
+
+/// A plane on which the simulator counts the flux crossing it (along its normal
+/// `u × v`, normalised), per pixel: pixel (i, j) is the parallelogram from
+/// `origin + i u + j v` spanned by `u` and `v` (world units; `u` ⟂ `v`).
+#[derive(Clone, Copy, Debug)]
+pub struct Receiver {
+    pub origin: Vec3,
+    pub u: Vec3,
+    pub v: Vec3,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl Receiver {
+    /// The plane normal to the view at `depth` in front of the eye, pixels as the
+    /// frame's (and the photon tracer's `trace_irradiance`): row 0 at the top. Its normal
+    /// points away from the eye.
+    pub fn view_plane(camera: &Camera, width: u32, height: u32, depth: f32) -> Receiver {
+        let (eye, forward, right, _) = camera.frame();
+        let forward = forward.normalize();
+        let right = (right - forward * right.dot(forward)).normalize();
+        let up = right.cross(forward);
+        let half_h = depth * (camera.fov_y.to_radians() * 0.5).tan();
+        let half_w = half_h * width as f32 / height as f32;
+        Receiver {
+            origin: eye + forward * depth - right * half_w + up * half_h,
+            u: right * (2.0 * half_w / width as f32),
+            // u × v = right × (-up) = forward: the normal points away from the eye.
+            v: -up * (2.0 * half_h / height as f32),
+            width,
+            height,
+        }
+    }
+
+    fn normal(&self) -> Vec3 {
+        self.u.cross(self.v).normalize()
+    }
+}
+
+/// Counters of one simulation: what happened to the light, and how the list grew.
+#[derive(Clone, Debug, Default)]
+pub struct SimulationStats {
+    /// Cycles run and RK4 steps per corner.
+    pub cycles: u32,
+    pub steps: u32,
+    pub launched: u32,
+    /// The largest list after a cycle.
+    pub peak_patches: u32,
+    /// The longest edge of a patch kept after the tessellation analysis, in reference
+    /// steps (its parent's longest edge over its split factor).
+    pub worst_span: f32,
+    /// Patches longer than a voxel kept whole at the level limit (summed over cycles).
+    pub unsplit: u32,
+    /// Foci crossed (a patch's orientation turned), summed over patches and cycles.
+    pub foci: u32,
+    /// Receiver deposits too wide to cover exactly, put under their centre.
+    pub coarse_deposits: u32,
+    /// Flux, per channel, in the light's colour × reference step²: launched, retired
+    /// below the threshold, leaving the box, carried through foci (kept or discarded
+    /// per [`FocusPolicy`]), and still travelling when the cycles ran out.
+    pub launched_flux: [f64; 3],
+    pub absorbed: [f64; 3],
+    pub left: [f64; 3],
+    pub at_foci: [f64; 3],
+    /// Flux retired with torn patches.
+    pub torn: [f64; 3],
+    pub live_at_end: u32,
+    /// The list's size after each submission: (cycles done, patches).
+    pub list_sizes: Vec<(u32, u32)>,
+    /// GPU time of the whole simulation, milliseconds.
+    pub gpu_ms: f64,
+}
+
+/// The light volumes: per voxel (x fastest), the fluence (rgb, the light's irradiance
+/// units) and the luminance-weighted mean direction of the light crossing it (not unit:
+/// its length is 1 where one wavefront crosses, less where several do).
+#[derive(Clone, Debug)]
+pub struct FluenceVolume {
+    pub dims: [u32; 3],
+    pub fluence: Vec<[f32; 3]>,
+    pub direction: Vec<[f32; 3]>,
+}
+
+/// A simulation's results.
+#[derive(Clone, Debug)]
+pub struct LightSimulation {
+    /// Per receiver, per pixel (row-major), the irradiance (rgb) in the light's units.
+    pub receivers: Vec<Vec<[f32; 3]>>,
+    pub fluence: Option<FluenceVolume>,
+    pub stats: SimulationStats,
+}
+
+/// The shaders' push constants (`Push` in glsl/light_wavefront.glsl).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct WavefrontPush {
+    half_extent: [f32; 4],
+    dims: [f32; 4],
+    colour: [f32; 4],
+    dt: f32,
+    substeps: u32,
+    capacity: u32,
+    parity: u32,
+    receiver_count: u32,
+    max_level: u32,
+    discard_at_foci: u32,
+    fluence: u32,
+    tear_span: f32,
+}
+
+/// A launched patch, as the shaders read it (`Patch`).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct GpuPatch {
+    x: [[f32; 4]; 4],
+    v: [[f32; 4]; 4],
+    flux: [f32; 4],
+}
+
+/// A 32.32 fixed-point sum in two words (low, high), as glsl/light_splat_fixed.glsl adds.
+fn fixed(lo: u32, hi: u32) -> f64 {
+    ((hi as u64) << 32 | lo as u64) as i64 as f64 / 4_294_967_296.0
+}
+
+fn fixed_rgb(words: &[u32], at: usize) -> [f64; 3] {
+    std::array::from_fn(|c| fixed(words[at + 2 * c], words[at + 2 * c + 1]))
+}
+
+impl WavefrontSettings {
+    fn validate(&self) -> Result<()> {
+        ensure!(
+            self.step.is_finite() && self.step > 0.0 && self.step <= 4.0,
+            "wavefront step {} must be above 0 and at most 4 reference steps",
+            self.step
+        );
+        ensure!(
+            (1..=64).contains(&self.substeps),
+            "wavefront substeps {} must be 1 to 64",
+            self.substeps
+        );
+        ensure!(
+            self.launch_spacing.is_finite()
+                && self.launch_spacing >= 0.05
+                && self.launch_spacing <= 1.0,
+            "launch spacing {} must be 0.05 to 1 reference steps",
+            self.launch_spacing
+        );
+        ensure!(
+            self.threshold.is_finite() && (0.0..1.0).contains(&self.threshold),
+            "energy threshold {} must be at least 0 and below 1",
+            self.threshold
+        );
+        ensure!(
+            self.max_level <= 16,
+            "max_level {} must be at most 16",
+            self.max_level
+        );
+        if let Some(m) = self.max_patches {
+            ensure!(m >= GROUP, "the patch budget {m} must be at least {GROUP}");
+        }
+        ensure!(
+            self.tear_span.is_finite() && self.tear_span >= 2.0,
+            "tear span {} must be at least 2 reference steps",
+            self.tear_span
+        );
+        if let Some(a) = self.aperture {
+            ensure!(
+                a.is_finite() && a > 0.0,
+                "aperture {a} must be a positive radius"
+            );
+        }
+        Ok(())
+    }
+}
+
+impl Renderer {
+    /// Simulate `light` through the volume (the transfer functions' η with `opts`'
+    /// refractive-index scale; no clipping plane): count its flux on `receivers`, and
+    /// fill the fluence volume when `settings.fluence`. `progress` hears (cycles done,
+    /// cycles at most) after each submission.
+    pub fn simulate_light(
+        &self,
+        opts: &RenderOptions,
+        light: &Light,
+        settings: &WavefrontSettings,
+        receivers: &[Receiver],
+        progress: Option<&dyn Fn(u32, u32)>,
+    ) -> Result<LightSimulation> {
+        settings.validate()?;
+        ensure!(
+            opts.sweep.clip.is_none(),
+            "the light simulator takes no clipping plane"
+        );
+        let travel = match light.source {
+            LightSource::Directional { .. } => light.travel(),
+            LightSource::Point { .. } => bail!(
+                "the light simulator launches plane waves only so far; {} is a point light",
+                light.describe()
+            ),
+        };
+        ensure!(
+            light.colour.iter().all(|c| c.is_finite() && *c >= 0.0),
+            "light colour {:?} must be finite and non-negative",
+            light.colour
+        );
+        let ctx = &self.ctx;
+        let info = &self.volume_info;
+        let half = info.half_extent;
+        let reference = info.ref_step;
+        let limit = ctx.info().limits.max_storage_buffer_range as u64;
+
+        // The plane wave: square patches side s on a plane normal to the light, one
+        // bounding-sphere radius and two reference steps before the box's centre,
+        // covering the box's shadow on it. Corners counter-clockwise seen along the
+        // light: (e1 × e2) = travel.
+        let helper = if travel.x.abs() < 0.9 {
+            Vec3::X
+        } else {
+            Vec3::Y
+        };
+        let e1 = travel.cross(helper).normalize();
+        let e2 = travel.cross(e1);
+        let radius = half.length() + 2.0 * reference;
+        let centre = -travel * radius;
+        let (mut lo, mut hi) = (glam::Vec2::splat(f32::INFINITY), glam::Vec2::NEG_INFINITY);
+        for i in 0..8 {
+            let c = Vec3::new(
+                if i & 1 == 0 { -half.x } else { half.x },
+                if i & 2 == 0 { -half.y } else { half.y },
+                if i & 4 == 0 { -half.z } else { half.z },
+            );
+            let p = glam::Vec2::new(c.dot(e1), c.dot(e2));
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+        let side = settings.launch_spacing * reference;
+        lo -= glam::Vec2::splat(side);
+        hi += glam::Vec2::splat(side);
+        let cols = ((hi.x - lo.x) / side).ceil() as u32;
+        let rows = ((hi.y - lo.y) / side).ceil() as u32;
+        let capacity = settings
+            .max_patches
+            .unwrap_or(((limit / (2 * PATCH_BYTES)).min(1 << 20) as u32 / GROUP) * GROUP);
+        let list_bytes = 2 * capacity as u64 * PATCH_BYTES;
+        ensure!(
+            list_bytes <= limit,
+            "a patch list of {capacity} patches (twice {PATCH_BYTES} bytes each: {list_bytes} \
+             bytes) is more than device '{}' binds at once ({limit} bytes); lower the patch \
+             budget to at most {}",
+            ctx.info().name,
+            limit / (2 * PATCH_BYTES)
+        );
+        ensure!(
+            cols as u64 * rows as u64 <= 1 << 28,
+            "the plane wave would be {cols} x {rows} patches: use a larger launch spacing"
+        );
+        let share = settings.launch_spacing * settings.launch_spacing;
+        let mut patches = Vec::new();
+        for j in 0..rows {
+            for i in 0..cols {
+                let o = centre + e1 * (lo.x + i as f32 * side) + e2 * (lo.y + j as f32 * side);
+                if let Some(a) = settings.aperture {
+                    let mid = o + (e1 + e2) * (0.5 * side);
+                    if (mid - travel * mid.dot(travel)).length() > a {
+                        continue;
+                    }
+                }
+                let corners = [o, o + e1 * side, o + (e1 + e2) * side, o + e2 * side];
+                // v's length is set to the local η by the first step (x[3].w < 0).
+                let ws = [share, 0.0, 1.0, -1.0];
+                patches.push(GpuPatch {
+                    x: std::array::from_fn(|k| corners[k].extend(ws[k]).into()),
+                    v: std::array::from_fn(|_| travel.extend(0.0).into()),
+                    flux: [
+                        light.colour[0] * share,
+                        light.colour[1] * share,
+                        light.colour[2] * share,
+                        0.0,
+                    ],
+                });
+            }
+        }
+        let launched = patches.len() as u64;
+        ensure!(
+            launched > 0,
+            "the aperture {:?} launches no patch",
+            settings.aperture
+        );
+        ensure!(
+            launched <= capacity as u64,
+            "the plane wave needs {launched} patches ({} reference steps apart) and the \
+             patch budget is {capacity}; raise the budget or the launch spacing",
+            settings.launch_spacing
+        );
+        let launched_flux: [f64; 3] =
+            std::array::from_fn(|c| light.colour[c] as f64 * share as f64 * launched as f64);
+
+        // Buffers.
+        let storage = vk::usage::STORAGE_BUFFER;
+        let list = Buffer::new(
+            ctx,
+            list_bytes,
+            storage | vk::usage::BUFFER_TRANSFER_DST,
+            Memory::Gpu,
+            "wavefront patches",
+        )?;
+        let counts = Buffer::new(
+            ctx,
+            capacity as u64 * 4,
+            storage,
+            Memory::Gpu,
+            "wavefront counts",
+        )?;
+        let block_sums = Buffer::new(
+            ctx,
+            capacity.div_ceil(GROUP) as u64 * 4,
+            storage,
+            Memory::Gpu,
+            "wavefront block sums",
+        )?;
+        let control = Buffer::new(
+            ctx,
+            CTRL_WORDS as u64 * 4,
+            storage
+                | vk::usage::INDIRECT_BUFFER
+                | vk::usage::BUFFER_TRANSFER_DST
+                | vk::usage::BUFFER_TRANSFER_SRC,
+            Memory::Gpu,
+            "wavefront control",
+        )?;
+        let control_host = Buffer::readback(ctx, CTRL_WORDS as u64 * 4, "wavefront control")?;
+        let mut initial = vec![0u32; CTRL_WORDS];
+        initial[CTRL_COUNT] = launched as u32;
+        initial[CTRL_DISPATCH] = (launched as u32).div_ceil(GROUP);
+        initial[CTRL_DISPATCH + 1] = 1;
+        initial[CTRL_DISPATCH + 2] = 1;
+        initial[CTRL_PEAK] = launched as u32;
+        let mut staging = Buffer::new(
+            ctx,
+            (CTRL_WORDS * 4 + patches.len() * PATCH_BYTES as usize) as u64,
+            vk::usage::BUFFER_TRANSFER_SRC,
+            Memory::Upload,
+            "wavefront launch",
+        )?;
+        staging.write(0, bytemuck::cast_slice(&initial))?;
+        staging.write(CTRL_WORDS * 4, bytemuck::cast_slice(&patches))?;
+
+        let mut geometry: Vec<[f32; 4]> = Vec::new();
+        let mut pixels_total = 0u64;
+        ensure!(
+            receivers.len() <= MAX_RECEIVERS,
+            "{} receivers: at most {MAX_RECEIVERS}",
+            receivers.len()
+        );
+        for (k, r) in receivers.iter().enumerate() {
+            ensure!(
+                r.width > 0 && r.height > 0 && r.width <= 8192 && r.height <= 8192,
+                "receiver {k}: {} x {} pixels (1 to 8192 each)",
+                r.width,
+                r.height
+            );
+            ensure!(
+                r.origin.is_finite()
+                    && r.u.is_finite()
+                    && r.v.is_finite()
+                    && r.u.cross(r.v).length() > 0.0
+                    && r.u.dot(r.v).abs() <= 1e-4 * r.u.length() * r.v.length(),
+                "receiver {k}: u {:?} and v {:?} must be finite, non-zero and at right angles",
+                r.u,
+                r.v
+            );
+            let n = r.normal();
+            geometry.push(r.origin.extend(r.width as f32).into());
+            geometry.push(r.u.extend(r.height as f32).into());
+            geometry.push(r.v.extend(3.0 * pixels_total as f32).into());
+            geometry.push(n.extend(n.dot(r.origin)).into());
+            pixels_total += r.width as u64 * r.height as u64;
+        }
+        ensure!(
+            3 * pixels_total < 1 << 24,
+            "receivers of {pixels_total} pixels in all: at most 5 592 405"
+        );
+        geometry.resize(geometry.len().max(4), [0.0; 4]);
+        let mut receiver_geometry = Buffer::new(
+            ctx,
+            (geometry.len() * 16) as u64,
+            storage,
+            Memory::Upload,
+            "wavefront receivers",
+        )?;
+        receiver_geometry.write(0, bytemuck::cast_slice(&geometry))?;
+        let receiver_bytes = (pixels_total.max(1) * 3 * 8).max(16);
+        ensure!(
+            receiver_bytes <= limit,
+            "receivers of {pixels_total} pixels need {receiver_bytes} bytes of sums, more \
+             than device '{}' binds at once ({limit} bytes)",
+            ctx.info().name
+        );
+        let receiver_sums = Buffer::new(
+            ctx,
+            receiver_bytes,
+            storage | vk::usage::BUFFER_TRANSFER_DST | vk::usage::BUFFER_TRANSFER_SRC,
+            Memory::Gpu,
+            "wavefront receiver sums",
+        )?;
+        let voxels = info.dims.iter().map(|d| *d as u64).product::<u64>();
+        let fluence_bytes = if settings.fluence { voxels * 6 * 8 } else { 16 };
+        ensure!(
+            fluence_bytes <= limit,
+            "the fluence volume of {} x {} x {} voxels needs {fluence_bytes} bytes of sums, \
+             more than device '{}' binds at once ({limit} bytes)",
+            info.dims[0],
+            info.dims[1],
+            info.dims[2],
+            ctx.info().name
+        );
+        let fluence_sums = Buffer::new(
+            ctx,
+            fluence_bytes,
+            storage | vk::usage::BUFFER_TRANSFER_DST | vk::usage::BUFFER_TRANSFER_SRC,
+            Memory::Gpu,
+            "wavefront fluence sums",
+        )?;
+
+        // The paper's stored η and ∇η volumes (sect. 5.1): the sweep's field texture,
+        // built here for this simulation.
+        let mut field =
+            super::field::FieldTexture::new(ctx, &self.volume_tex, &self.tf_image, &self.linear)?;
+        let set = DescriptorSet::new(
+            ctx,
+            &[
+                Binding::Texture(&self.volume_tex, &self.volume_sampler),
+                Binding::Texture(&self.tf_image, &self.linear),
+                Binding::Storage(&list),
+                Binding::Storage(&counts),
+                Binding::Storage(&block_sums),
+                Binding::Storage(&control),
+                Binding::Storage(&receiver_sums),
+                Binding::Storage(&receiver_geometry),
+                Binding::Storage(&fluence_sums),
+                Binding::Texture(field.image(), &self.linear),
+            ],
+            "light simulator",
+        )?;
+        let push_size = std::mem::size_of::<WavefrontPush>() as u32;
+        let constants = [(settings.gradient == RayGradient::FieldTexture) as u32];
+        let pipeline = |spirv: &[u8], name: &str| {
+            ComputePipeline::with_constants(ctx, spirv, &set, push_size, &constants, name)
+        };
+        let step = pipeline(shaders::LIGHT_WAVEFRONT_STEP_COMP, "wavefront step")?;
+        let scan_blocks = pipeline(
+            shaders::LIGHT_WAVEFRONT_SCAN_BLOCKS_COMP,
+            "wavefront scan blocks",
+        )?;
+        let scan_sums = pipeline(
+            shaders::LIGHT_WAVEFRONT_SCAN_SUMS_COMP,
+            "wavefront scan sums",
+        )?;
+        let emit = pipeline(shaders::LIGHT_WAVEFRONT_EMIT_COMP, "wavefront emit")?;
+
+        let mut push = WavefrontPush {
+            half_extent: half.extend(reference).into(),
+            dims: [
+                info.dims[0] as f32,
+                info.dims[1] as f32,
+                info.dims[2] as f32,
+                opts.sweep.eta_scale,
+            ],
+            colour: [
+                light.colour[0],
+                light.colour[1],
+                light.colour[2],
+                settings.threshold,
+            ],
+            dt: settings.step * reference,
+            substeps: settings.substeps,
+            capacity,
+            parity: 0,
+            receiver_count: receivers.len() as u32,
+            max_level: settings.max_level,
+            discard_at_foci: (settings.at_foci == FocusPolicy::Discard) as u32,
+            fluence: settings.fluence as u32,
+            tear_span: settings.tear_span,
+        };
+        // Enough cycles for a straight path from the launch plane through the box at η 3.
+        let cycle_path = settings.step * reference * settings.substeps as f32;
+        let max_cycles = settings
+            .max_cycles
+            .unwrap_or_else(|| (3.0 * 2.0 * radius / cycle_path).ceil() as u32 + 1);
+        let mut stats = SimulationStats {
+            launched: launched as u32,
+            launched_flux,
+            ..Default::default()
+        };
+        let mut cycle = 0u32;
+        let mut words = initial.clone();
+        while cycle < max_cycles {
+            let first = cycle == 0;
+            let n = CYCLES_PER_SUBMIT.min(max_cycles - cycle);
+            let timings = ctx.execute(|rec| {
+                rec.pass("light simulation", &[], |rec| {
+                    if first {
+                        field.record_build(rec)?;
+                        rec.clear_storage(&receiver_sums);
+                        rec.clear_storage(&fluence_sums);
+                        rec.upload_to_storage(&staging, 0, &control, 0, CTRL_WORDS as u64 * 4)?;
+                        rec.upload_to_storage(
+                            &staging,
+                            CTRL_WORDS as u64 * 4,
+                            &list,
+                            0,
+                            patches.len() as u64 * PATCH_BYTES,
+                        )?;
+                    }
+                    for c in 0..n {
+                        push.parity = (cycle + c) % 2;
+                        let bytes = bytemuck::bytes_of(&push);
+                        let args = (CTRL_DISPATCH as u64 + 4 * push.parity as u64) * 4;
+                        rec.dispatch_indirect(&step, &set, bytes, &control, args)?;
+                        rec.dispatch_indirect(&scan_blocks, &set, bytes, &control, args)?;
+                        rec.dispatch(&scan_sums, &set, bytes, [1, 1, 1])?;
+                        rec.dispatch_indirect(&emit, &set, bytes, &control, args)?;
+                    }
+                    Ok(())
+                })?;
+                rec.copy_storage_to_host(&control, &control_host);
+                Ok(())
+            })?;
+            stats.gpu_ms += timings.get("light simulation").unwrap_or(0.0);
+            cycle += n;
+            words = control_host.read_values(CTRL_WORDS)?;
+            stats
+                .list_sizes
+                .push((cycle, words[CTRL_COUNT + (cycle % 2) as usize]));
+            if let Some(p) = progress {
+                p(cycle, max_cycles);
+            }
+            if words[CTRL_NEEDED] > 0 {
+                bail!(
+                    "the light simulation needed {} patches at once, more than its budget of \
+                     {capacity} ({} bytes of patch list); raise the patch budget, coarsen the \
+                     volume, or raise the energy threshold",
+                    words[CTRL_NEEDED],
+                    list_bytes
+                );
+            }
+            if words[CTRL_COUNT + (cycle % 2) as usize] == 0 {
+                break;
+            }
+        }
+        stats.cycles = cycle;
+        stats.steps = cycle * settings.substeps;
+        stats.peak_patches = words[CTRL_PEAK];
+        stats.worst_span = f32::from_bits(words[CTRL_WORST_SPAN]);
+        stats.unsplit = words[CTRL_UNSPLIT];
+        stats.foci = words[CTRL_FOCI];
+        stats.coarse_deposits = words[CTRL_COARSE];
+        stats.absorbed = fixed_rgb(&words, CTRL_ABSORBED);
+        stats.left = fixed_rgb(&words, CTRL_LEFT);
+        stats.at_foci = fixed_rgb(&words, CTRL_AT_FOCI);
+        stats.torn = fixed_rgb(&words, CTRL_TORN);
+        stats.live_at_end = words[CTRL_COUNT + (cycle % 2) as usize];
+        let dropped = fixed_rgb(&words, CTRL_DROPPED);
+        ensure!(
+            dropped.iter().all(|d| *d == 0.0),
+            "the light simulation dropped flux {dropped:?} to the patch budget"
+        );
+
+        // Read the deposits back.
+        let receivers_out = if receivers.is_empty() {
+            Vec::new()
+        } else {
+            let sums = read_words(ctx, &receiver_sums, receiver_bytes)?;
+            let mut out = Vec::with_capacity(receivers.len());
+            let mut base = 0usize;
+            for r in receivers {
+                let n = (r.width * r.height) as usize;
+                out.push(
+                    (0..n)
+                        .map(|px| {
+                            std::array::from_fn(|c| {
+                                let at = 2 * (base + c * n + px);
+                                fixed(sums[at], sums[at + 1]) as f32
+                            })
+                        })
+                        .collect(),
+                );
+                base += 3 * n;
+            }
+            out
+        };
+        let fluence = if settings.fluence {
+            let sums = read_words(ctx, &fluence_sums, fluence_bytes)?;
+            let n = voxels as usize;
+            let channel = |q: usize, i: usize| {
+                let at = 2 * (q * n + i);
+                fixed(sums[at], sums[at + 1]) as f32
+            };
+            Some(FluenceVolume {
+                dims: info.dims,
+                fluence: (0..n)
+                    .map(|i| std::array::from_fn(|c| channel(c, i)))
+                    .collect(),
+                direction: (0..n)
+                    .map(|i| {
+                        let e = [channel(0, i), channel(1, i), channel(2, i)];
+                        let lum = 0.2126 * e[0] + 0.7152 * e[1] + 0.0722 * e[2];
+                        std::array::from_fn(|c| {
+                            if lum > 0.0 {
+                                channel(3 + c, i) / lum
+                            } else {
+                                0.0
+                            }
+                        })
+                    })
+                    .collect(),
+            })
+        } else {
+            None
+        };
+        Ok(LightSimulation {
+            receivers: receivers_out,
+            fluence,
+            stats,
+        })
+    }
+}
+
+/// The words of a storage buffer the GPU wrote (`bytes` of it).
+fn read_words(ctx: &vk::Context, buffer: &Buffer, bytes: u64) -> Result<Vec<u32>> {
+    let host = Buffer::readback(ctx, bytes, "wavefront readback")?;
+    ctx.execute(|rec| {
+        rec.copy_storage_to_host(buffer, &host);
+        Ok(())
+    })?;
+    host.read_values((bytes / 4) as usize)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn push_matches_the_shaders_block() {
+        crate::assert_host_block!(
+            shaders::LIGHT_WAVEFRONT_STEP_COMP,
+            "Push",
+            WavefrontPush {
+                half_extent,
+                dims,
+                colour,
+                dt,
+                substeps,
+                capacity,
+                parity,
+                receiver_count,
+                max_level,
+                discard_at_foci,
+                fluence,
+                tear_span
+            },
+            exact_size = false
+        );
+    }
+
+    #[test]
+    fn fixed_point_words_decode_signed_sums() {
+        // 1.5 is (2^31, 1); -1.5 is its two's complement over 64 bits.
+        assert_eq!(fixed(1 << 31, 1), 1.5);
+        let neg = (-(1.5f64 * 4_294_967_296.0) as i64) as u64;
+        assert_eq!(fixed(neg as u32, (neg >> 32) as u32), -1.5);
+    }
+}

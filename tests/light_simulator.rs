@@ -1,0 +1,482 @@
+//! The eikonal light simulator (render/light_simulator.rs, glsl/light_wavefront*; issue
+//! 35, seed 001 sect. 4.2 and 5.2): a wavefront of patches through the refractive-index
+//! field, held to conservation of power through a focus, to Beer–Lambert per channel, to
+//! a ball lens' paraxial focus and to its own tessellation bound.
+
+mod common;
+
+use common::floor::{annulus_mean, measure_floor};
+use common::*;
+use glam::Vec3;
+use refrakt::light::{Light, LightSource};
+use refrakt::render::light_simulator::{FocusPolicy, LightSimulation, Receiver, WavefrontSettings};
+use refrakt::render::{RenderOptions, Renderer};
+use refrakt::transfer::{Piecewise, TransferFunctions};
+
+/// A white directional light travelling along `travel`.
+fn light_along(travel: Vec3) -> Light {
+    Light {
+        source: LightSource::Directional { towards: -travel },
+        colour: [1.0; 3],
+        softness: 0.0,
+    }
+}
+
+/// A square receiver normal to `travel` through `centre`, `size` world units on a side in
+/// `pixels` pixels, its normal along `travel`.
+fn receiver_across(travel: Vec3, centre: Vec3, size: f32, pixels: u32) -> Receiver {
+    let t = travel.normalize();
+    let helper = if t.x.abs() < 0.9 { Vec3::X } else { Vec3::Y };
+    let a = helper.cross(t).normalize();
+    // u × v = t: u = a, v = t × a.
+    let b = t.cross(a);
+    let px = size / pixels as f32;
+    Receiver {
+        origin: centre - (a + b) * (0.5 * size),
+        u: a * px,
+        v: b * px,
+        width: pixels,
+        height: pixels,
+    }
+}
+
+/// The power a receiver counted: irradiance × pixel area, summed, per channel (world
+/// units: the light's irradiance × area).
+fn power(sim: &LightSimulation, k: usize, r: &Receiver) -> [f64; 3] {
+    let area = r.u.cross(r.v).length() as f64;
+    let mut p = [0.0; 3];
+    for e in &sim.receivers[k] {
+        for c in 0..3 {
+            p[c] += e[c] as f64 * area;
+        }
+    }
+    p
+}
+
+/// Launched power in world units (the stats count it in the light's colour × reference
+/// step²).
+fn launched(sim: &LightSimulation, reference: f64) -> [f64; 3] {
+    sim.stats.launched_flux.map(|f| f * reference * reference)
+}
+
+/// A clear glass ball lens (η 1.5, radius 12 voxels of 48, a two-voxel ramp) lit along
+/// −z by a beam of radius 0.8 R: the flux crossing planes normal to the light before the
+/// ball, through it, at the paraxial focus (1.5 R from the centre) and beyond must stay
+/// the launched flux within 1 % (nothing absorbs, the rays stay in the box), with the
+/// patches that crossed the focus kept. The paper's policy (discard them) loses most of
+/// the light beyond the focus: measured, and required to lose at least a quarter there.
+/// After every cycle no kept patch spans more than a voxel.
+#[test]
+fn power_is_conserved_through_a_ball_lens_focus() {
+    with_context(|ctx| {
+        let n = 48u32;
+        let r = 12.0 / n as f32;
+        let vol = f32_volume(n, |p| 0.5 + (r - Vec3::from(p).length()) * n as f32 / 2.0);
+        let tf = glass(1.5);
+        let renderer = Renderer::new(ctx, &vol, &tf).unwrap();
+        let travel = Vec3::new(0.0, 0.0, -1.0);
+        let light = light_along(travel);
+        let depths = [0.4f32, 0.1, 0.0, -0.3, -1.5 * r, -0.45];
+        let receivers: Vec<Receiver> = depths
+            .iter()
+            .map(|z| receiver_across(travel, Vec3::new(0.0, 0.0, *z), 1.0, 96))
+            .collect();
+        let reference = 1.0 / n as f64;
+        let mut beyond = Vec::new();
+        for policy in [FocusPolicy::Keep, FocusPolicy::Discard] {
+            let settings = WavefrontSettings {
+                aperture: Some(0.8 * r),
+                at_foci: policy,
+                ..Default::default()
+            };
+            let sim = renderer
+                .simulate_light(
+                    &RenderOptions::default(),
+                    &light,
+                    &settings,
+                    &receivers,
+                    None,
+                )
+                .unwrap();
+            let s = &sim.stats;
+            let total = launched(&sim, reference)[0];
+            println!(
+                "{policy:?}: {} patches launched, peak {}, {} cycles, worst span {:.3} voxel, \
+                 {} unsplit, {} foci crossed carrying {:.4} of the launched flux, {:.1} ms",
+                s.launched,
+                s.peak_patches,
+                s.cycles,
+                s.worst_span,
+                s.unsplit,
+                s.foci,
+                s.at_foci[0] / s.launched_flux[0],
+                s.gpu_ms
+            );
+            let mut ratios = Vec::new();
+            for (k, rc) in receivers.iter().enumerate() {
+                let p = power(&sim, k, rc);
+                println!(
+                    "  z = {:+.3}: power {:.5} of the launched",
+                    depths[k],
+                    p[0] / total
+                );
+                ratios.push(p[0] / total);
+            }
+            assert!(
+                s.worst_span <= 1.0,
+                "a kept patch spans {} voxels",
+                s.worst_span
+            );
+            assert_eq!(s.unsplit, 0, "patches kept whole at the level limit");
+            assert_eq!(s.live_at_end, 0, "light still travelling at the end");
+            if policy == FocusPolicy::Keep {
+                for (k, q) in ratios.iter().enumerate() {
+                    assert!(
+                        (q - 1.0).abs() <= 0.01,
+                        "z = {}: power {q:.4} of the launched",
+                        depths[k]
+                    );
+                }
+                assert!(s.foci > 0, "no patch crossed the focus");
+            }
+            beyond.push(*ratios.last().unwrap());
+        }
+        assert!(
+            beyond[1] <= 0.75 * beyond[0],
+            "discarding at foci kept {:.3} of the light beyond the focus (keeping: {:.3})",
+            beyond[1],
+            beyond[0]
+        );
+    });
+}
+
+/// A uniform tinted medium (η 1, passing 0.9, 0.8, 0.7 per reference step) fills the box:
+/// the power of a beam between two planes normal to it falls as Beer–Lambert says,
+/// m^(distance / reference step) per channel, within 1 %, along an axis and at 30° to it.
+#[test]
+fn beam_power_follows_beer_lambert() {
+    with_context(|ctx| {
+        let n = 32u32;
+        let vol = f32_volume(n, |_| 1.0);
+        let m = [0.9f32, 0.8, 0.7];
+        let tf = TransferFunctions {
+            medium: Piecewise::new(vec![(0.0, [1.0, 1.0, 1.0]), (1.0, m)]),
+            ..Default::default()
+        };
+        let renderer = Renderer::new(ctx, &vol, &tf).unwrap();
+        let reference = 1.0 / n as f64;
+        for angle in [0.0f32, 30.0] {
+            let a = angle.to_radians();
+            let travel = Vec3::new(a.sin(), 0.0, -a.cos());
+            let light = light_along(travel);
+            let (c0, c1) = (travel * -0.2, travel * 0.15);
+            let receivers = [
+                receiver_across(travel, c0, 0.5, 32),
+                receiver_across(travel, c1, 0.5, 32),
+            ];
+            let settings = WavefrontSettings {
+                aperture: Some(0.12),
+                ..Default::default()
+            };
+            let sim = renderer
+                .simulate_light(
+                    &RenderOptions::default(),
+                    &light,
+                    &settings,
+                    &receivers,
+                    None,
+                )
+                .unwrap();
+            let (p0, p1) = (power(&sim, 0, &receivers[0]), power(&sim, 1, &receivers[1]));
+            let d = (c1 - c0).length() as f64 / reference;
+            for c in 0..3 {
+                let expected = (m[c] as f64).powf(d);
+                let got = p1[c] / p0[c];
+                println!(
+                    "{angle}°, channel {c}: {got:.6} against {expected:.6} ({:+.3} %)",
+                    (got / expected - 1.0) * 100.0
+                );
+                assert!(
+                    (got / expected - 1.0).abs() <= 0.01,
+                    "{angle}°, channel {c}: {got} against Beer–Lambert's {expected}"
+                );
+            }
+        }
+    });
+}
+
+/// A ball lens (η 1.5, radius 16 voxels of 64, a two-voxel ramp) lit along −z by a beam of
+/// radius 0.4 R: the fluence on the axis peaks at the paraxial focus nD/(4(n−1)) = 1.5 R
+/// from the centre within 3 % (by Snell's law, exactly, the beam's rim crosses the axis at
+/// 1.432 R, its paraxial rays at 1.5 R); the light's direction there is along the axis. With the beam at 0.8 R, the peak moves towards the ball, as the
+/// aberration says it must.
+#[test]
+fn fluence_peaks_at_the_ball_lens_focus() {
+    with_context(|ctx| {
+        let n = 64u32;
+        let r = 16.0 / n as f32;
+        let vol = f32_volume(n, |p| 0.5 + (r - Vec3::from(p).length()) * n as f32 / 2.0);
+        let renderer = Renderer::new(ctx, &vol, &glass(1.5)).unwrap();
+        let light = light_along(Vec3::new(0.0, 0.0, -1.0));
+        let mut peaks = Vec::new();
+        for beam in [0.4f32, 0.8] {
+            let settings = WavefrontSettings {
+                aperture: Some(beam * r),
+                fluence: true,
+                ..Default::default()
+            };
+            let sim = renderer
+                .simulate_light(&RenderOptions::default(), &light, &settings, &[], None)
+                .unwrap();
+            let f = sim.fluence.as_ref().unwrap();
+            let d = n as usize;
+            // The axis x = y = 0 lies between voxel columns 31 and 32: their mean.
+            let on_axis = |k: usize| {
+                let mut s = 0.0f64;
+                for (i, j) in [(31, 31), (31, 32), (32, 31), (32, 32)] {
+                    s += f.fluence[(k * d + j) * d + i][0] as f64;
+                }
+                s / 4.0
+            };
+            let z_of = |k: usize| (k as f32 + 0.5) / n as f32 - 0.5;
+            // Behind the ball only (inside it the light converges but is not focused).
+            let (k_best, best) = (0..d)
+                .filter(|k| z_of(*k) < -r)
+                .map(|k| (k, on_axis(k)))
+                .fold((0, f64::MIN), |a, b| if b.1 > a.1 { b } else { a });
+            // Parabolic refinement of the peak between voxel centres.
+            let (a, c) = (on_axis(k_best - 1), on_axis(k_best + 1));
+            let shift = 0.5 * (a - c) / (a - 2.0 * best + c);
+            let z_peak = z_of(k_best) + shift as f32 / n as f32;
+            let focus = -z_peak / r;
+            let dir = f.direction[(k_best * d + 31) * d + 31];
+            println!(
+                "beam {beam} R: axis fluence peaks at {focus:.4} R from the centre ({best:.2} of \
+                 the light; paraxial 1.5 R), direction there {dir:?}; {} patches at peak, \
+                 {:.1} ms",
+                sim.stats.peak_patches, sim.stats.gpu_ms
+            );
+            peaks.push(focus);
+            if beam == 0.4 {
+                assert!(
+                    (focus / 1.5 - 1.0).abs() <= 0.03,
+                    "the fluence peaks {focus:.4} R from the centre, not at 1.5 R"
+                );
+                assert!(best > 10.0, "the focus is only {best} times the light");
+                assert!(
+                    dir[2] < -0.95,
+                    "the light at the focus travels along {dir:?}"
+                );
+            }
+        }
+        assert!(
+            peaks[1] < peaks[0] - 0.05,
+            "a wider beam must focus nearer (spherical aberration): {peaks:?}"
+        );
+    });
+}
+
+/// The validation scene of the caustics (tests/caustics.rs): a clear glass sphere (η 1.5,
+/// R = 24 voxels of 64) above an opaque floor, a directional light 23° from the vertical,
+/// the floor's irradiance on the plane two voxels above it, seen from straight above.
+/// The simulator against the photon tracer on the same volume and plane: the shadow's
+/// centre within 1 % R, its semi-axes within 2 % R, the caustic's brightest point within
+/// 0.05 R, the mean light in discs of 0.05, 0.1 and 0.2 R around it within 20 %, and the
+/// light inside the shadow within 10 %.
+#[test]
+fn sphere_on_floor_matches_the_photon_tracer() {
+    with_context(|ctx| {
+        let n = 64u32;
+        let vox = 1.0 / n as f32;
+        let r = 24.0 * vox;
+        let c = Vec3::new(0.0, 0.1, 0.0);
+        let floor_top = c.y - 1.089 * r;
+        let vol = f32_volume(n, |p| {
+            let p = Vec3::from(p);
+            let sphere = 0.5 * (0.5 + (r - (p - c).length()) * n as f32).clamp(0.0, 1.0);
+            let floor = (0.5 + (floor_top - p.y) * n as f32).clamp(0.0, 1.0);
+            sphere.max(floor)
+        });
+        let tf = TransferFunctions {
+            eta: Piecewise::new(vec![(0.0, [1.0]), (0.5, [1.5]), (0.6, [1.0])]),
+            opacity: Piecewise::new(vec![(0.0, [0.0]), (0.7, [0.0]), (0.75, [1.0])]),
+            ..Default::default()
+        };
+        let cam = refrakt::render::Camera {
+            azimuth: 0.0,
+            elevation: 90.0,
+            distance: 2.5,
+            fov_y: 30.0,
+            ..Default::default()
+        };
+        let (w, h) = (128usize, 128usize);
+        let light = Light {
+            source: LightSource::Directional {
+                towards: -Vec3::new(0.35, -1.0, 0.25).normalize(),
+            },
+            colour: [1.0; 3],
+            softness: 0.0,
+        };
+        let depth = cam.distance - (floor_top + 2.0 * vox);
+        let r_px = {
+            let t = (cam.fov_y.to_radians() * 0.5).tan();
+            r as f64 * h as f64 / (2.0 * depth as f64 * t as f64)
+        };
+        let opts = RenderOptions {
+            width: w as u32,
+            height: h as u32,
+            lights: vec![light],
+            ..Default::default()
+        };
+        let traced = refrakt::photons::trace_irradiance(
+            &vol,
+            &tf,
+            &cam,
+            &opts,
+            depth,
+            &refrakt::photons::PhotonOptions {
+                photons_per_pixel: 16,
+                ..Default::default()
+            },
+            None,
+        )
+        .unwrap()
+        .pixels;
+        let renderer = Renderer::new(ctx, &vol, &tf).unwrap();
+        let receiver = Receiver::view_plane(&cam, w as u32, h as u32, depth);
+        let sim = renderer
+            .simulate_light(
+                &opts,
+                &light,
+                &WavefrontSettings::default(),
+                &[receiver],
+                None,
+            )
+            .unwrap();
+        // The tracer's image is in units of the light crossing a plane parallel to this
+        // one; the receiver's, of the light's irradiance square to it: divide by the cosine.
+        let cos = light.travel().dot(receiver.u.cross(receiver.v).normalize());
+        let simulated: Vec<[f32; 4]> = sim.receivers[0]
+            .iter()
+            .map(|e| [e[0] / cos, e[1] / cos, e[2] / cos, 1.0])
+            .collect();
+        let s = &sim.stats;
+        println!(
+            "simulator: {} patches launched, peak {}, {} cycles, worst span {:.3}, {} foci, \
+             {} coarse deposits, {:.1} ms; torn {:.4}, absorbed {:.4}, left {:.4} of the \
+             launched flux, {} live at the end; list {:?}",
+            s.launched,
+            s.peak_patches,
+            s.cycles,
+            s.worst_span,
+            s.foci,
+            s.coarse_deposits,
+            s.gpu_ms,
+            s.torn[0] / s.launched_flux[0],
+            s.absorbed[0] / s.launched_flux[0],
+            s.left[0] / s.launched_flux[0],
+            s.live_at_end,
+            s.list_sizes
+        );
+        if let Ok(dir) = std::env::var("REFRAKT_TEST_DUMP") {
+            let dump = |name: &str, img: &[[f32; 4]]| {
+                let bytes: Vec<u8> = img
+                    .iter()
+                    .map(|p| (p[0] / 4.0).clamp(0.0, 1.0).powf(1.0 / 2.2) * 255.0)
+                    .map(|v| v as u8)
+                    .collect();
+                image::GrayImage::from_raw(w as u32, h as u32, bytes)
+                    .unwrap()
+                    .save(format!("{dir}/{name}.png"))
+                    .unwrap();
+            };
+            dump("eikonal-floor", &simulated);
+            dump("photons-floor", &traced);
+        }
+        // The simulator follows light inside the box only (a patch leaving it retires);
+        // the tracer lights the plane beyond it too. Both are measured on the square of
+        // pixels whose centres lie over the box (x, z within ±0.5).
+        let (inner, cw, x0, y0) = {
+            let to_px = |p: Vec3| {
+                let q = p - receiver.origin;
+                (
+                    q.dot(receiver.u) / receiver.u.length_squared(),
+                    q.dot(receiver.v) / receiver.v.length_squared(),
+                )
+            };
+            let (ax, ay) = to_px(Vec3::new(-0.5, 0.0, -0.5));
+            let (bx, by) = to_px(Vec3::new(0.5, 0.0, 0.5));
+            let (x0, x1) = (ax.min(bx).ceil() as usize, ax.max(bx).floor() as usize);
+            let (y0, y1) = (ay.min(by).ceil() as usize, ay.max(by).floor() as usize);
+            (y1 - y0, x1 - x0, x0, y0)
+        };
+        let crop = |img: &[[f32; 4]]| -> Vec<[f32; 4]> {
+            (0..inner)
+                .flat_map(|y| (0..cw).map(move |x| (x, y)))
+                .map(|(x, y)| img[(y0 + y) * w + x0 + x])
+                .collect()
+        };
+        let (simulated, traced) = (crop(&simulated), crop(&traced));
+        let (w, h) = (cw, inner);
+        println!("measured over {w} x {h} pixels from ({x0}, {y0})");
+        let a = measure_floor(&simulated, w, h);
+        let b = measure_floor(&traced, w, h);
+        let centre_err = (a.centre - b.centre).length() / r_px;
+        let axes_err = [
+            (a.semi_axes[0] - b.semi_axes[0]).abs() / r_px,
+            (a.semi_axes[1] - b.semi_axes[1]).abs() / r_px,
+        ];
+        let bright_err = (a.brightest - b.brightest).length() / r_px;
+        println!(
+            "shadow centre {:.2} % R off, semi-axes {:.2} / {:.2} % R off (tracer {:.1}, {:.1} \
+             px), brightest point {:.3} R off, caustic extent {} vs {} px",
+            centre_err * 100.0,
+            axes_err[0] * 100.0,
+            axes_err[1] * 100.0,
+            b.semi_axes[0],
+            b.semi_axes[1],
+            bright_err,
+            a.bright_pixels,
+            b.bright_pixels
+        );
+        let mut disc_errs = Vec::new();
+        for frac in [0.05, 0.1, 0.2] {
+            let ma = annulus_mean(&simulated, w, h, b.brightest, 0.0, frac * r_px);
+            let mb = annulus_mean(&traced, w, h, b.brightest, 0.0, frac * r_px);
+            println!("  disc {frac} R around the caustic: simulator {ma:.2}, tracer {mb:.2}");
+            disc_errs.push((ma - mb).abs() / mb);
+        }
+        let inside = |img: &[[f32; 4]]| {
+            let (mut s, mut k) = (0.0, 0.0);
+            for y in 0..h {
+                for x in 0..w {
+                    let p = glam::DVec2::new(x as f64 + 0.5, y as f64 + 0.5) - b.centre;
+                    if p.length() <= b.semi_axes[1] {
+                        s += img[y * w + x][0] as f64;
+                        k += 1.0;
+                    }
+                }
+            }
+            s / k
+        };
+        let (ea, eb) = (inside(&simulated), inside(&traced));
+        println!("  mean light inside the shadow: simulator {ea:.3}, tracer {eb:.3}");
+        assert!(
+            centre_err <= 0.01,
+            "shadow centre {:.2} % R off",
+            centre_err * 100.0
+        );
+        assert!(
+            axes_err.iter().all(|e| *e <= 0.02),
+            "semi-axes {axes_err:?}"
+        );
+        assert!(bright_err <= 0.05, "brightest point {bright_err:.3} R off");
+        for (e, frac) in disc_errs.iter().zip([0.05, 0.1, 0.2]) {
+            assert!(*e <= 0.2, "disc {frac} R off by {:.0} %", e * 100.0);
+        }
+        assert!(
+            (ea - eb).abs() / eb <= 0.1,
+            "light in the shadow {ea} vs {eb}"
+        );
+    });
+}
