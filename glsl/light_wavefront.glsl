@@ -33,7 +33,8 @@ layout(set = 0, binding = 1) uniform sampler1DArray tf;
 //   x[2].w  the sign of its oriented area (+1 at launch; it turns at each focus crossed);
 //   x[3].w  its children for the emit, ku + 8 kv along its two parameters (0: retired);
 //   v[0].w  foci crossed;
-//   v[1].w  the receivers it has reached, a bit mask (light_wavefront_step.comp).
+//   v[1].w  the receivers it has reached, a bit mask (light_wavefront_step.comp);
+//   v[2].w  its launched patch's share (x[0].w at launch).
 // flux: rgb, in units of the light's irradiance times a reference step squared (a patch
 // one reference step on a side, square to the light, unattenuated, carries `colour`).
 struct Patch {
@@ -73,7 +74,8 @@ layout(std430, set = 0, binding = 4) buffer BlockSums {
 #define CTRL_AT_FOCI 28u        // carried through a focus (kept) or discarded there
 #define CTRL_DROPPED 34u        // lost to the capacity (not written)
 #define CTRL_TORN 40u           // retired torn (longer than tear_span)
-#define CTRL_WORDS 46u
+#define CTRL_DILUTED 46u        // retired split below min_dilution of its launched flux
+#define CTRL_WORDS 52u
 layout(std430, set = 0, binding = 5) buffer Control {
     uint control[];
 };
@@ -118,6 +120,7 @@ layout(push_constant) uniform Push {
     uint discard_at_foci;  // 1: retire a patch that crossed a focus (the paper); 0: keep
     uint fluence;      // 1: deposit into the fluence volume
     float tear_span;   // a patch longer than this (reference steps) is torn: retired
+    float min_dilution;  // a patch below this part of its launched share retires
 } pc;
 
 #define RAY_VOLUME volume

@@ -228,6 +228,12 @@ void main() {
     } else if (transmitted < pc.colour.w) {
         keep = false;
         add_control_rgb(CTRL_ABSORBED, flux);
+    } else if (p.x[0].w < pc.min_dilution * p.v[2].w) {
+        // Split down to a tiny part of its launched patch (the paper's energy threshold,
+        // sect. 5.2.3): light fanned out so far (beside a silhouette, after a micro-focus)
+        // that following it would multiply the list every cycle for little flux.
+        keep = false;
+        add_control_rgb(CTRL_DILUTED, flux);
     } else if (span > pc.tear_span) {
         // Torn: at most a voxel a cycle ago and now many apart, its corners went
         // different ways (either side of a silhouette, or one trapped by total

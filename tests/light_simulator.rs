@@ -62,9 +62,12 @@ fn launched(sim: &LightSimulation, reference: f64) -> [f64; 3] {
 /// A clear glass ball lens (η 1.5, radius 12 voxels of 48, a two-voxel ramp) lit along
 /// −z by a beam of radius 0.8 R: the flux crossing planes normal to the light before the
 /// ball, through it, at the paraxial focus (1.5 R from the centre) and beyond must stay
-/// the launched flux within 1 % (nothing absorbs, the rays stay in the box), with the
-/// patches that crossed the focus kept. The paper's policy (discard them) loses most of
-/// the light beyond the focus: measured, and required to lose at least a quarter there.
+/// the launched flux within 0.1 % (the issue asks 1 %; nothing absorbs, the rays stay
+/// in the box; measured within 1e-4), with the patches that crossed the focus kept (a
+/// split patch straddling a plane counted by each child whose centre crossed it, before
+/// the receivers kept a mask of the planes a patch has reached, gave 1.0013). The
+/// paper's policy (discard them) loses most of the light beyond the focus: measured, and
+/// required to lose at least a quarter there.
 /// After every cycle no kept patch spans more than a voxel.
 #[test]
 fn power_is_conserved_through_a_ball_lens_focus() {
@@ -132,7 +135,7 @@ fn power_is_conserved_through_a_ball_lens_focus() {
             if policy == FocusPolicy::Keep {
                 for (k, q) in ratios.iter().enumerate() {
                     assert!(
-                        (q - 1.0).abs() <= 0.01,
+                        (q - 1.0).abs() <= 0.001,
                         "z = {}: power {q:.4} of the launched",
                         depths[k]
                     );
@@ -362,17 +365,20 @@ fn sphere_on_floor_matches_the_photon_tracer() {
             .collect();
         let s = &sim.stats;
         println!(
-            "simulator: {} patches launched, peak {}, {} cycles, worst span {:.3}, {} foci, \
-             {} coarse deposits, {:.1} ms; torn {:.4}, absorbed {:.4}, left {:.4} of the \
-             launched flux, {} live at the end; list {:?}",
+            "simulator: {} patches launched, peak {}, {} cycles, worst span {:.3} ({} kept \
+             whole at the level limit), {} foci, {} coarse deposits, {:.1} ms; torn {:.4}, \
+             diluted {:.4}, absorbed {:.4}, left {:.4} of the launched flux, {} live at the \
+             end; list {:?}",
             s.launched,
             s.peak_patches,
             s.cycles,
             s.worst_span,
+            s.unsplit,
             s.foci,
             s.coarse_deposits,
             s.gpu_ms,
             s.torn[0] / s.launched_flux[0],
+            s.diluted[0] / s.launched_flux[0],
             s.absorbed[0] / s.launched_flux[0],
             s.left[0] / s.launched_flux[0],
             s.live_at_end,
@@ -478,5 +484,138 @@ fn sphere_on_floor_matches_the_photon_tracer() {
             (ea - eb).abs() / eb <= 0.1,
             "light in the shadow {ea} vs {eb}"
         );
+    });
+}
+
+/// A point light in clear space (η 1, nothing absorbs), outside the box and inside it:
+/// the irradiance on a plane is the light's colour × cos θ / r² (the inverse square and
+/// cosine laws) within 1 % at every pixel, and the power on the plane is that law's
+/// integral within 0.5 %. The pixels are a voxel wide: a patch (up to a voxel) deposits
+/// a uniform irradiance, so pixels finer than the patches see the law as steps (half a
+/// box from the light, where it changes by about 9 % a voxel: 3 % errors at half-voxel
+/// pixels, 5 % at quarter-voxel ones, measured).
+#[test]
+fn point_light_irradiance_falls_off_with_the_square_of_distance() {
+    with_context(|ctx| {
+        let n = 32u32;
+        let vol = f32_volume(n, |_| 0.0);
+        let renderer = Renderer::new(ctx, &vol, &glass(1.5)).unwrap();
+        for position in [Vec3::new(0.3, -0.2, 1.2), Vec3::new(0.1, 0.05, 0.2)] {
+            let light = Light {
+                source: LightSource::Point { position },
+                colour: [1.0, 0.5, 0.25],
+                softness: 0.0,
+            };
+            // The plane z = -0.3, normal -z (away from the light), over x, y in ±0.4.
+            let px = 24u32;
+            let size = 0.8f32;
+            let receiver = Receiver {
+                origin: Vec3::new(-0.4, 0.4, -0.3),
+                u: Vec3::X * (size / px as f32),
+                v: -Vec3::Y * (size / px as f32),
+                width: px,
+                height: px,
+            };
+            let sim = renderer
+                .simulate_light(
+                    &RenderOptions::default(),
+                    &light,
+                    &WavefrontSettings::default(),
+                    &[receiver],
+                    None,
+                )
+                .unwrap();
+            let (mut worst, mut got, mut want) = (0.0f64, 0.0f64, 0.0f64);
+            let mut at = (0, 0);
+            let area = (size as f64 / px as f64).powi(2);
+            for j in 0..px {
+                for i in 0..px {
+                    // The law averaged over the pixel (4 x 4 points).
+                    let mut e = 0.0f64;
+                    for b in 0..4 {
+                        for a in 0..4 {
+                            let p = receiver.origin
+                                + receiver.u * (i as f32 + (a as f32 + 0.5) / 4.0)
+                                + receiver.v * (j as f32 + (b as f32 + 0.5) / 4.0);
+                            let d = (p - position).as_dvec3();
+                            let r = d.length();
+                            e += (-d.z / r) / (r * r) / 16.0;
+                        }
+                    }
+                    let simulated = sim.receivers[0][(j * px + i) as usize];
+                    for (c, colour) in light.colour.iter().enumerate() {
+                        let expected = e * *colour as f64;
+                        let off = (simulated[c] as f64 / expected - 1.0).abs();
+                        if off > worst {
+                            worst = off;
+                            at = (i, j);
+                        }
+                    }
+                    got += simulated[0] as f64 * area;
+                    want += e * area;
+                }
+            }
+            let s = &sim.stats;
+            println!(
+                "point light at {position}: {} patches launched, peak {}, worst pixel {:.3} % \
+                 (at {at:?}), power {:.5} of the law's, {:.1} ms",
+                s.launched,
+                s.peak_patches,
+                worst * 100.0,
+                got / want,
+                s.gpu_ms
+            );
+            assert!(
+                worst <= 0.01,
+                "a pixel is {:.2} % off the law",
+                worst * 100.0
+            );
+            assert!(
+                (got / want - 1.0).abs() <= 0.005,
+                "power {} of the law's",
+                got / want
+            );
+        }
+    });
+}
+
+/// A patch budget too small for the wavefront is refused with the count it needed, not
+/// cut short: the light a truncated list would drop is not silently lost.
+#[test]
+fn a_wavefront_over_its_patch_budget_is_refused() {
+    with_context(|ctx| {
+        let n = 32u32;
+        let r = 8.0 / n as f32;
+        let vol = f32_volume(n, |p| 0.5 + (r - Vec3::from(p).length()) * n as f32 / 2.0);
+        let renderer = Renderer::new(ctx, &vol, &glass(1.5)).unwrap();
+        let light = light_along(Vec3::new(0.0, 0.0, -1.0));
+        let launch = |budget: u32| {
+            renderer.simulate_light(
+                &RenderOptions::default(),
+                &light,
+                &WavefrontSettings {
+                    max_patches: Some(budget),
+                    ..Default::default()
+                },
+                &[],
+                None,
+            )
+        };
+        // The plane wave over a 32³ box is 58 x 58 patches: 512 cannot launch it.
+        let e = launch(512).unwrap_err().to_string();
+        assert!(e.contains("patch budget is 512"), "{e}");
+        // Enough to launch it, too few once the lens' focus makes the list grow.
+        let fits = launch(1 << 16).unwrap();
+        let peak = fits.stats.peak_patches;
+        println!("launched {}, peak {peak}", fits.stats.launched);
+        assert!(peak > fits.stats.launched, "the list never grew");
+        let budget = fits.stats.launched.div_ceil(256) * 256;
+        if budget < peak {
+            let e = launch(budget).unwrap_err().to_string();
+            assert!(
+                e.contains("needed") && e.contains(&budget.to_string()),
+                "{e}"
+            );
+        }
     });
 }

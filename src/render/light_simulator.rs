@@ -53,7 +53,8 @@ const CTRL_LEFT: usize = 22;
 const CTRL_AT_FOCI: usize = 28;
 const CTRL_DROPPED: usize = 34;
 const CTRL_TORN: usize = 40;
-const CTRL_WORDS: usize = 46;
+const CTRL_DILUTED: usize = 46;
+const CTRL_WORDS: usize = 52;
 /// Receiver planes at most (a patch keeps one bit per receiver in a float's mantissa).
 pub const MAX_RECEIVERS: usize = 16;
 /// Cycles recorded per submission: the host reads the list's size after each, to stop
@@ -114,6 +115,11 @@ pub struct WavefrontSettings {
     /// counted ([`SimulationStats::torn`]). At least 2.
     pub tear_span: f32,
     pub gradient: RayGradient,
+    /// A patch split down to less than this part of its launched patch's flux retires
+    /// (the paper's energy threshold): light fanned out beside a silhouette or after a
+    /// micro-focus of a voxelised surface would otherwise multiply the list every cycle.
+    /// Its flux is counted ([`SimulationStats::diluted`]). 0 to 1.
+    pub min_dilution: f32,
     /// A beam: only the patches whose centres lie within this radius (world units) of
     /// the line along the light through the box's centre are launched. `None`: the whole
     /// box is lit.
@@ -135,6 +141,7 @@ impl Default for WavefrontSettings {
             aperture: None,
             tear_span: 4.0,
             gradient: RayGradient::Differences,
+            min_dilution: 1e-4,
         }
     }
 }
@@ -202,8 +209,9 @@ pub struct SimulationStats {
     pub absorbed: [f64; 3],
     pub left: [f64; 3],
     pub at_foci: [f64; 3],
-    /// Flux retired with torn patches.
+    /// Flux retired with torn patches, and with patches split below `min_dilution`.
     pub torn: [f64; 3],
+    pub diluted: [f64; 3],
     pub live_at_end: u32,
     /// The list's size after each submission: (cycles done, patches).
     pub list_sizes: Vec<(u32, u32)>,
@@ -246,6 +254,7 @@ struct WavefrontPush {
     discard_at_foci: u32,
     fluence: u32,
     tear_span: f32,
+    min_dilution: f32,
 }
 
 /// A launched patch, as the shaders read it (`Patch`).
@@ -303,6 +312,11 @@ impl WavefrontSettings {
             "tear span {} must be at least 2 reference steps",
             self.tear_span
         );
+        ensure!(
+            (0.0..1.0).contains(&self.min_dilution),
+            "min_dilution {} must be at least 0 and below 1",
+            self.min_dilution
+        );
         if let Some(a) = self.aperture {
             ensure!(
                 a.is_finite() && a > 0.0,
@@ -331,13 +345,6 @@ impl Renderer {
             opts.sweep.clip.is_none(),
             "the light simulator takes no clipping plane"
         );
-        let travel = match light.source {
-            LightSource::Directional { .. } => light.travel(),
-            LightSource::Point { .. } => bail!(
-                "the light simulator launches plane waves only so far; {} is a point light",
-                light.describe()
-            ),
-        };
         ensure!(
             light.colour.iter().all(|c| c.is_finite() && *c >= 0.0),
             "light colour {:?} must be finite and non-negative",
@@ -348,36 +355,7 @@ impl Renderer {
         let half = info.half_extent;
         let reference = info.ref_step;
         let limit = ctx.info().limits.max_storage_buffer_range as u64;
-
-        // The plane wave: square patches side s on a plane normal to the light, one
-        // bounding-sphere radius and two reference steps before the box's centre,
-        // covering the box's shadow on it. Corners counter-clockwise seen along the
-        // light: (e1 × e2) = travel.
-        let helper = if travel.x.abs() < 0.9 {
-            Vec3::X
-        } else {
-            Vec3::Y
-        };
-        let e1 = travel.cross(helper).normalize();
-        let e2 = travel.cross(e1);
-        let radius = half.length() + 2.0 * reference;
-        let centre = -travel * radius;
-        let (mut lo, mut hi) = (glam::Vec2::splat(f32::INFINITY), glam::Vec2::NEG_INFINITY);
-        for i in 0..8 {
-            let c = Vec3::new(
-                if i & 1 == 0 { -half.x } else { half.x },
-                if i & 2 == 0 { -half.y } else { half.y },
-                if i & 4 == 0 { -half.z } else { half.z },
-            );
-            let p = glam::Vec2::new(c.dot(e1), c.dot(e2));
-            lo = lo.min(p);
-            hi = hi.max(p);
-        }
-        let side = settings.launch_spacing * reference;
-        lo -= glam::Vec2::splat(side);
-        hi += glam::Vec2::splat(side);
-        let cols = ((hi.x - lo.x) / side).ceil() as u32;
-        let rows = ((hi.y - lo.y) / side).ceil() as u32;
+        let wave = launch(light, settings, half, reference)?;
         let capacity = settings
             .max_patches
             .unwrap_or(((limit / (2 * PATCH_BYTES)).min(1 << 20) as u32 / GROUP) * GROUP);
@@ -390,50 +368,17 @@ impl Renderer {
             ctx.info().name,
             limit / (2 * PATCH_BYTES)
         );
-        ensure!(
-            cols as u64 * rows as u64 <= 1 << 28,
-            "the plane wave would be {cols} x {rows} patches: use a larger launch spacing"
-        );
-        let share = settings.launch_spacing * settings.launch_spacing;
-        let mut patches = Vec::new();
-        for j in 0..rows {
-            for i in 0..cols {
-                let o = centre + e1 * (lo.x + i as f32 * side) + e2 * (lo.y + j as f32 * side);
-                if let Some(a) = settings.aperture {
-                    let mid = o + (e1 + e2) * (0.5 * side);
-                    if (mid - travel * mid.dot(travel)).length() > a {
-                        continue;
-                    }
-                }
-                let corners = [o, o + e1 * side, o + (e1 + e2) * side, o + e2 * side];
-                // v's length is set to the local η by the first step (x[3].w < 0).
-                let ws = [share, 0.0, 1.0, -1.0];
-                patches.push(GpuPatch {
-                    x: std::array::from_fn(|k| corners[k].extend(ws[k]).into()),
-                    v: std::array::from_fn(|_| travel.extend(0.0).into()),
-                    flux: [
-                        light.colour[0] * share,
-                        light.colour[1] * share,
-                        light.colour[2] * share,
-                        0.0,
-                    ],
-                });
-            }
-        }
+        let patches = wave.patches;
         let launched = patches.len() as u64;
         ensure!(
-            launched > 0,
-            "the aperture {:?} launches no patch",
-            settings.aperture
-        );
-        ensure!(
             launched <= capacity as u64,
-            "the plane wave needs {launched} patches ({} reference steps apart) and the \
+            "{} needs {launched} patches ({} reference steps apart) at launch and the \
              patch budget is {capacity}; raise the budget or the launch spacing",
+            light.describe(),
             settings.launch_spacing
         );
         let launched_flux: [f64; 3] =
-            std::array::from_fn(|c| light.colour[c] as f64 * share as f64 * launched as f64);
+            std::array::from_fn(|c| patches.iter().map(|p| p.flux[c] as f64).sum::<f64>());
 
         // Buffers.
         let storage = vk::usage::STORAGE_BUFFER;
@@ -621,12 +566,13 @@ impl Renderer {
             discard_at_foci: (settings.at_foci == FocusPolicy::Discard) as u32,
             fluence: settings.fluence as u32,
             tear_span: settings.tear_span,
+            min_dilution: settings.min_dilution,
         };
-        // Enough cycles for a straight path from the launch plane through the box at η 3.
+        // Enough cycles for a straight path from the launch through the box at η 3.
         let cycle_path = settings.step * reference * settings.substeps as f32;
         let max_cycles = settings
             .max_cycles
-            .unwrap_or_else(|| (3.0 * 2.0 * radius / cycle_path).ceil() as u32 + 1);
+            .unwrap_or_else(|| (3.0 * wave.path / cycle_path).ceil() as u32 + 1);
         let mut stats = SimulationStats {
             launched: launched as u32,
             launched_flux,
@@ -699,6 +645,7 @@ impl Renderer {
         stats.left = fixed_rgb(&words, CTRL_LEFT);
         stats.at_foci = fixed_rgb(&words, CTRL_AT_FOCI);
         stats.torn = fixed_rgb(&words, CTRL_TORN);
+        stats.diluted = fixed_rgb(&words, CTRL_DILUTED);
         stats.live_at_end = words[CTRL_COUNT + (cycle % 2) as usize];
         let dropped = fixed_rgb(&words, CTRL_DROPPED);
         ensure!(
@@ -766,6 +713,186 @@ impl Renderer {
     }
 }
 
+/// The launched wavefront: its patches, and the straight path (world units) from the
+/// launch surface through the far side of the box.
+struct Launch {
+    patches: Vec<GpuPatch>,
+    path: f32,
+}
+
+impl GpuPatch {
+    /// A patch at launch: corners (counter-clockwise seen along the light), their unit
+    /// directions, and its flux (the light's colour × `share`, reference-step² units).
+    fn launched(corners: [Vec3; 4], directions: [Vec3; 4], share: f32, colour: [f32; 3]) -> Self {
+        // v's length is set to the local η by the first step (x[3].w < 0).
+        let ws = [share, 0.0, 1.0, -1.0];
+        let vs = [0.0, 0.0, share, 0.0];
+        GpuPatch {
+            x: std::array::from_fn(|k| corners[k].extend(ws[k]).into()),
+            v: std::array::from_fn(|k| directions[k].extend(vs[k]).into()),
+            flux: [colour[0] * share, colour[1] * share, colour[2] * share, 0.0],
+        }
+    }
+}
+
+/// The wavefront `light` launches over the box (half extent `half`, reference step
+/// `reference`).
+fn launch(
+    light: &Light,
+    settings: &WavefrontSettings,
+    half: Vec3,
+    reference: f32,
+) -> Result<Launch> {
+    let bound = half.length() + 2.0 * reference;
+    let side = settings.launch_spacing * reference;
+    let mut patches = Vec::new();
+    let path = match light.source {
+        LightSource::Directional { .. } => {
+            // A plane wave: square patches on a plane normal to the light, one bounding
+            // radius before the box's centre, covering the box's shadow on it. Corners
+            // counter-clockwise seen along the light: e1 × e2 = travel.
+            let travel = light.travel();
+            let helper = if travel.x.abs() < 0.9 {
+                Vec3::X
+            } else {
+                Vec3::Y
+            };
+            let e1 = travel.cross(helper).normalize();
+            let e2 = travel.cross(e1);
+            let centre = -travel * bound;
+            let (mut lo, mut hi) = (glam::Vec2::splat(f32::INFINITY), glam::Vec2::NEG_INFINITY);
+            for c in box_corners(half) {
+                let p = glam::Vec2::new(c.dot(e1), c.dot(e2));
+                lo = lo.min(p);
+                hi = hi.max(p);
+            }
+            lo -= glam::Vec2::splat(side);
+            hi += glam::Vec2::splat(side);
+            let cols = ((hi.x - lo.x) / side).ceil() as u64;
+            let rows = ((hi.y - lo.y) / side).ceil() as u64;
+            ensure!(
+                cols * rows <= 1 << 28,
+                "the plane wave would be {cols} x {rows} patches: use a larger launch spacing"
+            );
+            // A square patch side s square to the light carries colour × (s / reference)².
+            let share = settings.launch_spacing * settings.launch_spacing;
+            for j in 0..rows {
+                for i in 0..cols {
+                    let o = centre + e1 * (lo.x + i as f32 * side) + e2 * (lo.y + j as f32 * side);
+                    if let Some(a) = settings.aperture {
+                        let mid = o + (e1 + e2) * (0.5 * side);
+                        if (mid - travel * mid.dot(travel)).length() > a {
+                            continue;
+                        }
+                    }
+                    let corners = [o, o + e1 * side, o + (e1 + e2) * side, o + e2 * side];
+                    patches.push(GpuPatch::launched(
+                        corners,
+                        [travel; 4],
+                        share,
+                        light.colour,
+                    ));
+                }
+            }
+            2.0 * bound
+        }
+        LightSource::Point { position } => {
+            ensure!(
+                settings.aperture.is_none(),
+                "an aperture shapes a directional light's beam; {} has none",
+                light.describe()
+            );
+            ensure!(
+                position.is_finite(),
+                "{}: not a finite position",
+                light.describe()
+            );
+            // A spherical wave: patches on a sphere about the light, just outside the
+            // box's bounding sphere when the light is outside it (only those whose rays
+            // meet that sphere), else one reference step about the light; a cube map of
+            // gnomonic grids, each patch at most `side` across. The irradiance at
+            // distance r is colour / r² (the light's colour is its irradiance at unit
+            // distance), so a patch of area A carries colour A / r².
+            let distance = position.length();
+            let r0 = if distance - bound > 2.0 * reference {
+                distance - bound
+            } else {
+                reference
+            };
+            // At least 32 cells a face (0.05 rad): a split places new corners on the
+            // chords between old ones, inside the sphere by the patch's sagitta, which a
+            // coarse launch makes large (2 x 2 cells a face put 18 % errors on a plane
+            // half a box from the light; measured).
+            let cells = (2.0 * r0 / side).ceil().max(32.0) as u32;
+            ensure!(
+                6 * cells as u64 * cells as u64 <= 1 << 28,
+                "the spherical wave would be 6 x {cells}² patches: use a larger launch spacing"
+            );
+            let faces = [
+                (Vec3::X, Vec3::Y, Vec3::Z),
+                (-Vec3::X, Vec3::Z, Vec3::Y),
+                (Vec3::Y, Vec3::Z, Vec3::X),
+                (-Vec3::Y, Vec3::X, Vec3::Z),
+                (Vec3::Z, Vec3::X, Vec3::Y),
+                (-Vec3::Z, Vec3::Y, Vec3::X),
+            ];
+            let outside = r0 > reference;
+            for (n, u, v) in faces {
+                let dir = |i: u32, j: u32| {
+                    let s = -1.0 + 2.0 * i as f32 / cells as f32;
+                    let t = -1.0 + 2.0 * j as f32 / cells as f32;
+                    (n + u * s + v * t).normalize()
+                };
+                for j in 0..cells {
+                    for i in 0..cells {
+                        let d = [dir(i, j), dir(i + 1, j), dir(i + 1, j + 1), dir(i, j + 1)];
+                        let mid = (d[0] + d[1] + d[2] + d[3]).normalize();
+                        // A ray from the light along `mid` misses the bounding sphere.
+                        let along = -position.dot(mid);
+                        if outside && (along <= 0.0 || (position + mid * along).length() > bound) {
+                            continue;
+                        }
+                        let corners = d.map(|k| position + k * r0);
+                        // Flux = intensity × solid angle: the quad's two spherical
+                        // triangles (the flat quad's area / r0² fell 0.3 % short, measured).
+                        let omega = solid_angle(d[0], d[1], d[2]) + solid_angle(d[0], d[2], d[3]);
+                        let share = omega / (reference * reference);
+                        patches.push(GpuPatch::launched(corners, d, share, light.colour));
+                    }
+                }
+            }
+            distance + bound - r0
+        }
+    };
+    ensure!(
+        !patches.is_empty(),
+        "{} with aperture {:?} launches no light into the box",
+        light.describe(),
+        settings.aperture
+    );
+    Ok(Launch { patches, path })
+}
+
+/// The solid angle of the spherical triangle of unit vectors a, b, c (Van Oosterom and
+/// Strackee, 1983).
+fn solid_angle(a: Vec3, b: Vec3, c: Vec3) -> f32 {
+    let (a, b, c) = (a.as_dvec3(), b.as_dvec3(), c.as_dvec3());
+    let numerator = a.dot(b.cross(c)).abs();
+    let denominator = 1.0 + a.dot(b) + b.dot(c) + c.dot(a);
+    (2.0 * numerator.atan2(denominator)) as f32
+}
+
+/// The eight corners of the box of half extent `half` centred at the origin.
+fn box_corners(half: Vec3) -> [Vec3; 8] {
+    std::array::from_fn(|i| {
+        Vec3::new(
+            if i & 1 == 0 { -half.x } else { half.x },
+            if i & 2 == 0 { -half.y } else { half.y },
+            if i & 4 == 0 { -half.z } else { half.z },
+        )
+    })
+}
+
 /// The words of a storage buffer the GPU wrote (`bytes` of it).
 fn read_words(ctx: &vk::Context, buffer: &Buffer, bytes: u64) -> Result<Vec<u32>> {
     let host = Buffer::readback(ctx, bytes, "wavefront readback")?;
@@ -797,7 +924,8 @@ mod tests {
                 max_level,
                 discard_at_foci,
                 fluence,
-                tear_span
+                tear_span,
+                min_dilution
             },
             exact_size = false
         );
