@@ -387,22 +387,37 @@ impl Recorder<'_> {
             dst_offset,
             size,
         };
-        // SAFETY: recording; src has TRANSFER_SRC and dst TRANSFER_DST usage (the
-        // caller's), the region lies within both (checked above); the host wrote src
-        // before submission, which vkQueueSubmit makes visible.
+        // The host wrote src before submission, which vkQueueSubmit makes visible; the
+        // region lies within both buffers (checked above).
+        self.copy_between_barriers(&before, src, dst, region, &after);
+        Ok(())
+    }
+
+    /// `before`, the copy of `region` from `src` (TRANSFER_SRC usage) to `dst`
+    /// (TRANSFER_DST usage), then `after`: the callers' checks keep the region within
+    /// both buffers.
+    fn copy_between_barriers(
+        &mut self,
+        before: &[vk::BufferMemoryBarrier2<'_>],
+        src: &Buffer,
+        dst: &Buffer,
+        region: vk::BufferCopy,
+        after: &[vk::BufferMemoryBarrier2<'_>],
+    ) {
+        // SAFETY: recording; usages and the region are the callers' (see above); the
+        // barriers reference live buffers.
         unsafe {
             let d = self.device();
             d.cmd_pipeline_barrier2(
                 self.cmd,
-                &vk::DependencyInfo::default().buffer_memory_barriers(&before),
+                &vk::DependencyInfo::default().buffer_memory_barriers(before),
             );
             d.cmd_copy_buffer(self.cmd, src.raw, dst.raw, &[region]);
             d.cmd_pipeline_barrier2(
                 self.cmd,
-                &vk::DependencyInfo::default().buffer_memory_barriers(&after),
+                &vk::DependencyInfo::default().buffer_memory_barriers(after),
             );
         }
-        Ok(())
     }
 
     /// Copy a storage buffer that shaders wrote into a host-visible `dst` (made with
@@ -430,19 +445,7 @@ impl Recorder<'_> {
             dst_offset: 0,
             size: src.size().min(dst.size()),
         };
-        // SAFETY: recording; src has TRANSFER_SRC and dst TRANSFER_DST usage, sizes checked.
-        unsafe {
-            let d = self.device();
-            d.cmd_pipeline_barrier2(
-                self.cmd,
-                &vk::DependencyInfo::default().buffer_memory_barriers(&before),
-            );
-            d.cmd_copy_buffer(self.cmd, src.raw, dst.raw, &[region]);
-            d.cmd_pipeline_barrier2(
-                self.cmd,
-                &vk::DependencyInfo::default().buffer_memory_barriers(&after),
-            );
-        }
+        self.copy_between_barriers(&before, src, dst, region, &after);
     }
 
     /// `push` for `pipeline`, whose push range it must fill exactly.
