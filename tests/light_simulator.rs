@@ -5,13 +5,31 @@
 
 mod common;
 
-use common::floor::{annulus_mean, measure_floor};
+use common::floor::{caustic_scene, compare_floors};
 use common::*;
 use glam::Vec3;
 use refrakt::light::{Light, LightSource};
 use refrakt::render::light_simulator::{FocusPolicy, LightSimulation, Receiver, WavefrontSettings};
 use refrakt::render::{RenderOptions, Renderer};
 use refrakt::transfer::{Piecewise, TransferFunctions};
+
+/// A glass ball lens' value: radius `r` (world units) in a cube of `n` voxels, a
+/// two-voxel ramp (with `glass(1.5)`: η 1.5 inside).
+fn lens(n: u32, r: f32) -> refrakt::volume::Volume {
+    f32_volume(n, |p| 0.5 + (r - Vec3::from(p).length()) * n as f32 / 2.0)
+}
+
+/// Simulate `light` with `settings`, counting it on `receivers` (default render options).
+fn simulate(
+    renderer: &Renderer,
+    light: &Light,
+    settings: &WavefrontSettings,
+    receivers: &[Receiver],
+) -> LightSimulation {
+    renderer
+        .simulate_light(&RenderOptions::default(), light, settings, receivers, None)
+        .unwrap()
+}
 
 /// A white directional light travelling along `travel`.
 fn light_along(travel: Vec3) -> Light {
@@ -74,7 +92,7 @@ fn power_is_conserved_through_a_ball_lens_focus() {
     with_context(|ctx| {
         let n = 48u32;
         let r = 12.0 / n as f32;
-        let vol = f32_volume(n, |p| 0.5 + (r - Vec3::from(p).length()) * n as f32 / 2.0);
+        let vol = lens(n, r);
         let tf = glass(1.5);
         let renderer = Renderer::new(ctx, &vol, &tf).unwrap();
         let travel = Vec3::new(0.0, 0.0, -1.0);
@@ -92,15 +110,7 @@ fn power_is_conserved_through_a_ball_lens_focus() {
                 at_foci: policy,
                 ..Default::default()
             };
-            let sim = renderer
-                .simulate_light(
-                    &RenderOptions::default(),
-                    &light,
-                    &settings,
-                    &receivers,
-                    None,
-                )
-                .unwrap();
+            let sim = simulate(&renderer, &light, &settings, &receivers);
             let s = &sim.stats;
             let total = launched(&sim, reference)[0];
             println!(
@@ -181,15 +191,7 @@ fn beam_power_follows_beer_lambert() {
                 aperture: Some(0.12),
                 ..Default::default()
             };
-            let sim = renderer
-                .simulate_light(
-                    &RenderOptions::default(),
-                    &light,
-                    &settings,
-                    &receivers,
-                    None,
-                )
-                .unwrap();
+            let sim = simulate(&renderer, &light, &settings, &receivers);
             let (p0, p1) = (power(&sim, 0, &receivers[0]), power(&sim, 1, &receivers[1]));
             let d = (c1 - c0).length() as f64 / reference;
             for c in 0..3 {
@@ -211,14 +213,15 @@ fn beam_power_follows_beer_lambert() {
 /// A ball lens (η 1.5, radius 16 voxels of 64, a two-voxel ramp) lit along −z by a beam of
 /// radius 0.4 R: the fluence on the axis peaks at the paraxial focus nD/(4(n−1)) = 1.5 R
 /// from the centre within 3 % (by Snell's law, exactly, the beam's rim crosses the axis at
-/// 1.432 R, its paraxial rays at 1.5 R); the light's direction there is along the axis. With the beam at 0.8 R, the peak moves towards the ball, as the
-/// aberration says it must.
+/// 1.432 R, its paraxial rays at 1.5 R); the light's direction there is along the axis.
+/// With the beam at 0.8 R, the peak moves towards the ball, as the aberration says it
+/// must.
 #[test]
 fn fluence_peaks_at_the_ball_lens_focus() {
     with_context(|ctx| {
         let n = 64u32;
         let r = 16.0 / n as f32;
-        let vol = f32_volume(n, |p| 0.5 + (r - Vec3::from(p).length()) * n as f32 / 2.0);
+        let vol = lens(n, r);
         let renderer = Renderer::new(ctx, &vol, &glass(1.5)).unwrap();
         let light = light_along(Vec3::new(0.0, 0.0, -1.0));
         let mut peaks = Vec::new();
@@ -228,9 +231,7 @@ fn fluence_peaks_at_the_ball_lens_focus() {
                 fluence: true,
                 ..Default::default()
             };
-            let sim = renderer
-                .simulate_light(&RenderOptions::default(), &light, &settings, &[], None)
-                .unwrap();
+            let sim = simulate(&renderer, &light, &settings, &[]);
             let f = sim.fluence.as_ref().unwrap();
             let d = n as usize;
             // The axis x = y = 0 lies between voxel columns 31 and 32: their mean.
@@ -289,42 +290,11 @@ fn fluence_peaks_at_the_ball_lens_focus() {
 #[test]
 fn sphere_on_floor_matches_the_photon_tracer() {
     with_context(|ctx| {
-        let n = 64u32;
-        let vox = 1.0 / n as f32;
-        let r = 24.0 * vox;
-        let c = Vec3::new(0.0, 0.1, 0.0);
-        let floor_top = c.y - 1.089 * r;
-        let vol = f32_volume(n, |p| {
-            let p = Vec3::from(p);
-            let sphere = 0.5 * (0.5 + (r - (p - c).length()) * n as f32).clamp(0.0, 1.0);
-            let floor = (0.5 + (floor_top - p.y) * n as f32).clamp(0.0, 1.0);
-            sphere.max(floor)
-        });
-        let tf = TransferFunctions {
-            eta: Piecewise::new(vec![(0.0, [1.0]), (0.5, [1.5]), (0.6, [1.0])]),
-            opacity: Piecewise::new(vec![(0.0, [0.0]), (0.7, [0.0]), (0.75, [1.0])]),
-            ..Default::default()
-        };
-        let cam = refrakt::render::Camera {
-            azimuth: 0.0,
-            elevation: 90.0,
-            distance: 2.5,
-            fov_y: 30.0,
-            ..Default::default()
-        };
-        let (w, h) = (128usize, 128usize);
-        let light = Light {
-            source: LightSource::Directional {
-                towards: -Vec3::new(0.35, -1.0, 0.25).normalize(),
-            },
-            colour: [1.0; 3],
-            softness: 0.0,
-        };
-        let depth = cam.distance - (floor_top + 2.0 * vox);
-        let r_px = {
-            let t = (cam.fov_y.to_radians() * 0.5).tan();
-            r as f64 * h as f64 / (2.0 * depth as f64 * t as f64)
-        };
+        let scene = caustic_scene();
+        let (vol, tf, cam, light) = (&scene.volume, &scene.tf, &scene.camera, scene.light);
+        let (w, h) = (scene.width, scene.height);
+        let depth = scene.floor_depth();
+        let r_px = scene.radius_px(depth);
         let opts = RenderOptions {
             width: w as u32,
             height: h as u32,
@@ -332,9 +302,9 @@ fn sphere_on_floor_matches_the_photon_tracer() {
             ..Default::default()
         };
         let traced = refrakt::photons::trace_irradiance(
-            &vol,
-            &tf,
-            &cam,
+            vol,
+            tf,
+            cam,
             &opts,
             depth,
             &refrakt::photons::PhotonOptions {
@@ -345,8 +315,8 @@ fn sphere_on_floor_matches_the_photon_tracer() {
         )
         .unwrap()
         .pixels;
-        let renderer = Renderer::new(ctx, &vol, &tf).unwrap();
-        let receiver = Receiver::view_plane(&cam, w as u32, h as u32, depth);
+        let renderer = Renderer::new(ctx, vol, tf).unwrap();
+        let receiver = Receiver::view_plane(cam, w as u32, h as u32, depth);
         let sim = renderer
             .simulate_light(
                 &opts,
@@ -425,65 +395,9 @@ fn sphere_on_floor_matches_the_photon_tracer() {
         let (simulated, traced) = (crop(&simulated), crop(&traced));
         let (w, h) = (cw, inner);
         println!("measured over {w} x {h} pixels from ({x0}, {y0})");
-        let a = measure_floor(&simulated, w, h);
-        let b = measure_floor(&traced, w, h);
-        let centre_err = (a.centre - b.centre).length() / r_px;
-        let axes_err = [
-            (a.semi_axes[0] - b.semi_axes[0]).abs() / r_px,
-            (a.semi_axes[1] - b.semi_axes[1]).abs() / r_px,
-        ];
-        let bright_err = (a.brightest - b.brightest).length() / r_px;
-        println!(
-            "shadow centre {:.2} % R off, semi-axes {:.2} / {:.2} % R off (tracer {:.1}, {:.1} \
-             px), brightest point {:.3} R off, caustic extent {} vs {} px",
-            centre_err * 100.0,
-            axes_err[0] * 100.0,
-            axes_err[1] * 100.0,
-            b.semi_axes[0],
-            b.semi_axes[1],
-            bright_err,
-            a.bright_pixels,
-            b.bright_pixels
-        );
-        let mut disc_errs = Vec::new();
-        for frac in [0.05, 0.1, 0.2] {
-            let ma = annulus_mean(&simulated, w, h, b.brightest, 0.0, frac * r_px);
-            let mb = annulus_mean(&traced, w, h, b.brightest, 0.0, frac * r_px);
-            println!("  disc {frac} R around the caustic: simulator {ma:.2}, tracer {mb:.2}");
-            disc_errs.push((ma - mb).abs() / mb);
-        }
-        let inside = |img: &[[f32; 4]]| {
-            let (mut s, mut k) = (0.0, 0.0);
-            for y in 0..h {
-                for x in 0..w {
-                    let p = glam::DVec2::new(x as f64 + 0.5, y as f64 + 0.5) - b.centre;
-                    if p.length() <= b.semi_axes[1] {
-                        s += img[y * w + x][0] as f64;
-                        k += 1.0;
-                    }
-                }
-            }
-            s / k
-        };
-        let (ea, eb) = (inside(&simulated), inside(&traced));
-        println!("  mean light inside the shadow: simulator {ea:.3}, tracer {eb:.3}");
-        assert!(
-            centre_err <= 0.01,
-            "shadow centre {:.2} % R off",
-            centre_err * 100.0
-        );
-        assert!(
-            axes_err.iter().all(|e| *e <= 0.02),
-            "semi-axes {axes_err:?}"
-        );
-        assert!(bright_err <= 0.05, "brightest point {bright_err:.3} R off");
-        for (e, frac) in disc_errs.iter().zip([0.05, 0.1, 0.2]) {
-            assert!(*e <= 0.2, "disc {frac} R off by {:.0} %", e * 100.0);
-        }
-        assert!(
-            (ea - eb).abs() / eb <= 0.1,
-            "light in the shadow {ea} vs {eb}"
-        );
+        let cmp = compare_floors(&simulated, &traced, w, h, r_px);
+        cmp.print("simulator against the photon tracer", "simulator");
+        cmp.assert_close("simulator");
     });
 }
 
@@ -516,15 +430,12 @@ fn point_light_irradiance_falls_off_with_the_square_of_distance() {
                 width: px,
                 height: px,
             };
-            let sim = renderer
-                .simulate_light(
-                    &RenderOptions::default(),
-                    &light,
-                    &WavefrontSettings::default(),
-                    &[receiver],
-                    None,
-                )
-                .unwrap();
+            let sim = simulate(
+                &renderer,
+                &light,
+                &WavefrontSettings::default(),
+                &[receiver],
+            );
             let (mut worst, mut got, mut want) = (0.0f64, 0.0f64, 0.0f64);
             let mut at = (0, 0);
             let area = (size as f64 / px as f64).powi(2);
@@ -586,7 +497,7 @@ fn a_wavefront_over_its_patch_budget_is_refused() {
     with_context(|ctx| {
         let n = 32u32;
         let r = 8.0 / n as f32;
-        let vol = f32_volume(n, |p| 0.5 + (r - Vec3::from(p).length()) * n as f32 / 2.0);
+        let vol = lens(n, r);
         let renderer = Renderer::new(ctx, &vol, &glass(1.5)).unwrap();
         let light = light_along(Vec3::new(0.0, 0.0, -1.0));
         let launch = |budget: u32| {
