@@ -65,7 +65,7 @@ vec3 sample_shade(vec3 p, vec3 dir) {
         float front = texture(radiance, xj / (2.0 * h) + 0.5)[j];
         float c = dot(w, -dir);
         float table = texture(scattered, vec3(ambient_theta_coord(c), sg)).r;
-        light += P.colours[j].rgb * (front * (direct * ambient_hg4pi(c, g) + table));
+        light += P.colours[j].rgb * (front * (direct * hg4pi(c, g) + table));
     }
     return P.ambient.w * light;
 }

@@ -39,10 +39,6 @@ float ambient_theta_coord(float cos_theta) {
     return ambient_node_coord(theta * (1.0 / 3.14159265358979) * (d.x - 1.0), d.x);
 }
 
-// 4 pi times the Henyey-Greenstein phase function (mean 1 over the sphere of directions).
-float ambient_hg4pi(float cos_theta, float g) {
-    float d = 1.0 + g * g - 2.0 * g * cos_theta;
-    return (1.0 - g * g) / (d * sqrt(d));
-}
+#include "phase.glsl"
 
 #endif

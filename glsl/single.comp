@@ -37,11 +37,7 @@ layout(set = 0, binding = 3) uniform sampler2DArray preint;
 layout(set = 0, binding = 4, rgba32f) uniform writeonly image2D frame;
 layout(set = 0, binding = 5) uniform sampler3D transmittance;
 
-// 4 pi times the Henyey-Greenstein phase function.
-float hg4pi(float cos_theta, float g) {
-    float d = 1.0 + g * g - 2.0 * g * cos_theta;
-    return (1.0 - g * g) / (d * sqrt(d));
-}
+#include "phase.glsl"
 
 vec3 sample_shade(vec3 p, vec3 dir) {
     float t = texture(transmittance, p / (2.0 * P.box_half.xyz) + 0.5).r;

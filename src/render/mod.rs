@@ -9,6 +9,7 @@
 //! lists the models; re-exported here, so `render::ao` is the folder `render/ao/`).
 
 mod cached;
+pub mod eikonal_view;
 pub mod extinction;
 pub mod field;
 pub mod gradient;

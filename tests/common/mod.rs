@@ -244,10 +244,10 @@ pub fn environment_from(
 }
 
 /// L / (light colour · albedo · colour) along the ray through the centre of the cube
-/// [-h, h]³ from +z (direction -z), light from `towards` (unit, y and z ≥ 0), extinction
-/// `k` per world unit, phase 4π·p_HG(cos θ; g): ∫₀^{2h} k e^{-k t} T_light(t) dt with
-/// T_light = e^{-k ℓ(t)}, ℓ the distance from (0, 0, h − t) along `towards` to the
-/// cube's face.
+/// [-h, h]³ from +z (direction -z), light from `towards` (unit, x = 0, y ≥ 0; z < 0 is a
+/// light in front of the camera), extinction `k` per world unit, phase 4π·p_HG(cos θ; g):
+/// ∫₀^{2h} k e^{-k t} T_light(t) dt with T_light = e^{-k ℓ(t)}, ℓ the distance from
+/// (0, 0, h − t) along `towards` to the cube's face.
 pub fn single_scattering_block(k: f64, h: f64, towards: [f64; 3], g: f64) -> f64 {
     let exit = |t: f64| -> f64 {
         let mut l = f64::INFINITY;
@@ -256,6 +256,9 @@ pub fn single_scattering_block(k: f64, h: f64, towards: [f64; 3], g: f64) -> f64
         }
         if towards[2] > 0.0 {
             l = l.min(t / towards[2]);
+        }
+        if towards[2] < 0.0 {
+            l = l.min((2.0 * h - t) / -towards[2]);
         }
         l
     };

@@ -1,0 +1,147 @@
+#version 460
+// The eikonal model's view renderer (issue 35 item 2; seed 001, Ihrke et al., sect. 4.1 and
+// 5.3): one viewing ray per pixel, integrated through the refractive-index field with the
+// ray equation (eqs. 11-12; ray_rk4, the photon tracer's integrator), lit by the light
+// simulator's fluence volume (render/light_simulator.rs) instead of a light swept with it.
+// Per step of arc length h, the segment's matter (the transfer function at the chord's
+// midpoint: colour c, opacity a per reference step, medium colour m) scatters the light
+// arriving there towards the eye through the Henyey-Greenstein phase function:
+//
+//   shade = albedo * (|d| 4pi p_HG(d^ . -dir; g) + (1 - |d|)) * fluence,
+//
+// d the voxel's luminance-weighted mean light direction (unit where one wavefront crosses
+// it; shorter where several cross, whose spread the seed's one direction per voxel cannot
+// hold, so that part is scattered as if isotropic), normalised as the single-scattering
+// model is (4pi p = 1 for g = 0: an EA image where fluence and albedo are 1); composited
+// front to back as the sweep composites (Oddy-Willis, eq. 4.13: the medium factor once),
+//
+//   C += (1 - A) M c a_h shade,  A += (1 - A) a_h,  M *= m^(h / ref),
+//   a_h = 1 - (1 - a)^(h / ref),
+//
+// and what the ray sees where it leaves the box (the environment in its bent direction, or
+// the background) through (1 - A) M. Not yet here: the Fresnel split at faces (the ray
+// refracts through every face; the reflected part is not traced) and an ambient term.
+#extension GL_GOOGLE_include_directive : require
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(set = 0, binding = 0) uniform sampler3D volume;
+layout(set = 0, binding = 1) uniform sampler1DArray tf;
+layout(set = 0, binding = 2) uniform sampler2D environment;
+layout(std140, set = 0, binding = 3) uniform Params {
+    vec4 cam_pos;      // xyz: the eye (world); w: tan(fov_y / 2)
+    vec4 cam_forward;  // w: aspect (width / height)
+    vec4 cam_right;
+    vec4 cam_up;
+    vec4 half_extent;  // xyz: the box's half extent; w: the reference step
+    vec4 dims;         // xyz: the volume's voxels per axis; w: the eta scale k
+    vec4 background;   // linear rgba behind the volume (no environment)
+    vec4 scatter;      // x: g; y: albedo; z: the step (world units); w: environment rotation (rad)
+    uvec4 size;        // x, y: the image; z: steps at most per ray; w: 1 = environment map
+    vec4 march;        // x: stop at this accumulated opacity
+} P;
+// Per voxel of the fluence volume (the volume's grid, x fastest): fluence rgb (w unused),
+// then the mean light direction xyz (w unused).
+layout(std430, set = 0, binding = 4) readonly buffer Light {
+    vec4 light[];
+};
+layout(std430, set = 0, binding = 5) writeonly buffer Frame {
+    vec4 frame[];
+};
+
+#define RAY_VOLUME volume
+#define RAY_TF tf
+#define RAY_HALF P.half_extent.xyz
+#define RAY_DIMS P.dims.xyz
+#define RAY_REF_STEP P.half_extent.w
+#define RAY_ETA_SCALE P.dims.w
+#include "ray_equation.glsl"
+#include "raycast.glsl"
+#include "environment.glsl"
+#include "phase.glsl"
+
+// The fluence and mean direction at world point w: trilinear between voxel centres (the
+// simulator's deposit grid), clamped to the edge voxels.
+void light_at(vec3 w, out vec3 fluence, out vec3 direction) {
+    vec3 g = clamp(ray_tex(w) * P.dims.xyz - 0.5, vec3(0.0), P.dims.xyz - 1.0);
+    ivec3 b = min(ivec3(floor(g)), ivec3(P.dims.xyz) - 2);
+    b = max(b, ivec3(0));
+    vec3 f = g - vec3(b);
+    ivec3 d = ivec3(P.dims.xyz);
+    fluence = vec3(0.0);
+    direction = vec3(0.0);
+    for (int k = 0; k < 8; ++k) {
+        ivec3 o = ivec3(k & 1, (k >> 1) & 1, (k >> 2) & 1);
+        ivec3 c = min(b + o, d - 1);
+        vec3 wv = mix(1.0 - f, f, vec3(o));
+        float wt = wv.x * wv.y * wv.z;
+        uint vox = uint((c.z * d.y + c.y) * d.x + c.x);
+        fluence += wt * light[2u * vox].rgb;
+        direction += wt * light[2u * vox + 1u].xyz;
+    }
+}
+
+vec3 background_seen(vec3 dir) {
+    if (P.size.w == 0u) return P.background.rgb;
+    float r = P.scatter.w;
+    vec3 w = vec3(cos(r) * dir.x - sin(r) * dir.z, dir.y, sin(r) * dir.x + cos(r) * dir.z);
+    return env_bilinear(environment, env_texel(env_angles(w), textureSize(environment, 0)));
+}
+
+// The part of the chord from a to b (unit direction u, length len) inside the box.
+float inside_length(vec3 a, vec3 u, float len) {
+    float t0, t1;
+    box_span(a, u, P.half_extent.xyz, t0, t1);
+    return max(min(t1, len) - t0, 0.0);
+}
+
+void main() {
+    uvec2 id = gl_GlobalInvocationID.xy;
+    if (any(greaterThanEqual(id, P.size.xy))) return;
+    vec3 dir = camera_ray(id, P.size.xy, P.cam_pos, P.cam_forward, P.cam_right.xyz, P.cam_up.xyz);
+    vec3 eye = P.cam_pos.xyz;
+    vec3 C = vec3(0.0), M = vec3(1.0);
+    float A = 0.0;
+    float t_near, t_far;
+    box_span(eye, dir, P.half_extent.xyz, t_near, t_far);
+    if (t_far > t_near) {
+        float h = P.scatter.z, ref = P.half_extent.w;
+        vec3 x = eye + t_near * dir;
+        vec3 v = dir * ray_eta(x);
+        for (uint k = 0u; k < P.size.z && A < P.march.x; ++k) {
+            vec3 x0 = x;
+            ray_rk4(x, v, h);
+            vec3 chord = x - x0;
+            float len = length(chord);
+            if (len <= 0.0) break;
+            // Only the matter inside the box counts (outside it the value is 0, which a
+            // transfer function may make opaque).
+            float inside = inside_length(x0, chord / len, len);
+            if (inside > 0.0) {
+                vec3 mid = x0 + chord * (0.5 * inside / len);
+                float s = ray_value(mid);
+                vec4 ca = ray_tf(s, 0);
+                vec3 m = ray_tf(s, 1).rgb;
+                float ratio = inside / ref;
+                float a = correct_opacity(ca.a, ratio);
+                vec3 fluence, d;
+                light_at(mid, fluence, d);
+                float r = min(length(d), 1.0);
+                vec3 u = normalize(v);
+                float phase = r > 0.0 ? r * hg4pi(dot(d / length(d), -u), P.scatter.x) : 0.0;
+                phase += 1.0 - r;
+                vec3 shade = P.scatter.y * phase * fluence;
+                C += (1.0 - A) * M * ca.rgb * a * shade;
+                A += (1.0 - A) * a;
+                M *= correct_medium(m, ratio);
+            }
+            // Left the box, moving away from it: the rest is uniform (eta 1 outside).
+            bvec3 beyond = greaterThan(abs(x), P.half_extent.xyz);
+            bvec3 away = greaterThan(x * v, vec3(0.0));
+            if (any(bvec3(beyond.x && away.x, beyond.y && away.y, beyond.z && away.z))) break;
+        }
+        dir = normalize(v);
+    }
+    vec3 rgb = C + (1.0 - A) * M * background_seen(dir);
+    float alpha = A + (1.0 - A) * (P.size.w == 0u ? P.background.a : 1.0);
+    frame[id.y * P.size.x + id.x] = vec4(rgb, alpha);
+}
