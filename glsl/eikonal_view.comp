@@ -24,36 +24,39 @@
 #extension GL_GOOGLE_include_directive : require
 layout(local_size_x = 8, local_size_y = 8) in;
 
-layout(set = 0, binding = 0) uniform sampler3D volume;
-layout(set = 0, binding = 1) uniform sampler1DArray tf;
-layout(set = 0, binding = 2) uniform sampler2D environment;
-layout(std140, set = 0, binding = 3) uniform Params {
+// Bindings 0-4 as every ray-marched model's (render/march.rs, RayMarchPass); then the
+// environment and the light volume.
+layout(set = 0, binding = 0) uniform Params {
     vec4 cam_pos;      // xyz: the eye (world); w: tan(fov_y / 2)
     vec4 cam_forward;  // w: aspect (width / height)
     vec4 cam_right;
     vec4 cam_up;
-    vec4 half_extent;  // xyz: the box's half extent; w: the reference step
-    vec4 dims;         // xyz: the volume's voxels per axis; w: the eta scale k
+    vec4 box_half;     // xyz: the box's half extent; w: the reference step
     vec4 background;   // linear rgba behind the volume (no environment)
-    vec4 scatter;      // x: g; y: albedo; z: the step (world units); w: environment rotation (rad)
-    uvec4 size;        // x, y: the image; z: steps at most per ray; w: 1 = environment map
-    vec4 march;        // x: stop at this accumulated opacity
+    vec4 march;        // x: sample distance (reference steps); y: stop at this opacity
+    uvec4 size;        // x, y: the image
+    // As ea.comp up to here.
+    vec4 field;        // xyz: the volume's voxels per axis; w: the eta scale k
+    vec4 scatter;      // x: g; y: albedo; z: environment rotation (rad); w: 1 = environment map
+    uvec4 steps;       // x: steps at most per ray
 } P;
-// Per voxel of the fluence volume (the volume's grid, x fastest): fluence rgb (w unused),
+layout(set = 0, binding = 1) uniform sampler3D volume;
+layout(set = 0, binding = 2) uniform sampler1DArray tf;
+layout(set = 0, binding = 3) uniform sampler2DArray preint;  // bound for the march layout; unread
+layout(set = 0, binding = 4, rgba32f) uniform writeonly image2D frame;
+layout(set = 0, binding = 5) uniform sampler2D environment;
+// Per voxel of the light volume (the volume's grid, x fastest): fluence rgb (w unused),
 // then the mean light direction xyz (w unused).
-layout(std430, set = 0, binding = 4) readonly buffer Light {
+layout(std430, set = 0, binding = 6) readonly buffer Light {
     vec4 light[];
-};
-layout(std430, set = 0, binding = 5) writeonly buffer Frame {
-    vec4 frame[];
 };
 
 #define RAY_VOLUME volume
 #define RAY_TF tf
-#define RAY_HALF P.half_extent.xyz
-#define RAY_DIMS P.dims.xyz
-#define RAY_REF_STEP P.half_extent.w
-#define RAY_ETA_SCALE P.dims.w
+#define RAY_HALF P.box_half.xyz
+#define RAY_DIMS P.field.xyz
+#define RAY_REF_STEP P.box_half.w
+#define RAY_ETA_SCALE P.field.w
 #include "ray_equation.glsl"
 #include "raycast.glsl"
 #include "environment.glsl"
@@ -62,11 +65,11 @@ layout(std430, set = 0, binding = 5) writeonly buffer Frame {
 // The fluence and mean direction at world point w: trilinear between voxel centres (the
 // simulator's deposit grid), clamped to the edge voxels.
 void light_at(vec3 w, out vec3 fluence, out vec3 direction) {
-    vec3 g = clamp(ray_tex(w) * P.dims.xyz - 0.5, vec3(0.0), P.dims.xyz - 1.0);
-    ivec3 b = min(ivec3(floor(g)), ivec3(P.dims.xyz) - 2);
+    vec3 g = clamp(ray_tex(w) * P.field.xyz - 0.5, vec3(0.0), P.field.xyz - 1.0);
+    ivec3 b = min(ivec3(floor(g)), ivec3(P.field.xyz) - 2);
     b = max(b, ivec3(0));
     vec3 f = g - vec3(b);
-    ivec3 d = ivec3(P.dims.xyz);
+    ivec3 d = ivec3(P.field.xyz);
     fluence = vec3(0.0);
     direction = vec3(0.0);
     for (int k = 0; k < 8; ++k) {
@@ -81,8 +84,8 @@ void light_at(vec3 w, out vec3 fluence, out vec3 direction) {
 }
 
 vec3 background_seen(vec3 dir) {
-    if (P.size.w == 0u) return P.background.rgb;
-    float r = P.scatter.w;
+    if (P.scatter.w < 0.5) return P.background.rgb;
+    float r = P.scatter.z;
     vec3 w = vec3(cos(r) * dir.x - sin(r) * dir.z, dir.y, sin(r) * dir.x + cos(r) * dir.z);
     return env_bilinear(environment, env_texel(env_angles(w), textureSize(environment, 0)));
 }
@@ -90,7 +93,7 @@ vec3 background_seen(vec3 dir) {
 // The part of the chord from a to b (unit direction u, length len) inside the box.
 float inside_length(vec3 a, vec3 u, float len) {
     float t0, t1;
-    box_span(a, u, P.half_extent.xyz, t0, t1);
+    box_span(a, u, P.box_half.xyz, t0, t1);
     return max(min(t1, len) - t0, 0.0);
 }
 
@@ -102,14 +105,17 @@ void main() {
     vec3 C = vec3(0.0), M = vec3(1.0);
     float A = 0.0;
     float t_near, t_far;
-    box_span(eye, dir, P.half_extent.xyz, t_near, t_far);
+    box_span(eye, dir, P.box_half.xyz, t_near, t_far);
     if (t_far > t_near) {
-        float h = P.scatter.z, ref = P.half_extent.w;
+        float ref = P.box_half.w, h = P.march.x * ref;
+        // The sample distance is the longest step; faces and films take shorter ones
+        // (ray_rk4_adaptive), down to a hundredth of a voxel.
+        float h_try = h, h_min = min(0.01 * ref, h);
         vec3 x = eye + t_near * dir;
         vec3 v = dir * ray_eta(x);
-        for (uint k = 0u; k < P.size.z && A < P.march.x; ++k) {
+        for (uint k = 0u; k < P.steps.x && A < P.march.y; ++k) {
             vec3 x0 = x;
-            ray_rk4(x, v, h);
+            ray_rk4_adaptive(x, v, h_try, h, h_min);
             vec3 chord = x - x0;
             float len = length(chord);
             if (len <= 0.0) break;
@@ -135,13 +141,13 @@ void main() {
                 M *= correct_medium(m, ratio);
             }
             // Left the box, moving away from it: the rest is uniform (eta 1 outside).
-            bvec3 beyond = greaterThan(abs(x), P.half_extent.xyz);
+            bvec3 beyond = greaterThan(abs(x), P.box_half.xyz);
             bvec3 away = greaterThan(x * v, vec3(0.0));
             if (any(bvec3(beyond.x && away.x, beyond.y && away.y, beyond.z && away.z))) break;
         }
         dir = normalize(v);
     }
     vec3 rgb = C + (1.0 - A) * M * background_seen(dir);
-    float alpha = A + (1.0 - A) * (P.size.w == 0u ? P.background.a : 1.0);
-    frame[id.y * P.size.x + id.x] = vec4(rgb, alpha);
+    float alpha = A + (1.0 - A) * (P.scatter.w < 0.5 ? P.background.a : 1.0);
+    imageStore(frame, ivec2(id), vec4(rgb, alpha));
 }

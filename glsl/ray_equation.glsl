@@ -111,8 +111,9 @@ vec3 ray_rate(vec3 w) {
 }
 
 // One RK4 step of arc length h from (x, v): the ray equation with dx/ds = v / |v|,
-// dv/ds = grad eta.
-void ray_rk4(inout vec3 x, inout vec3 v, float h) {
+// dv/ds = grad eta. Returns the largest |grad eta| its four stages met (a step-size
+// controller's measure: ray_rk4_adaptive).
+float ray_rk4(inout vec3 x, inout vec3 v, float h) {
     vec3 k1x = normalize(v), k1v = ray_grad_eta(x);
     vec3 v2 = v + 0.5 * h * k1v;
     vec3 k2x = normalize(v2), k2v = ray_grad_eta(x + 0.5 * h * k1x);
@@ -122,6 +123,34 @@ void ray_rk4(inout vec3 x, inout vec3 v, float h) {
     vec3 k4x = normalize(v4), k4v = ray_grad_eta(x + h * k3x);
     x += h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
     v += h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+    return max(max(length(k1v), length(k2v)), max(length(k3v), length(k4v)));
+}
+
+// The largest turn, in radians, a controlled step may give a ray (ray_rk4_adaptive).
+const float RAY_MAX_KICK = 0.02;
+
+// One RK4 step from (x, v) of at most *h (arc length), shortened where a stage meets a
+// gradient that would turn the ray by more than RAY_MAX_KICK within it (|grad eta| h >
+// RAY_MAX_KICK eta: a face, or a film thinner than the step), down to h_min; returns the
+// step taken and leaves in *h the next step to try (doubled back towards h_max). A fixed
+// step that lands one stage inside a film thinner than itself and the others outside
+// gives the ray the film's whole gradient times the step: a kick that sends it anywhere
+// (speckle where viewing rays cross the glass-floor scene's films; docs/NOTES.md). A film
+// the stages all miss is crossed unturned, as a thin parallel film leaves a ray.
+float ray_rk4_adaptive(inout vec3 x, inout vec3 v, inout float h, float h_max, float h_min) {
+    for (;;) {
+        vec3 x1 = x, v1 = v;
+        float g = ray_rk4(x1, v1, h);
+        if (g * h > RAY_MAX_KICK * length(v) && h > h_min) {
+            h = max(0.25 * h, h_min);
+            continue;
+        }
+        x = x1;
+        v = v1;
+        float taken = h;
+        h = min(2.0 * h, h_max);
+        return taken;
+    }
 }
 
 // One RK4 step of time dt of the equi-temporal ray equation (seed 001 eqs. 13-15):

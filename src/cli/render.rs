@@ -180,7 +180,7 @@ pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
         progress.suspend(|| println!("{line}"));
         renderer.set_ambient_table(&table)?;
     }
-    let env_timings = if model == Model::Refract {
+    let env_timings = if model.takes_flag("--env") {
         renderer.set_environment(env.as_ref())?
     } else {
         Default::default()

@@ -29,7 +29,7 @@ use anyhow::{bail, ensure, Result};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-use super::{RenderOptions, Renderer};
+use super::{RenderOptions, Renderer, VolumeInfo};
 use crate::camera::Camera;
 use crate::light::{Light, LightSource};
 use crate::shaders;
@@ -327,6 +327,17 @@ impl WavefrontSettings {
     }
 }
 
+/// What a simulation reads: the volume, its transfer functions and their samplers (the
+/// renderer's, lent by [`Renderer::simulate_light`] or by a model's state).
+pub(crate) struct FieldInputs<'a> {
+    pub ctx: &'a vk::Context,
+    pub info: VolumeInfo,
+    pub volume: &'a vk::Image,
+    pub volume_sampler: &'a vk::Sampler,
+    pub tf: &'a vk::Image,
+    pub linear: &'a vk::Sampler,
+}
+
 impl Renderer {
     /// Simulate `light` through the volume (the transfer functions' η with `opts`'
     /// refractive-index scale; no clipping plane): count its flux on `receivers`, and
@@ -340,377 +351,396 @@ impl Renderer {
         receivers: &[Receiver],
         progress: Option<&dyn Fn(u32, u32)>,
     ) -> Result<LightSimulation> {
-        settings.validate()?;
-        ensure!(
-            opts.sweep.clip.is_none(),
-            "the light simulator takes no clipping plane"
-        );
-        ensure!(
-            light.colour.iter().all(|c| c.is_finite() && *c >= 0.0),
-            "light colour {:?} must be finite and non-negative",
-            light.colour
-        );
-        let ctx = &self.ctx;
-        let info = &self.volume_info;
-        let half = info.half_extent;
-        let reference = info.ref_step;
-        let limit = ctx.info().limits.max_storage_buffer_range as u64;
-        let wave = launch(light, settings, half, reference)?;
-        let capacity = settings
-            .max_patches
-            .unwrap_or(((limit / (2 * PATCH_BYTES)).min(1 << 20) as u32 / GROUP) * GROUP);
-        let list_bytes = 2 * capacity as u64 * PATCH_BYTES;
-        ensure!(
-            list_bytes <= limit,
-            "a patch list of {capacity} patches (twice {PATCH_BYTES} bytes each: {list_bytes} \
+        let field = FieldInputs {
+            ctx: &self.ctx,
+            info: self.volume_info,
+            volume: &self.volume_tex,
+            volume_sampler: &self.volume_sampler,
+            tf: &self.tf_image,
+            linear: &self.linear,
+        };
+        simulate(&field, opts, light, settings, receivers, progress)
+    }
+}
+
+/// [`Renderer::simulate_light`] over `inputs`.
+pub(crate) fn simulate(
+    inputs: &FieldInputs,
+    opts: &RenderOptions,
+    light: &Light,
+    settings: &WavefrontSettings,
+    receivers: &[Receiver],
+    progress: Option<&dyn Fn(u32, u32)>,
+) -> Result<LightSimulation> {
+    settings.validate()?;
+    ensure!(
+        opts.sweep.clip.is_none(),
+        "the light simulator takes no clipping plane"
+    );
+    ensure!(
+        light.colour.iter().all(|c| c.is_finite() && *c >= 0.0),
+        "light colour {:?} must be finite and non-negative",
+        light.colour
+    );
+    let ctx = inputs.ctx;
+    let info = &inputs.info;
+    let half = info.half_extent;
+    let reference = info.ref_step;
+    let limit = ctx.info().limits.max_storage_buffer_range as u64;
+    let wave = launch(light, settings, half, reference)?;
+    let capacity = settings
+        .max_patches
+        .unwrap_or(((limit / (2 * PATCH_BYTES)).min(1 << 20) as u32 / GROUP) * GROUP);
+    let list_bytes = 2 * capacity as u64 * PATCH_BYTES;
+    ensure!(
+        list_bytes <= limit,
+        "a patch list of {capacity} patches (twice {PATCH_BYTES} bytes each: {list_bytes} \
              bytes) is more than device '{}' binds at once ({limit} bytes); lower the patch \
              budget to at most {}",
-            ctx.info().name,
-            limit / (2 * PATCH_BYTES)
-        );
-        let patches = wave.patches;
-        let launched = patches.len() as u64;
-        ensure!(
-            launched <= capacity as u64,
-            "{} needs {launched} patches ({} reference steps apart) at launch and the \
+        ctx.info().name,
+        limit / (2 * PATCH_BYTES)
+    );
+    let patches = wave.patches;
+    let launched = patches.len() as u64;
+    ensure!(
+        launched <= capacity as u64,
+        "{} needs {launched} patches ({} reference steps apart) at launch and the \
              patch budget is {capacity}; raise the budget or the launch spacing",
-            light.describe(),
-            settings.launch_spacing
-        );
-        let launched_flux: [f64; 3] =
-            std::array::from_fn(|c| patches.iter().map(|p| p.flux[c] as f64).sum::<f64>());
+        light.describe(),
+        settings.launch_spacing
+    );
+    let launched_flux: [f64; 3] =
+        std::array::from_fn(|c| patches.iter().map(|p| p.flux[c] as f64).sum::<f64>());
 
-        // Buffers.
-        let storage = vk::usage::STORAGE_BUFFER;
-        let list = Buffer::new(
-            ctx,
-            list_bytes,
-            storage | vk::usage::BUFFER_TRANSFER_DST,
-            Memory::Gpu,
-            "wavefront patches",
-        )?;
-        let counts = Buffer::new(
-            ctx,
-            capacity as u64 * 4,
-            storage,
-            Memory::Gpu,
-            "wavefront counts",
-        )?;
-        let block_sums = Buffer::new(
-            ctx,
-            capacity.div_ceil(GROUP) as u64 * 4,
-            storage,
-            Memory::Gpu,
-            "wavefront block sums",
-        )?;
-        let control = Buffer::new(
-            ctx,
-            CTRL_WORDS as u64 * 4,
-            storage
-                | vk::usage::INDIRECT_BUFFER
-                | vk::usage::BUFFER_TRANSFER_DST
-                | vk::usage::BUFFER_TRANSFER_SRC,
-            Memory::Gpu,
-            "wavefront control",
-        )?;
-        let control_host = Buffer::readback(ctx, CTRL_WORDS as u64 * 4, "wavefront control")?;
-        let mut initial = vec![0u32; CTRL_WORDS];
-        initial[CTRL_COUNT] = launched as u32;
-        initial[CTRL_DISPATCH] = (launched as u32).div_ceil(GROUP);
-        initial[CTRL_DISPATCH + 1] = 1;
-        initial[CTRL_DISPATCH + 2] = 1;
-        initial[CTRL_PEAK] = launched as u32;
-        let mut staging = Buffer::new(
-            ctx,
-            (CTRL_WORDS * 4 + patches.len() * PATCH_BYTES as usize) as u64,
-            vk::usage::BUFFER_TRANSFER_SRC,
-            Memory::Upload,
-            "wavefront launch",
-        )?;
-        staging.write(0, bytemuck::cast_slice(&initial))?;
-        staging.write(CTRL_WORDS * 4, bytemuck::cast_slice(&patches))?;
+    // Buffers.
+    let storage = vk::usage::STORAGE_BUFFER;
+    let list = Buffer::new(
+        ctx,
+        list_bytes,
+        storage | vk::usage::BUFFER_TRANSFER_DST,
+        Memory::Gpu,
+        "wavefront patches",
+    )?;
+    let counts = Buffer::new(
+        ctx,
+        capacity as u64 * 4,
+        storage,
+        Memory::Gpu,
+        "wavefront counts",
+    )?;
+    let block_sums = Buffer::new(
+        ctx,
+        capacity.div_ceil(GROUP) as u64 * 4,
+        storage,
+        Memory::Gpu,
+        "wavefront block sums",
+    )?;
+    let control = Buffer::new(
+        ctx,
+        CTRL_WORDS as u64 * 4,
+        storage
+            | vk::usage::INDIRECT_BUFFER
+            | vk::usage::BUFFER_TRANSFER_DST
+            | vk::usage::BUFFER_TRANSFER_SRC,
+        Memory::Gpu,
+        "wavefront control",
+    )?;
+    let control_host = Buffer::readback(ctx, CTRL_WORDS as u64 * 4, "wavefront control")?;
+    let mut initial = vec![0u32; CTRL_WORDS];
+    initial[CTRL_COUNT] = launched as u32;
+    initial[CTRL_DISPATCH] = (launched as u32).div_ceil(GROUP);
+    initial[CTRL_DISPATCH + 1] = 1;
+    initial[CTRL_DISPATCH + 2] = 1;
+    initial[CTRL_PEAK] = launched as u32;
+    let mut staging = Buffer::new(
+        ctx,
+        (CTRL_WORDS * 4 + patches.len() * PATCH_BYTES as usize) as u64,
+        vk::usage::BUFFER_TRANSFER_SRC,
+        Memory::Upload,
+        "wavefront launch",
+    )?;
+    staging.write(0, bytemuck::cast_slice(&initial))?;
+    staging.write(CTRL_WORDS * 4, bytemuck::cast_slice(&patches))?;
 
-        let mut geometry: Vec<[f32; 4]> = Vec::new();
-        let mut pixels_total = 0u64;
+    let mut geometry: Vec<[f32; 4]> = Vec::new();
+    let mut pixels_total = 0u64;
+    ensure!(
+        receivers.len() <= MAX_RECEIVERS,
+        "{} receivers: at most {MAX_RECEIVERS}",
+        receivers.len()
+    );
+    for (k, r) in receivers.iter().enumerate() {
         ensure!(
-            receivers.len() <= MAX_RECEIVERS,
-            "{} receivers: at most {MAX_RECEIVERS}",
-            receivers.len()
+            r.width > 0 && r.height > 0 && r.width <= 8192 && r.height <= 8192,
+            "receiver {k}: {} x {} pixels (1 to 8192 each)",
+            r.width,
+            r.height
         );
-        for (k, r) in receivers.iter().enumerate() {
-            ensure!(
-                r.width > 0 && r.height > 0 && r.width <= 8192 && r.height <= 8192,
-                "receiver {k}: {} x {} pixels (1 to 8192 each)",
-                r.width,
-                r.height
-            );
-            ensure!(
-                r.origin.is_finite()
-                    && r.u.is_finite()
-                    && r.v.is_finite()
-                    && r.u.cross(r.v).length() > 0.0
-                    && r.u.dot(r.v).abs() <= 1e-4 * r.u.length() * r.v.length(),
-                "receiver {k}: u {:?} and v {:?} must be finite, non-zero and at right angles",
-                r.u,
-                r.v
-            );
-            let n = r.normal();
-            geometry.push(r.origin.extend(r.width as f32).into());
-            geometry.push(r.u.extend(r.height as f32).into());
-            geometry.push(r.v.extend(3.0 * pixels_total as f32).into());
-            geometry.push(n.extend(n.dot(r.origin)).into());
-            pixels_total += r.width as u64 * r.height as u64;
-        }
         ensure!(
-            3 * pixels_total < 1 << 24,
-            "receivers of {pixels_total} pixels in all: at most 5 592 405"
+            r.origin.is_finite()
+                && r.u.is_finite()
+                && r.v.is_finite()
+                && r.u.cross(r.v).length() > 0.0
+                && r.u.dot(r.v).abs() <= 1e-4 * r.u.length() * r.v.length(),
+            "receiver {k}: u {:?} and v {:?} must be finite, non-zero and at right angles",
+            r.u,
+            r.v
         );
-        geometry.resize(geometry.len().max(4), [0.0; 4]);
-        let mut receiver_geometry = Buffer::new(
-            ctx,
-            (geometry.len() * 16) as u64,
-            storage,
-            Memory::Upload,
-            "wavefront receivers",
-        )?;
-        receiver_geometry.write(0, bytemuck::cast_slice(&geometry))?;
-        let receiver_bytes = (pixels_total.max(1) * 3 * 8).max(16);
-        ensure!(
-            receiver_bytes <= limit,
-            "receivers of {pixels_total} pixels need {receiver_bytes} bytes of sums, more \
+        let n = r.normal();
+        geometry.push(r.origin.extend(r.width as f32).into());
+        geometry.push(r.u.extend(r.height as f32).into());
+        geometry.push(r.v.extend(3.0 * pixels_total as f32).into());
+        geometry.push(n.extend(n.dot(r.origin)).into());
+        pixels_total += r.width as u64 * r.height as u64;
+    }
+    ensure!(
+        3 * pixels_total < 1 << 24,
+        "receivers of {pixels_total} pixels in all: at most 5 592 405"
+    );
+    geometry.resize(geometry.len().max(4), [0.0; 4]);
+    let mut receiver_geometry = Buffer::new(
+        ctx,
+        (geometry.len() * 16) as u64,
+        storage,
+        Memory::Upload,
+        "wavefront receivers",
+    )?;
+    receiver_geometry.write(0, bytemuck::cast_slice(&geometry))?;
+    let receiver_bytes = (pixels_total.max(1) * 3 * 8).max(16);
+    ensure!(
+        receiver_bytes <= limit,
+        "receivers of {pixels_total} pixels need {receiver_bytes} bytes of sums, more \
              than device '{}' binds at once ({limit} bytes)",
-            ctx.info().name
-        );
-        let receiver_sums = Buffer::new(
-            ctx,
-            receiver_bytes,
-            storage | vk::usage::BUFFER_TRANSFER_DST | vk::usage::BUFFER_TRANSFER_SRC,
-            Memory::Gpu,
-            "wavefront receiver sums",
-        )?;
-        let voxels = info.dims.iter().map(|d| *d as u64).product::<u64>();
-        let fluence_bytes = if settings.fluence { voxels * 6 * 8 } else { 16 };
-        ensure!(
-            fluence_bytes <= limit,
-            "the fluence volume of {} x {} x {} voxels needs {fluence_bytes} bytes of sums, \
+        ctx.info().name
+    );
+    let receiver_sums = Buffer::new(
+        ctx,
+        receiver_bytes,
+        storage | vk::usage::BUFFER_TRANSFER_DST | vk::usage::BUFFER_TRANSFER_SRC,
+        Memory::Gpu,
+        "wavefront receiver sums",
+    )?;
+    let voxels = info.dims.iter().map(|d| *d as u64).product::<u64>();
+    let fluence_bytes = if settings.fluence { voxels * 6 * 8 } else { 16 };
+    ensure!(
+        fluence_bytes <= limit,
+        "the fluence volume of {} x {} x {} voxels needs {fluence_bytes} bytes of sums, \
              more than device '{}' binds at once ({limit} bytes)",
-            info.dims[0],
-            info.dims[1],
-            info.dims[2],
-            ctx.info().name
-        );
-        let fluence_sums = Buffer::new(
-            ctx,
-            fluence_bytes,
-            storage | vk::usage::BUFFER_TRANSFER_DST | vk::usage::BUFFER_TRANSFER_SRC,
-            Memory::Gpu,
-            "wavefront fluence sums",
-        )?;
+        info.dims[0],
+        info.dims[1],
+        info.dims[2],
+        ctx.info().name
+    );
+    let fluence_sums = Buffer::new(
+        ctx,
+        fluence_bytes,
+        storage | vk::usage::BUFFER_TRANSFER_DST | vk::usage::BUFFER_TRANSFER_SRC,
+        Memory::Gpu,
+        "wavefront fluence sums",
+    )?;
 
-        // The paper's stored η and ∇η volumes (sect. 5.1): the sweep's field texture,
-        // built here for this simulation.
-        let mut field =
-            super::field::FieldTexture::new(ctx, &self.volume_tex, &self.tf_image, &self.linear)?;
-        let set = DescriptorSet::new(
-            ctx,
-            &[
-                Binding::Texture(&self.volume_tex, &self.volume_sampler),
-                Binding::Texture(&self.tf_image, &self.linear),
-                Binding::Storage(&list),
-                Binding::Storage(&counts),
-                Binding::Storage(&block_sums),
-                Binding::Storage(&control),
-                Binding::Storage(&receiver_sums),
-                Binding::Storage(&receiver_geometry),
-                Binding::Storage(&fluence_sums),
-                Binding::Texture(field.image(), &self.linear),
-            ],
-            "light simulator",
-        )?;
-        let push_size = std::mem::size_of::<WavefrontPush>() as u32;
-        let constants = [(settings.gradient == RayGradient::FieldTexture) as u32];
-        let pipeline = |spirv: &[u8], name: &str| {
-            ComputePipeline::with_constants(ctx, spirv, &set, push_size, &constants, name)
-        };
-        let step = pipeline(shaders::LIGHT_WAVEFRONT_STEP_COMP, "wavefront step")?;
-        let scan_blocks = pipeline(
-            shaders::LIGHT_WAVEFRONT_SCAN_BLOCKS_COMP,
-            "wavefront scan blocks",
-        )?;
-        let scan_sums = pipeline(
-            shaders::LIGHT_WAVEFRONT_SCAN_SUMS_COMP,
-            "wavefront scan sums",
-        )?;
-        let emit = pipeline(shaders::LIGHT_WAVEFRONT_EMIT_COMP, "wavefront emit")?;
+    // The paper's stored η and ∇η volumes (sect. 5.1): the sweep's field texture,
+    // built here for this simulation.
+    let mut field = super::field::FieldTexture::new(ctx, inputs.volume, inputs.tf, inputs.linear)?;
+    let set = DescriptorSet::new(
+        ctx,
+        &[
+            Binding::Texture(inputs.volume, inputs.volume_sampler),
+            Binding::Texture(inputs.tf, inputs.linear),
+            Binding::Storage(&list),
+            Binding::Storage(&counts),
+            Binding::Storage(&block_sums),
+            Binding::Storage(&control),
+            Binding::Storage(&receiver_sums),
+            Binding::Storage(&receiver_geometry),
+            Binding::Storage(&fluence_sums),
+            Binding::Texture(field.image(), inputs.linear),
+        ],
+        "light simulator",
+    )?;
+    let push_size = std::mem::size_of::<WavefrontPush>() as u32;
+    let constants = [(settings.gradient == RayGradient::FieldTexture) as u32];
+    let pipeline = |spirv: &[u8], name: &str| {
+        ComputePipeline::with_constants(ctx, spirv, &set, push_size, &constants, name)
+    };
+    let step = pipeline(shaders::LIGHT_WAVEFRONT_STEP_COMP, "wavefront step")?;
+    let scan_blocks = pipeline(
+        shaders::LIGHT_WAVEFRONT_SCAN_BLOCKS_COMP,
+        "wavefront scan blocks",
+    )?;
+    let scan_sums = pipeline(
+        shaders::LIGHT_WAVEFRONT_SCAN_SUMS_COMP,
+        "wavefront scan sums",
+    )?;
+    let emit = pipeline(shaders::LIGHT_WAVEFRONT_EMIT_COMP, "wavefront emit")?;
 
-        let mut push = WavefrontPush {
-            half_extent: half.extend(reference).into(),
-            dims: [
-                info.dims[0] as f32,
-                info.dims[1] as f32,
-                info.dims[2] as f32,
-                opts.sweep.eta_scale,
-            ],
-            colour: [
-                light.colour[0],
-                light.colour[1],
-                light.colour[2],
-                settings.threshold,
-            ],
-            dt: settings.step * reference,
-            substeps: settings.substeps,
-            capacity,
-            parity: 0,
-            receiver_count: receivers.len() as u32,
-            max_level: settings.max_level,
-            discard_at_foci: (settings.at_foci == FocusPolicy::Discard) as u32,
-            fluence: settings.fluence as u32,
-            tear_span: settings.tear_span,
-            min_dilution: settings.min_dilution,
-        };
-        // Enough cycles for a straight path from the launch through the box at η 3.
-        let cycle_path = settings.step * reference * settings.substeps as f32;
-        let max_cycles = settings
-            .max_cycles
-            .unwrap_or_else(|| (3.0 * wave.path / cycle_path).ceil() as u32 + 1);
-        let mut stats = SimulationStats {
-            launched: launched as u32,
-            launched_flux,
-            ..Default::default()
-        };
-        let mut cycle = 0u32;
-        let mut words = initial.clone();
-        while cycle < max_cycles {
-            let first = cycle == 0;
-            let n = CYCLES_PER_SUBMIT.min(max_cycles - cycle);
-            let timings = ctx.execute(|rec| {
-                rec.pass("light simulation", &[], |rec| {
-                    if first {
-                        field.record_build(rec)?;
-                        rec.clear_storage(&receiver_sums);
-                        rec.clear_storage(&fluence_sums);
-                        rec.upload_to_storage(&staging, 0, &control, 0, CTRL_WORDS as u64 * 4)?;
-                        rec.upload_to_storage(
-                            &staging,
-                            CTRL_WORDS as u64 * 4,
-                            &list,
-                            0,
-                            patches.len() as u64 * PATCH_BYTES,
-                        )?;
-                    }
-                    for c in 0..n {
-                        push.parity = (cycle + c) % 2;
-                        let bytes = bytemuck::bytes_of(&push);
-                        let args = (CTRL_DISPATCH as u64 + 4 * push.parity as u64) * 4;
-                        rec.dispatch_indirect(&step, &set, bytes, &control, args)?;
-                        rec.dispatch_indirect(&scan_blocks, &set, bytes, &control, args)?;
-                        rec.dispatch(&scan_sums, &set, bytes, [1, 1, 1])?;
-                        rec.dispatch_indirect(&emit, &set, bytes, &control, args)?;
-                    }
-                    Ok(())
-                })?;
-                rec.copy_storage_to_host(&control, &control_host);
+    let mut push = WavefrontPush {
+        half_extent: half.extend(reference).into(),
+        dims: [
+            info.dims[0] as f32,
+            info.dims[1] as f32,
+            info.dims[2] as f32,
+            opts.sweep.eta_scale,
+        ],
+        colour: [
+            light.colour[0],
+            light.colour[1],
+            light.colour[2],
+            settings.threshold,
+        ],
+        dt: settings.step * reference,
+        substeps: settings.substeps,
+        capacity,
+        parity: 0,
+        receiver_count: receivers.len() as u32,
+        max_level: settings.max_level,
+        discard_at_foci: (settings.at_foci == FocusPolicy::Discard) as u32,
+        fluence: settings.fluence as u32,
+        tear_span: settings.tear_span,
+        min_dilution: settings.min_dilution,
+    };
+    // Enough cycles for a straight path from the launch through the box at η 3.
+    let cycle_path = settings.step * reference * settings.substeps as f32;
+    let max_cycles = settings
+        .max_cycles
+        .unwrap_or_else(|| (3.0 * wave.path / cycle_path).ceil() as u32 + 1);
+    let mut stats = SimulationStats {
+        launched: launched as u32,
+        launched_flux,
+        ..Default::default()
+    };
+    let mut cycle = 0u32;
+    let mut words = initial.clone();
+    while cycle < max_cycles {
+        let first = cycle == 0;
+        let n = CYCLES_PER_SUBMIT.min(max_cycles - cycle);
+        let timings = ctx.execute(|rec| {
+            rec.pass("light simulation", &[], |rec| {
+                if first {
+                    field.record_build(rec)?;
+                    rec.clear_storage(&receiver_sums);
+                    rec.clear_storage(&fluence_sums);
+                    rec.upload_to_storage(&staging, 0, &control, 0, CTRL_WORDS as u64 * 4)?;
+                    rec.upload_to_storage(
+                        &staging,
+                        CTRL_WORDS as u64 * 4,
+                        &list,
+                        0,
+                        patches.len() as u64 * PATCH_BYTES,
+                    )?;
+                }
+                for c in 0..n {
+                    push.parity = (cycle + c) % 2;
+                    let bytes = bytemuck::bytes_of(&push);
+                    let args = (CTRL_DISPATCH as u64 + 4 * push.parity as u64) * 4;
+                    rec.dispatch_indirect(&step, &set, bytes, &control, args)?;
+                    rec.dispatch_indirect(&scan_blocks, &set, bytes, &control, args)?;
+                    rec.dispatch(&scan_sums, &set, bytes, [1, 1, 1])?;
+                    rec.dispatch_indirect(&emit, &set, bytes, &control, args)?;
+                }
                 Ok(())
             })?;
-            stats.gpu_ms += timings.get("light simulation").unwrap_or(0.0);
-            cycle += n;
-            words = control_host.read_values(CTRL_WORDS)?;
-            stats
-                .list_sizes
-                .push((cycle, words[CTRL_COUNT + (cycle % 2) as usize]));
-            if let Some(p) = progress {
-                p(cycle, max_cycles);
-            }
-            if words[CTRL_NEEDED] > 0 {
-                bail!(
-                    "the light simulation needed {} patches at once, more than its budget of \
+            rec.copy_storage_to_host(&control, &control_host);
+            Ok(())
+        })?;
+        stats.gpu_ms += timings.get("light simulation").unwrap_or(0.0);
+        cycle += n;
+        words = control_host.read_values(CTRL_WORDS)?;
+        stats
+            .list_sizes
+            .push((cycle, words[CTRL_COUNT + (cycle % 2) as usize]));
+        if let Some(p) = progress {
+            p(cycle, max_cycles);
+        }
+        if words[CTRL_NEEDED] > 0 {
+            bail!(
+                "the light simulation needed {} patches at once, more than its budget of \
                      {capacity} ({} bytes of patch list); raise the patch budget, coarsen the \
                      volume, or raise the energy threshold",
-                    words[CTRL_NEEDED],
-                    list_bytes
-                );
-            }
-            if words[CTRL_COUNT + (cycle % 2) as usize] == 0 {
-                break;
-            }
+                words[CTRL_NEEDED],
+                list_bytes
+            );
         }
-        stats.cycles = cycle;
-        stats.steps = cycle * settings.substeps;
-        stats.peak_patches = words[CTRL_PEAK];
-        stats.worst_span = f32::from_bits(words[CTRL_WORST_SPAN]);
-        stats.unsplit = words[CTRL_UNSPLIT];
-        stats.foci = words[CTRL_FOCI];
-        stats.coarse_deposits = words[CTRL_COARSE];
-        stats.absorbed = fixed_rgb(&words, CTRL_ABSORBED);
-        stats.left = fixed_rgb(&words, CTRL_LEFT);
-        stats.at_foci = fixed_rgb(&words, CTRL_AT_FOCI);
-        stats.torn = fixed_rgb(&words, CTRL_TORN);
-        stats.diluted = fixed_rgb(&words, CTRL_DILUTED);
-        stats.live_at_end = words[CTRL_COUNT + (cycle % 2) as usize];
-        let dropped = fixed_rgb(&words, CTRL_DROPPED);
-        ensure!(
-            dropped.iter().all(|d| *d == 0.0),
-            "the light simulation dropped flux {dropped:?} to the patch budget"
-        );
+        if words[CTRL_COUNT + (cycle % 2) as usize] == 0 {
+            break;
+        }
+    }
+    stats.cycles = cycle;
+    stats.steps = cycle * settings.substeps;
+    stats.peak_patches = words[CTRL_PEAK];
+    stats.worst_span = f32::from_bits(words[CTRL_WORST_SPAN]);
+    stats.unsplit = words[CTRL_UNSPLIT];
+    stats.foci = words[CTRL_FOCI];
+    stats.coarse_deposits = words[CTRL_COARSE];
+    stats.absorbed = fixed_rgb(&words, CTRL_ABSORBED);
+    stats.left = fixed_rgb(&words, CTRL_LEFT);
+    stats.at_foci = fixed_rgb(&words, CTRL_AT_FOCI);
+    stats.torn = fixed_rgb(&words, CTRL_TORN);
+    stats.diluted = fixed_rgb(&words, CTRL_DILUTED);
+    stats.live_at_end = words[CTRL_COUNT + (cycle % 2) as usize];
+    let dropped = fixed_rgb(&words, CTRL_DROPPED);
+    ensure!(
+        dropped.iter().all(|d| *d == 0.0),
+        "the light simulation dropped flux {dropped:?} to the patch budget"
+    );
 
-        // Read the deposits back.
-        let receivers_out = if receivers.is_empty() {
-            Vec::new()
-        } else {
-            let sums = read_words(ctx, &receiver_sums, receiver_bytes)?;
-            let mut out = Vec::with_capacity(receivers.len());
-            let mut base = 0usize;
-            for r in receivers {
-                let n = (r.width * r.height) as usize;
-                out.push(
-                    (0..n)
-                        .map(|px| {
-                            std::array::from_fn(|c| {
-                                let at = 2 * (base + c * n + px);
-                                fixed(sums[at], sums[at + 1]) as f32
-                            })
-                        })
-                        .collect(),
-                );
-                base += 3 * n;
-            }
-            out
-        };
-        let fluence = if settings.fluence {
-            let sums = read_words(ctx, &fluence_sums, fluence_bytes)?;
-            let n = voxels as usize;
-            let channel = |q: usize, i: usize| {
-                let at = 2 * (q * n + i);
-                fixed(sums[at], sums[at + 1]) as f32
-            };
-            Some(FluenceVolume {
-                dims: info.dims,
-                fluence: (0..n)
-                    .map(|i| std::array::from_fn(|c| channel(c, i)))
-                    .collect(),
-                direction: (0..n)
-                    .map(|i| {
-                        let e = [channel(0, i), channel(1, i), channel(2, i)];
-                        let lum = 0.2126 * e[0] + 0.7152 * e[1] + 0.0722 * e[2];
+    // Read the deposits back.
+    let receivers_out = if receivers.is_empty() {
+        Vec::new()
+    } else {
+        let sums = read_words(ctx, &receiver_sums, receiver_bytes)?;
+        let mut out = Vec::with_capacity(receivers.len());
+        let mut base = 0usize;
+        for r in receivers {
+            let n = (r.width * r.height) as usize;
+            out.push(
+                (0..n)
+                    .map(|px| {
                         std::array::from_fn(|c| {
-                            if lum > 0.0 {
-                                channel(3 + c, i) / lum
-                            } else {
-                                0.0
-                            }
+                            let at = 2 * (base + c * n + px);
+                            fixed(sums[at], sums[at + 1]) as f32
                         })
                     })
                     .collect(),
-            })
-        } else {
-            None
+            );
+            base += 3 * n;
+        }
+        out
+    };
+    let fluence = if settings.fluence {
+        let sums = read_words(ctx, &fluence_sums, fluence_bytes)?;
+        let n = voxels as usize;
+        let channel = |q: usize, i: usize| {
+            let at = 2 * (q * n + i);
+            fixed(sums[at], sums[at + 1]) as f32
         };
-        Ok(LightSimulation {
-            receivers: receivers_out,
-            fluence,
-            stats,
+        Some(FluenceVolume {
+            dims: info.dims,
+            fluence: (0..n)
+                .map(|i| std::array::from_fn(|c| channel(c, i)))
+                .collect(),
+            direction: (0..n)
+                .map(|i| {
+                    let e = [channel(0, i), channel(1, i), channel(2, i)];
+                    let lum = 0.2126 * e[0] + 0.7152 * e[1] + 0.0722 * e[2];
+                    std::array::from_fn(|c| {
+                        if lum > 0.0 {
+                            channel(3 + c, i) / lum
+                        } else {
+                            0.0
+                        }
+                    })
+                })
+                .collect(),
         })
-    }
+    } else {
+        None
+    };
+    Ok(LightSimulation {
+        receivers: receivers_out,
+        fluence,
+        stats,
+    })
 }
 
 /// The launched wavefront: its patches, and the straight path (world units) from the

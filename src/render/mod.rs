@@ -9,7 +9,6 @@
 //! lists the models; re-exported here, so `render::ao` is the folder `render/ao/`).
 
 mod cached;
-pub mod eikonal_view;
 pub mod extinction;
 pub mod field;
 pub mod gradient;
@@ -115,6 +114,8 @@ pub struct Renderer {
     tf: TransferFunctions,
     tf_image: Image,
     tf_dirty: bool,
+    /// Times the transfer functions were replaced (models' states compare it).
+    tf_changes: u64,
     linear: Sampler,
     /// The volume's sampler for classification: linear, nearest for a label volume.
     volume_sampler: Sampler,
@@ -181,6 +182,7 @@ impl Renderer {
             tf: tf.clone(),
             tf_image,
             tf_dirty: true,
+            tf_changes: 0,
             linear,
             volume_sampler,
             preint,
@@ -218,6 +220,7 @@ impl Renderer {
             upload::write_transfer_texture(&self.ctx, tf, &self.tf_image)?;
             self.tf = tf.clone();
             self.tf_dirty = true;
+            self.tf_changes += 1;
             self.field_dirty = true;
             self.extinction_dirty = true;
         }
@@ -356,6 +359,13 @@ impl Renderer {
         observe: Option<&mut dyn FnMut(f64)>,
     ) -> Result<Frame> {
         self.prepare(model, camera, opts)?;
+        // What the model's state ran outside the recording (the eikonal model's light
+        // simulation) comes first in the frame's timings.
+        let mut timings = self
+            .states
+            .get_mut(&model)
+            .map(|s| s.take_timings())
+            .unwrap_or_default();
         let ctx = self.ctx.clone();
         let mut recorded = None;
         let record = |rec: &mut Recorder| {
@@ -373,10 +383,11 @@ impl Renderer {
             recorded = Some(r);
             Ok(())
         };
-        let timings = match observe {
+        let frame_timings = match observe {
             Some(observe) => ctx.execute_observed(record, observe)?,
             None => ctx.execute(record)?,
         };
+        timings.scopes.extend(frame_timings.scopes);
         let recorded: Recorded = recorded.expect("recorded by execute");
         let target = self.target(model, Slot::Main)?;
         let (width, height) = (opts.width, opts.height);
@@ -490,6 +501,10 @@ impl Renderer {
                 info: self.volume_info,
                 extinction: self.extinction.as_ref(),
                 linear: &self.linear,
+                volume: &self.volume_tex,
+                volume_sampler: &self.volume_sampler,
+                tf: &self.tf_image,
+                tf_changes: self.tf_changes,
             };
             state.record_update(rec, &shared, opts)?;
         }

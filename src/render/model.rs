@@ -76,6 +76,12 @@ pub(crate) struct Shared<'a> {
     /// The extinction volume, for a model that declared it ([`OpticalModel::extinction`]).
     pub extinction: Option<&'a Extinction>,
     pub linear: &'a Sampler,
+    /// The scalar volume and how the models read it, the transfer functions' image, and
+    /// how many times they have been replaced (a state made from them compares it).
+    pub volume: &'a Image,
+    pub volume_sampler: &'a Sampler,
+    pub tf: &'a Image,
+    pub tf_changes: u64,
 }
 
 /// A model's own persistent data, kept across frames and shared by the viewer's slots
@@ -96,6 +102,11 @@ pub(crate) trait ModelState: std::any::Any + Send {
         _opts: &RenderOptions,
     ) -> Result<()> {
         Ok(())
+    }
+    /// The GPU timings of what `prepare` ran since the last frame took them (a frame's
+    /// timings begin with them).
+    fn take_timings(&mut self) -> crate::vk::Timings {
+        crate::vk::Timings::default()
     }
     /// Device bytes it holds (counted against the budget the extinction volume shares).
     fn bytes(&self) -> u64 {

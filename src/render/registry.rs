@@ -19,6 +19,8 @@ pub mod ambient;
 pub mod ao;
 #[path = "ea/mod.rs"]
 mod ea;
+#[path = "eikonal/mod.rs"]
+pub mod eikonal;
 #[path = "refract/mod.rs"]
 pub mod refract;
 #[path = "single/mod.rs"]
@@ -69,17 +71,21 @@ pub enum Model {
     /// Ambient scattering: multiple scattering in a sphere around each sample from a
     /// preintegrated Monte-Carlo table, soft shadows by tube marching (render::ambient).
     Ambient,
+    /// Eikonal rendering: a simulated light volume, viewing rays along the ray equation
+    /// (render::eikonal).
+    Eikonal,
 }
 
 impl Model {
     /// Every model, in the order `bench models` compares them (EA first: the ratios'
     /// base).
-    pub const ALL: [Model; 5] = [
+    pub const ALL: [Model; 6] = [
         Model::Ea,
         Model::Ao,
         Model::Single,
         Model::Ambient,
         Model::Refract,
+        Model::Eikonal,
     ];
 
     /// The model called `name` (as [`Model::name`] gives it).
@@ -121,6 +127,7 @@ impl Model {
             Model::Ao => &ao::AO,
             Model::Single => &single::SINGLE,
             Model::Ambient => &ambient::AMBIENT,
+            Model::Eikonal => &eikonal::EIKONAL,
         }
     }
 

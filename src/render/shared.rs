@@ -134,6 +134,10 @@ impl Renderer {
                 info: self.volume_info,
                 extinction: self.extinction.as_ref(),
                 linear: &self.linear,
+                volume: &self.volume_tex,
+                volume_sampler: &self.volume_sampler,
+                tf: &self.tf_image,
+                tf_changes: self.tf_changes,
             };
             let state = (decl.make)(&shared)?;
             self.states.insert(model, state);
@@ -158,6 +162,10 @@ impl Renderer {
             info: self.volume_info,
             extinction: self.extinction.as_ref(),
             linear: &self.linear,
+            volume: &self.volume_tex,
+            volume_sampler: &self.volume_sampler,
+            tf: &self.tf_image,
+            tf_changes: self.tf_changes,
         };
         let state = self.states.get_mut(&model).expect("made above");
         if state.prepare(&shared, opts)? {

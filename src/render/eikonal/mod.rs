@@ -1,0 +1,268 @@
+//! The eikonal model (`--model eikonal`, issue 35; seed 001, Ihrke et al., *Eikonal
+//! Rendering*): the light simulated first, as adaptive wavefronts through the
+//! refractive-index field ([`super::light_simulator`], sect. 4.2 and 5.2), into a light
+//! volume (fluence and mean direction per voxel); then every view rendered from it by
+//! viewing rays integrated with the ray equation (`glsl/eikonal_view.comp`, sect. 4.1 and
+//! 5.3, with its image formation model).
+//!
+//! Unlike the sweep, light and view are independent: the light may come from any
+//! direction (behind the camera too), there may be several lights, directional or point
+//! (their wavefronts add), and moving the camera reruns only the view. The light volume
+//! is the model's state ([`LightVolume`]): simulated again, outside the frame's recording
+//! (the simulation reads the list's size back between submissions), when the lights, the
+//! transfer functions or the refractive-index scale change; its GPU time is the frame's
+//! scope [`SIMULATION_SCOPE`], what a light or transfer-function change costs this model.
+//! Changing g, the albedo or the camera rebuilds nothing.
+
+use anyhow::{ensure, Result};
+use bytemuck::{Pod, Zeroable};
+
+use super::light_simulator::{self, FieldInputs, SimulationStats, WavefrontSettings};
+use super::march::{delegate_to_march, RayMarchPass, RAY_MARCHER};
+use super::model::{Inputs, ModelPass, ModelState, ModelStateDecl, OpticalModel, Recorded, Shared};
+use super::LightSupport;
+use super::{RenderOptions, ScatterOptions, SCATTER_ALBEDO, SCATTER_G};
+use crate::shaders;
+use crate::vk::{self, Binding, Buffer, Memory, Recorder, Timings};
+
+/// The timings scope of the light simulation (all lights).
+pub const SIMULATION_SCOPE: &str = "light simulation";
+
+/// Bytes of the light volume per voxel: fluence and direction, a vec4 each.
+const VOXEL_BYTES: u64 = 32;
+
+/// The light volume the view reads, keyed by what it was simulated for.
+pub struct LightVolume {
+    buffer: Buffer,
+    /// The lights, η scale and transfer-function change it holds (None: not simulated).
+    key: Option<String>,
+    /// The last simulation's GPU timings, until a frame takes them.
+    timings: Timings,
+    /// Each light's simulation statistics, the last time it was simulated.
+    stats: Vec<SimulationStats>,
+}
+
+impl LightVolume {
+    fn bytes(extent: [u32; 3]) -> u64 {
+        VOXEL_BYTES * extent.iter().map(|&e| e as u64).product::<u64>()
+    }
+
+    fn new(shared: &Shared) -> Result<Self> {
+        let buffer = Buffer::new(
+            shared.ctx,
+            Self::bytes(shared.info.dims),
+            vk::usage::STORAGE_BUFFER | vk::usage::BUFFER_TRANSFER_DST,
+            Memory::Gpu,
+            "eikonal light volume",
+        )?;
+        Ok(Self {
+            buffer,
+            key: None,
+            timings: Timings::default(),
+            stats: Vec::new(),
+        })
+    }
+
+    /// The statistics of the last simulation, one per light.
+    pub fn stats(&self) -> &[SimulationStats] {
+        &self.stats
+    }
+}
+
+/// What the light volume depends on besides the volume (a renderer holds one).
+fn key(shared: &Shared, opts: &RenderOptions) -> String {
+    format!(
+        "{:?} eta scale {:?} tf change {}",
+        opts.lights, opts.sweep.eta_scale, shared.tf_changes
+    )
+}
+
+impl ModelState for LightVolume {
+    /// Simulate every light (their fluence and luminance-weighted directions add) and
+    /// upload the sum, unless the volume holds these lights already.
+    fn prepare(&mut self, shared: &Shared, opts: &RenderOptions) -> Result<bool> {
+        let key = key(shared, opts);
+        if self.key.as_ref() == Some(&key) {
+            return Ok(false);
+        }
+        let inputs = FieldInputs {
+            ctx: shared.ctx,
+            info: shared.info,
+            volume: shared.volume,
+            volume_sampler: shared.volume_sampler,
+            tf: shared.tf,
+            linear: shared.linear,
+        };
+        let settings = WavefrontSettings {
+            fluence: true,
+            ..Default::default()
+        };
+        let voxels = self.buffer.size() / VOXEL_BYTES;
+        let mut fluence = vec![[0.0f32; 3]; voxels as usize];
+        // Σ luminance × direction, divided by the summed luminance below.
+        let mut weighted = vec![[0.0f32; 3]; voxels as usize];
+        let mut stats = Vec::new();
+        let mut ms = 0.0;
+        for light in &opts.lights {
+            let sim = light_simulator::simulate(&inputs, opts, light, &settings, &[], None)?;
+            let volume = sim.fluence.as_ref().expect("asked for the fluence volume");
+            for ((f, w), (e, d)) in fluence
+                .iter_mut()
+                .zip(weighted.iter_mut())
+                .zip(volume.fluence.iter().zip(&volume.direction))
+            {
+                let lum = luminance(*e);
+                for c in 0..3 {
+                    f[c] += e[c];
+                    w[c] += lum * d[c];
+                }
+            }
+            ms += sim.stats.gpu_ms;
+            stats.push(sim.stats);
+        }
+        let mut texels: Vec<[f32; 4]> = Vec::with_capacity(2 * fluence.len());
+        for (f, w) in fluence.iter().zip(&weighted) {
+            let lum = luminance(*f);
+            let d = if lum > 0.0 {
+                w.map(|c| c / lum)
+            } else {
+                [0.0; 3]
+            };
+            texels.push([f[0], f[1], f[2], 0.0]);
+            texels.push([d[0], d[1], d[2], 0.0]);
+        }
+        let ctx = shared.ctx;
+        let mut staging = Buffer::new(
+            ctx,
+            self.buffer.size(),
+            vk::usage::BUFFER_TRANSFER_SRC,
+            Memory::Upload,
+            "eikonal light volume staging",
+        )?;
+        staging.write(0, bytemuck::cast_slice(&texels))?;
+        let size = self.buffer.size();
+        ctx.execute(|rec| rec.upload_to_storage(&staging, 0, &self.buffer, 0, size))?;
+        self.timings = Timings {
+            scopes: vec![(SIMULATION_SCOPE.to_string(), ms)],
+        };
+        self.stats = stats;
+        self.key = Some(key);
+        // The same buffer: the passes' sets stay valid.
+        Ok(false)
+    }
+
+    fn take_timings(&mut self) -> Timings {
+        std::mem::take(&mut self.timings)
+    }
+
+    fn bytes(&self) -> u64 {
+        self.buffer.size()
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+
+    fn as_any_mut(&mut self) -> &mut dyn std::any::Any {
+        self
+    }
+}
+
+fn luminance(c: [f32; 3]) -> f32 {
+    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+}
+
+/// std140 mirror of `Params` in glsl/eikonal_view.comp (ea.comp's block, then the
+/// model's).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct Params {
+    march: super::march::MarchParams,
+    field: [f32; 4],
+    scatter: [f32; 4],
+    steps: [u32; 4],
+}
+
+pub(super) struct EikonalPass {
+    march: RayMarchPass,
+}
+
+impl EikonalPass {
+    pub fn new(inputs: &Inputs) -> Result<Self> {
+        let light = inputs.state::<LightVolume>()?;
+        Ok(Self {
+            march: RayMarchPass::new::<Params>(
+                inputs,
+                shaders::EIKONAL_VIEW_COMP,
+                "eikonal view",
+                &[
+                    Binding::Texture(inputs.env.map, inputs.linear),
+                    Binding::Storage(&light.buffer),
+                ],
+            )?,
+        })
+    }
+}
+
+/// The eikonal model's declaration (listed in render/registry.rs).
+pub(crate) static EIKONAL: OpticalModel = OpticalModel {
+    name: "eikonal",
+    summary: "Eikonal rendering (Ihrke et al.): the light simulated as adaptive wavefronts into a light volume, then viewing rays along the ray equation; lights from any direction, several, point lights (--light, --g, --albedo).",
+    lights: LightSupport {
+        max: super::limits::MAX_LIGHTS,
+        point: true,
+    },
+    phase_function: true,
+    // The refractive-index scale and the environment behind, as the sweep's.
+    flags: &["--eta-scale", "--env", "--env-rotation"],
+    make_pass: |inputs| Ok(Box::new(EikonalPass::new(inputs)?)),
+    options: &[&SCATTER_G, &SCATTER_ALBEDO],
+    rebuild_scopes: &[SIMULATION_SCOPE],
+    state: Some(ModelStateDecl {
+        what: "the light volume",
+        bytes: LightVolume::bytes,
+        make: |shared| Ok(Box::new(LightVolume::new(shared)?)),
+    }),
+    ..RAY_MARCHER
+};
+
+impl ModelPass for EikonalPass {
+    delegate_to_march!();
+
+    fn record(&mut self, rec: &mut Recorder, inputs: &Inputs) -> Result<Recorded> {
+        let (opts, info) = (inputs.opts, inputs.info);
+        ensure!(
+            opts.sweep.clip.is_none(),
+            "the eikonal model takes no clipping plane"
+        );
+        let _light = inputs.state::<LightVolume>()?;
+        let scatter = ScatterOptions::of(opts);
+        // Steps at most: four times the box's diagonal at the sample distance, and as
+        // many again for the shorter steps at faces (a ray bent back and forth by total
+        // reflection inside glass is cut there).
+        let step = opts.sample_distance * info.ref_step;
+        let max_steps = ((16.0 * info.half_extent.length() / step).ceil() as u32).max(1);
+        let mut recorded = self.march.record(rec, inputs, |march| Params {
+            march,
+            field: [
+                info.dims[0] as f32,
+                info.dims[1] as f32,
+                info.dims[2] as f32,
+                opts.sweep.eta_scale,
+            ],
+            scatter: [
+                scatter.g,
+                scatter.albedo,
+                opts.sweep.env_rotation.to_radians(),
+                if inputs.env.enabled { 1.0 } else { 0.0 },
+            ],
+            steps: [max_steps, 0, 0, 0],
+        })?;
+        recorded.max_steps = max_steps;
+        Ok(recorded)
+    }
+}
+
+crate::render::march::test_blocks_match_the_shaders!(
+    params: shaders::EIKONAL_VIEW_COMP, Params { field, scatter, steps }
+);
