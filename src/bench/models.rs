@@ -1,4 +1,4 @@
-//! `bench models`: every optical model of [`Model::ALL`] on the same rows, after the
+//! `bench models`: every optical model of [`Model::benched`] on the same rows, after the
 //! protocol of Table 1 of Ament et al., "Ambient Volume Scattering" (512² viewport, early
 //! ray termination at α = 0.98): per row and model the rendering time, its ratio to EA's,
 //! and what a change of the transfer function (TF), the light source (LS) and the phase
@@ -268,7 +268,7 @@ pub struct ModelsRow {
     pub source: String,
     pub resolution: [u32; 3],
     pub viewport: [u32; 2],
-    /// In [`Model::ALL`] order.
+    /// In [`Model::benched`] order.
     pub models: Vec<ModelRun>,
     /// The paper's figures of every model it has on this row (Supernova only), ours or
     /// not.
@@ -295,7 +295,7 @@ pub struct ModelsSettingsRecord {
     pub orbit_deg_per_frame: f32,
     /// The rows timed.
     pub rows: Vec<String>,
-    /// The models, in the order each frame renders them ([`Model::ALL`]).
+    /// The models, in the order each frame renders them ([`Model::benched`]).
     pub models: Vec<String>,
     /// The model the ratios divide by.
     pub ratio_to: String,
@@ -393,19 +393,21 @@ fn missing(spec: &ModelsRowSpec, data_dir: &Path) -> Option<String> {
 /// Frames one row renders: the interleaved frames, and per model one first frame and one
 /// per applicable change.
 fn frames_per_row(s: &ModelsSettings) -> u64 {
-    let changes: u64 = Model::ALL
+    let models = Model::benched();
+    let changes: u64 = models
         .iter()
         .map(|m| 2 + m.uses_light() as u64 + m.has_phase_function() as u64)
         .sum();
-    (s.timing.warmup + s.timing.frames) as u64 * Model::ALL.len() as u64 + changes
+    (s.timing.warmup + s.timing.frames) as u64 * models.len() as u64 + changes
 }
 
-/// Times every model of [`Model::ALL`] on every selected row.
+/// Times every model of [`Model::benched`] on every selected row.
 pub fn models(ctx: &Context, s: &ModelsSettings) -> Result<ModelsReport> {
     ensure!(s.timing.frames >= 1, "--frames must be at least 1");
     standins::check_scale(s.timing.scale).context("--scale")?;
     let specs = select_models_rows(&s.timing.rows)?;
-    let ea = Model::ALL.iter().position(|m| *m == Model::Ea).unwrap_or(0);
+    let models = Model::benched();
+    let ea = models.iter().position(|m| *m == Model::Ea).unwrap_or(0);
     let side = models_side(s.timing.scale);
     let mut skipped = Vec::new();
     let mut timed = Vec::new();
@@ -422,7 +424,7 @@ pub fn models(ctx: &Context, s: &ModelsSettings) -> Result<ModelsReport> {
     for k in &skipped {
         pb.println(format!("skipping {}: {}", k.dataset, k.reason));
     }
-    let nm = Model::ALL.len();
+    let nm = models.len();
     let mut out = Vec::new();
     for spec in timed {
         pb.set_message(format!("{}: preparing the volume", spec.name));
@@ -439,7 +441,7 @@ pub fn models(ctx: &Context, s: &ModelsSettings) -> Result<ModelsReport> {
             let warm = k < s.timing.warmup;
             pb.set_message(s.timing.frame_message(spec.name, k));
             let camera = orbit(&row.scene.camera, k);
-            for (i, m) in Model::ALL.iter().enumerate() {
+            for (i, m) in models.iter().enumerate() {
                 let f = renderer.render(*m, &camera, &opts)?;
                 let ms = frame_ms(&f)?;
                 steps[i] = f.max_steps;
@@ -457,7 +459,7 @@ pub fn models(ctx: &Context, s: &ModelsSettings) -> Result<ModelsReport> {
         drop(renderer);
         let camera = orbit(&row.scene.camera, s.timing.warmup + s.timing.frames);
         let mut changes = Vec::new();
-        for m in Model::ALL {
+        for &m in &models {
             pb.set_message(format!("{}: {} changes", spec.name, m.name()));
             let (_, mut renderer) =
                 prepare_builtin(ctx, spec.name, s.timing.scale, side, &s.timing.data_dir)?;
@@ -502,7 +504,7 @@ pub fn models(ctx: &Context, s: &ModelsSettings) -> Result<ModelsReport> {
         for (i, ((warmup_ms, frames_ms), (tf_change, ls_change, pf_change))) in
             times.into_iter().zip(changes).enumerate()
         {
-            let m = Model::ALL[i];
+            let m = models[i];
             let stats = Stats::of(&frames_ms)?;
             runs.push(ModelRun {
                 model: m.name().to_string(),
@@ -557,8 +559,8 @@ pub fn models(ctx: &Context, s: &ModelsSettings) -> Result<ModelsReport> {
             termination_alpha: MODELS_TERMINATION_ALPHA,
             orbit_deg_per_frame: ORBIT_DEG_PER_FRAME,
             rows: out.iter().map(|r| r.dataset.clone()).collect(),
-            models: Model::ALL.iter().map(|m| m.name().to_string()).collect(),
-            ratio_to: Model::ALL[ea].name().to_string(),
+            models: models.iter().map(|m| m.name().to_string()).collect(),
+            ratio_to: models[ea].name().to_string(),
             rebuild_scopes: rebuild_scopes().iter().map(|s| s.to_string()).collect(),
             tf_change: format!("every opacity × {TF_CHANGE_OPACITY_SCALE}"),
             ls_change: format!("light direction turned by {LS_CHANGE_DEG}°"),

@@ -34,7 +34,8 @@ pub enum BenchCommand {
 }
 
 const MODELS_ABOUT: &str = "\
-Every optical model refrakt has (`render --model`; EA first, the ratios' base) on the same \
+Every optical model refrakt has (`render --model`; EA first, the ratios' base; not yet the \
+experimental eikonal model, whose light simulation is too slow on lavapipe: issue 35) on the same \
 rows, after the protocol of Table 1 of Ament, Sadlo and Weiskopf, \"Ambient Volume \
 Scattering\" (IEEE TVCG 2013):
 

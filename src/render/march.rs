@@ -118,6 +118,7 @@ pub(crate) const RAY_MARCHER: OpticalModel = OpticalModel {
     flags: &[],
     rebuild_scopes: &[],
     state: None,
+    experimental: None,
 };
 
 /// A ray-marched model's test that its host blocks match its shaders: its `Params` block

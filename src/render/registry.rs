@@ -93,10 +93,28 @@ impl Model {
         Model::ALL.into_iter().find(|m| m.name() == name)
     }
 
-    /// The model after this one in [`Model::ALL`], wrapping round: the viewer's `m` key.
+    /// The models `bench models` times and the viewer's `m` key cycles through: all but
+    /// the experimental ones ([`Model::experimental`]), in [`Model::ALL`]'s order.
+    pub fn benched() -> Vec<Model> {
+        Model::ALL
+            .into_iter()
+            .filter(|m| m.experimental().is_none())
+            .collect()
+    }
+
+    /// Why the model is left out of `bench models` and the viewer's `m` key, if it is.
+    pub fn experimental(self) -> Option<&'static str> {
+        self.declaration().experimental
+    }
+
+    /// The model after this one in [`Model::benched`], wrapping round: the viewer's `m`
+    /// key (from an experimental model, the first).
     pub fn next(self) -> Model {
-        let i = Model::ALL.iter().position(|&m| m == self).unwrap_or(0);
-        Model::ALL[(i + 1) % Model::ALL.len()]
+        let models = Model::benched();
+        match models.iter().position(|&m| m == self) {
+            Some(i) => models[(i + 1) % models.len()],
+            None => models[0],
+        }
     }
 
     /// Whether the model takes the command-line flag `flag` ("--ao-radius"), of those

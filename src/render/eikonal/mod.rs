@@ -223,6 +223,10 @@ pub(crate) static EIKONAL: OpticalModel = OpticalModel {
         bytes: LightVolume::bytes,
         make: |shared| Ok(Box::new(LightVolume::new(shared)?)),
     }),
+    experimental: Some(
+        "its light simulation takes minutes on lavapipe at 64³ and can outgrow its patch \
+         budget at 128³ (issue 35)",
+    ),
     ..RAY_MARCHER
 };
 

@@ -256,6 +256,7 @@ pub(crate) static REFRACT: OpticalModel = OpticalModel {
     ],
     rebuild_scopes: &[],
     state: None,
+    experimental: None,
 };
 
 impl ModelPass for SweepPass {
