@@ -506,36 +506,37 @@ pub(crate) fn simulate(
         "wavefront receivers",
     )?;
     receiver_geometry.write(0, bytemuck::cast_slice(&geometry))?;
+    // A buffer of 32.32 fixed-point sums, refused (naming `what`) beyond what the device
+    // binds at once.
+    let sums = |bytes: u64, what: String, name: &str| -> Result<Buffer> {
+        ensure!(
+            bytes <= limit,
+            "{what} would take {bytes} bytes of sums, more than device '{}' binds at once \
+             ({limit} bytes)",
+            ctx.info().name
+        );
+        Buffer::new(
+            ctx,
+            bytes,
+            storage | vk::usage::BUFFER_TRANSFER_DST | vk::usage::BUFFER_TRANSFER_SRC,
+            Memory::Gpu,
+            name,
+        )
+    };
     let receiver_bytes = (pixels_total.max(1) * 3 * 8).max(16);
-    ensure!(
-        receiver_bytes <= limit,
-        "receivers of {pixels_total} pixels need {receiver_bytes} bytes of sums, more \
-             than device '{}' binds at once ({limit} bytes)",
-        ctx.info().name
-    );
-    let receiver_sums = Buffer::new(
-        ctx,
+    let receiver_sums = sums(
         receiver_bytes,
-        storage | vk::usage::BUFFER_TRANSFER_DST | vk::usage::BUFFER_TRANSFER_SRC,
-        Memory::Gpu,
+        format!("receivers of {pixels_total} pixels"),
         "wavefront receiver sums",
     )?;
     let voxels = info.dims.iter().map(|d| *d as u64).product::<u64>();
     let fluence_bytes = if settings.fluence { voxels * 6 * 8 } else { 16 };
-    ensure!(
-        fluence_bytes <= limit,
-        "the fluence volume of {} x {} x {} voxels needs {fluence_bytes} bytes of sums, \
-             more than device '{}' binds at once ({limit} bytes)",
-        info.dims[0],
-        info.dims[1],
-        info.dims[2],
-        ctx.info().name
-    );
-    let fluence_sums = Buffer::new(
-        ctx,
+    let fluence_sums = sums(
         fluence_bytes,
-        storage | vk::usage::BUFFER_TRANSFER_DST | vk::usage::BUFFER_TRANSFER_SRC,
-        Memory::Gpu,
+        format!(
+            "the fluence volume of {} x {} x {} voxels",
+            info.dims[0], info.dims[1], info.dims[2]
+        ),
         "wavefront fluence sums",
     )?;
 
@@ -576,12 +577,7 @@ pub(crate) fn simulate(
 
     let mut push = WavefrontPush {
         half_extent: half.extend(reference).into(),
-        dims: [
-            info.dims[0] as f32,
-            info.dims[1] as f32,
-            info.dims[2] as f32,
-            opts.sweep.eta_scale,
-        ],
+        dims: info.dims_and(opts.sweep.eta_scale),
         colour: [
             light.colour[0],
             light.colour[1],

@@ -147,6 +147,15 @@ pub(crate) struct VolumeInfo {
     pub dims: [u32; 3],
 }
 
+impl VolumeInfo {
+    /// The voxels per axis as floats and `w`: the shaders' `RAY_DIMS` vec4, whose w is the
+    /// refractive-index scale (glsl/ray_equation.glsl).
+    pub fn dims_and(&self, w: f32) -> [f32; 4] {
+        let [x, y, z] = self.dims.map(|d| d as f32);
+        [x, y, z, w]
+    }
+}
+
 impl Renderer {
     pub fn new(ctx: &Context, volume: &Volume, tf: &TransferFunctions) -> Result<Self> {
         let volume_tex = upload::volume_texture(ctx, volume)?;

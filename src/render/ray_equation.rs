@@ -176,12 +176,7 @@ impl Renderer {
         let info = &self.volume_info;
         let push = ProbePush {
             half_extent: info.half_extent.extend(info.ref_step).into(),
-            dims: [
-                info.dims[0] as f32,
-                info.dims[1] as f32,
-                info.dims[2] as f32,
-                opts.sweep.eta_scale,
-            ],
+            dims: info.dims_and(opts.sweep.eta_scale),
             target: match how {
                 Advance::ToPlane(t) => t.normal.extend(t.offset).into(),
                 Advance::ForTime => [0.0; 4],

@@ -248,12 +248,7 @@ impl ModelPass for EikonalPass {
         let max_steps = ((16.0 * info.half_extent.length() / step).ceil() as u32).max(1);
         let mut recorded = self.march.record(rec, inputs, |march| Params {
             march,
-            field: [
-                info.dims[0] as f32,
-                info.dims[1] as f32,
-                info.dims[2] as f32,
-                opts.sweep.eta_scale,
-            ],
+            field: info.dims_and(opts.sweep.eta_scale),
             scatter: [
                 scatter.g,
                 scatter.albedo,
