@@ -1191,7 +1191,7 @@ fn a_flag_of_other_models_names_the_models_that_take_it() {
         (
             "ao",
             &["--g", "0.3", "--albedo", "0.5"][..],
-            &["--g, --albedo only apply to --model single, ambient, not ao"][..],
+            &["--g, --albedo only apply to --model single, ambient, eikonal, not ao"][..],
         ),
         (
             "single",
@@ -1205,7 +1205,7 @@ fn a_flag_of_other_models_names_the_models_that_take_it() {
         (
             "ea",
             &["--light", "0,1,1"][..],
-            &["--light only applies to --model ao, single, ambient, refract, not ea"][..],
+            &["--light only applies to --model ao, single, ambient, refract, eikonal, not ea"][..],
         ),
         (
             "ambient",
@@ -1236,15 +1236,15 @@ fn settings_that_do_not_apply_are_refused_from_files_and_flags() {
         (
             "model = \"ea\"\n[light]\ntowards = [0, 1, 1]\nsoftness = 2\n",
             "[light] softness, [light] towards only apply to --model ao, single, ambient, \
-             refract, not ea",
+             refract, eikonal, not ea",
         ),
         (
             "model = \"ea\"\n[environment]\nmap = \"sky\"\nrotation = 30\n",
-            "[environment] map, [environment] rotation only apply to --model refract",
+            "[environment] map, [environment] rotation only apply to --model refract, eikonal",
         ),
         (
             "model = \"refract\"\ng = 0.5\nalbedo = 0.2\n",
-            "[render] g, [render] albedo only apply to --model single, ambient, not refract",
+            "[render] g, [render] albedo only apply to --model single, ambient, eikonal, not refract",
         ),
         (
             "light_transport = \"backward\"\nlight_rays = 8\nlight_spacing = 4\n",
