@@ -61,26 +61,12 @@ layout(std430, set = 0, binding = 6) readonly buffer Light {
 #include "raycast.glsl"
 #include "environment.glsl"
 #include "phase.glsl"
+#define LIGHT_VOLUME light
+#include "light_volume.glsl"
 
-// The fluence and mean direction at world point w: trilinear between voxel centres (the
-// simulator's deposit grid), clamped to the edge voxels.
+// The fluence and mean direction at world point w (glsl/light_volume.glsl).
 void light_at(vec3 w, out vec3 fluence, out vec3 direction) {
-    vec3 g = clamp(ray_tex(w) * P.field.xyz - 0.5, vec3(0.0), P.field.xyz - 1.0);
-    ivec3 b = min(ivec3(floor(g)), ivec3(P.field.xyz) - 2);
-    b = max(b, ivec3(0));
-    vec3 f = g - vec3(b);
-    ivec3 d = ivec3(P.field.xyz);
-    fluence = vec3(0.0);
-    direction = vec3(0.0);
-    for (int k = 0; k < 8; ++k) {
-        ivec3 o = ivec3(k & 1, (k >> 1) & 1, (k >> 2) & 1);
-        ivec3 c = min(b + o, d - 1);
-        vec3 wv = mix(1.0 - f, f, vec3(o));
-        float wt = wv.x * wv.y * wv.z;
-        uint vox = uint((c.z * d.y + c.y) * d.x + c.x);
-        fluence += wt * light[2u * vox].rgb;
-        direction += wt * light[2u * vox + 1u].xyz;
-    }
+    light_volume_at(ray_tex(w), P.field.xyz, fluence, direction);
 }
 
 vec3 background_seen(vec3 dir) {

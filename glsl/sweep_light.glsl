@@ -72,6 +72,30 @@ vec3 splatted_direction(vec4 sum) {
                                                       : normalize(P.light_dir.xyz);
 }
 
+// The eikonal light transport (`--light-transport eikonal`, issue 35 item 5): the light
+// simulated beforehand as adaptive wavefronts into a light volume (render/eikonal, the
+// eikonal model's light), read here instead of propagated plane by plane, so the light
+// may come from any direction and need not keep pace with the sweep. Specialization
+// constant 10; the binding holds a placeholder for the other transports.
+layout(constant_id = 10) const bool LIGHT_FROM_VOLUME = false;
+layout(std430, set = 0, binding = 26) readonly buffer LightVolume {
+    vec4 light_volume[];
+};
+#define LIGHT_VOLUME light_volume
+#include "light_volume.glsl"
+
+// The light at view-space point p from the light volume: its fluence (the light's units:
+// an unobstructed beam reads the light colour, as the planes' light does) and the
+// direction it travels in view space (its luminance-weighted mean, normalised; the
+// main light's where none arrives).
+void volume_light(vec3 p, out vec3 light, out vec3 dir) {
+    vec3 d_world;
+    light_volume_at(to_tex(p), P.volume_dims.xyz, light, d_world);
+    // view_to_world is a rotation (and the eye's translation): its transpose turns back.
+    vec3 d = transpose(mat3(P.view_to_world)) * d_world;
+    dir = dot(d, d) > 1e-12 ? normalize(d) : normalize(P.light_dir.xyz);
+}
+
 void count_clamp(uint which) {
     atomicAdd(counters.clamps[which], 1u);
 }

@@ -369,9 +369,16 @@ void PLANE_MAIN() {
     light_ray_plane(pixel, R);   // the light rays (sect. 4.2), forward
 #else
 #if PASS == 0
-    // The light through this plane (sect. 4.2, 5.2): the thesis' backward step.
+    // The light through this plane (sect. 4.2, 5.2): the thesis' backward step, or the
+    // light volume's (`--light-transport eikonal`).
     vec3 light, light_dir;
-    backward_light_step(uv, pixel, light, light_dir);
+    if (LIGHT_FROM_VOLUME) {
+        // The eikonal light transport: the plane's light from the light volume (for
+        // dumps and the plane's record; the viewing rays read the volume themselves).
+        volume_light(plane_point(uv, pc.depth), light, light_dir);
+    } else {
+        backward_light_step(uv, pixel, light, light_dir);
+    }
     out_light_colour = vec4(light, 0.0);
     out_light_direction = vec4(light_dir, 0.0);
 #endif

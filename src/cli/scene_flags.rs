@@ -147,8 +147,9 @@ pub struct SceneArgs {
     /// half side 1); either optionally followed by "@R,G,B" (linear colour; a point
     /// light's is the irradiance at distance 1). The refract, ao and single models take
     /// one directional light; for the sweep it must lie in the viewer's hemisphere (the
-    /// sweep runs front to back, so light cannot come from behind the volume). The
-    /// ambient model takes up to 4, directional or point. Default: one light from above,
+    /// sweep runs front to back, so light cannot come from behind the volume), except
+    /// with --light-transport eikonal. The ambient and eikonal models take up to 4,
+    /// directional or point. Default: one light from above,
     /// tilted towards the camera. "env" (first only): direction and colour from the
     /// environment map's brightest region (its irradiance, in the map's units: a night
     /// map gives a night scene).
@@ -209,8 +210,12 @@ pub struct SceneArgs {
     /// ray on its own and splats its flux onto each plane, so light is conserved through
     /// foci and caustics land where geometric optics puts them; "backward" is the thesis'
     /// semi-Lagrangian step (one direction per pixel, gain bounded per plane), kept for
-    /// comparison [default: forward].
-    #[arg(help_heading = "Light", long, value_name = "forward|backward")]
+    /// comparison; "eikonal" simulates the light first, as the eikonal model does
+    /// (adaptive wavefronts into a light volume; minutes on lavapipe at 64³, again only
+    /// when the light or the transfer functions change), and the viewing rays read it
+    /// there: light from any direction, also against the sweep, and no --softness
+    /// [default: forward].
+    #[arg(help_heading = "Light", long, value_name = "forward|backward|eikonal")]
     pub light_transport: Option<String>,
     /// Forward light transport: light rays per screen pixel, 1 to 8 (refract). The rays
     /// cover the light's whole domain at the nearest plane's pixel pitch as far as this

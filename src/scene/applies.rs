@@ -3,7 +3,7 @@
 //! ignored — on the command line and in scene files alike. Which model takes which setting
 //! is each model's declaration (`Model::takes_flag`: its options and flags, the registry).
 
-use anyhow::{ensure, Result};
+use anyhow::{bail, ensure, Result};
 
 use crate::render::{LightTransport, Model};
 
@@ -30,7 +30,7 @@ impl Given {
 const FORWARD_ONLY: [&str; 2] = ["--light-rays", "--light-spacing"];
 
 /// Refuses `given` settings that `model` does not take (naming the models that do), and the
-/// light rays' settings with the backward light transport.
+/// light rays' settings with the backward and eikonal light transports.
 pub fn refuse_what_does_not_apply(
     model: Model,
     transport: LightTransport,
@@ -77,7 +77,17 @@ pub fn refuse_what_does_not_apply(
             " (which has no light, plane sweep, refraction or environment)"
         }
     );
-    if model == Model::Refract && transport == LightTransport::Backward {
+    if model == Model::Refract && transport == LightTransport::Eikonal {
+        if let Some(g) = given.iter().find(|g| g.flag == "--softness") {
+            bail!(
+                "{} does not apply to the eikonal light transport: its light is the light \
+                 simulator's, which has no softness filter (soft shadows are the forward and \
+                 backward transports')",
+                g.written
+            );
+        }
+    }
+    if model == Model::Refract && transport != LightTransport::Forward {
         let rays: Vec<&str> = given
             .iter()
             .filter(|g| FORWARD_ONLY.contains(&g.flag))
@@ -85,10 +95,15 @@ pub fn refuse_what_does_not_apply(
             .collect();
         ensure!(
             rays.is_empty(),
-            "{} only appl{} to the forward light transport (its light rays); the backward \
-             transport propagates the light from plane to plane",
+            "{} only appl{} to the forward light transport (its light rays); the {} \
+             transport {}",
             rays.join(", "),
-            if rays.len() > 1 { "y" } else { "ies" }
+            if rays.len() > 1 { "y" } else { "ies" },
+            transport.name(),
+            match transport {
+                LightTransport::Eikonal => "reads the light from the simulated light volume",
+                _ => "propagates the light from plane to plane",
+            }
         );
     }
     Ok(())

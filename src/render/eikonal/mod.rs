@@ -47,10 +47,24 @@ impl LightVolume {
         VOXEL_BYTES * extent.iter().map(|&e| e as u64).product::<u64>()
     }
 
-    fn new(shared: &Shared) -> Result<Self> {
+    /// An empty light volume for the renderer's volume, refused where the device cannot
+    /// bind it as one storage buffer.
+    pub(crate) fn new(shared: &Shared) -> Result<Self> {
+        let bytes = Self::bytes(shared.info.dims);
+        let range = shared.ctx.info().limits.max_storage_buffer_range as u64;
+        let [x, y, z] = shared.info.dims;
+        ensure!(
+            bytes <= range,
+            "the light volume of a {x}x{y}x{z} volume takes {} MiB ({VOXEL_BYTES} bytes a \
+             voxel); device '{}' binds at most {} MiB as one storage buffer \
+             (maxStorageBufferRange): use a smaller volume (--scale)",
+            bytes >> 20,
+            shared.ctx.info().name,
+            range >> 20
+        );
         let buffer = Buffer::new(
             shared.ctx,
-            Self::bytes(shared.info.dims),
+            bytes,
             vk::usage::STORAGE_BUFFER | vk::usage::BUFFER_TRANSFER_DST,
             Memory::Gpu,
             "eikonal light volume",
@@ -67,23 +81,36 @@ impl LightVolume {
     pub fn stats(&self) -> &[SimulationStats] {
         &self.stats
     }
-}
 
-/// What the light volume depends on besides the volume (a renderer holds one).
-fn key(shared: &Shared, opts: &RenderOptions) -> String {
-    format!(
-        "{:?} eta scale {:?} tf change {}",
-        opts.lights, opts.sweep.eta_scale, shared.tf_changes
-    )
-}
+    /// The buffer the light is read from (glsl/light_volume.glsl).
+    pub(crate) fn buffer(&self) -> &Buffer {
+        &self.buffer
+    }
 
-impl ModelState for LightVolume {
-    /// Simulate every light (their fluence and luminance-weighted directions add) and
-    /// upload the sum, unless the volume holds these lights already.
-    fn prepare(&mut self, shared: &Shared, opts: &RenderOptions) -> Result<bool> {
+    /// Its device bytes.
+    pub(crate) fn device_bytes(&self) -> u64 {
+        self.buffer.size()
+    }
+
+    /// The last simulation's GPU timings, until a frame takes them.
+    pub(crate) fn take_timings(&mut self) -> Timings {
+        std::mem::take(&mut self.timings)
+    }
+
+    /// Simulate every light of `opts` (their fluence and luminance-weighted directions
+    /// add) and upload the sum, unless the volume holds these lights already.
+    pub(crate) fn update(&mut self, shared: &Shared, opts: &RenderOptions) -> Result<()> {
+        /// What the light volume depends on besides the volume (a renderer holds one).
+        fn key(shared: &Shared, opts: &RenderOptions) -> String {
+            format!(
+                "{:?} eta scale {:?} tf change {}",
+                opts.lights, opts.sweep.eta_scale, shared.tf_changes
+            )
+        }
+
         let key = key(shared, opts);
         if self.key.as_ref() == Some(&key) {
-            return Ok(false);
+            return Ok(());
         }
         let inputs = FieldInputs {
             ctx: shared.ctx,
@@ -147,16 +174,23 @@ impl ModelState for LightVolume {
         };
         self.stats = stats;
         self.key = Some(key);
+        Ok(())
+    }
+}
+
+impl ModelState for LightVolume {
+    fn prepare(&mut self, shared: &Shared, opts: &RenderOptions) -> Result<bool> {
+        self.update(shared, opts)?;
         // The same buffer: the passes' sets stay valid.
         Ok(false)
     }
 
     fn take_timings(&mut self) -> Timings {
-        std::mem::take(&mut self.timings)
+        LightVolume::take_timings(self)
     }
 
     fn bytes(&self) -> u64 {
-        self.buffer.size()
+        self.device_bytes()
     }
 
     fn as_any(&self) -> &dyn std::any::Any {

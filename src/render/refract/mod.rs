@@ -28,7 +28,7 @@ use anyhow::{bail, ensure, Result};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-use super::model::{FrameReadback, Inputs, ModelPass, OpticalModel, Recorded};
+use super::model::{FrameReadback, Inputs, ModelPass, ModelStateDecl, OpticalModel, Recorded};
 use super::LightSupport;
 use super::{Camera, FrameTarget, RenderOptions, VolumeInfo};
 use crate::shaders;
@@ -184,11 +184,14 @@ pub(super) fn check(
     let (_, forward, _, _) = camera.frame();
     let travel = opts.light().travel();
     let forwardness = travel.dot(forward);
-    if forwardness < MIN_FORWARD {
+    // (The eikonal transport's light comes from the light volume, simulated for any
+    // direction.)
+    if forwardness < MIN_FORWARD && sweep.light_transport != LightTransport::Eikonal {
         bail!(
             "the light must come from the viewer's side: the sweep runs front to back, so \
              light travelling against it cannot be propagated (light direction makes {:.1}° \
-             with the view direction; at most {:.1}° is supported)",
+             with the view direction; at most {:.1}° is supported; --light-transport eikonal \
+             takes light from any direction)",
             forwardness.clamp(-1.0, 1.0).acos().to_degrees(),
             MIN_FORWARD.acos().to_degrees()
         );
@@ -254,8 +257,14 @@ pub(crate) static REFRACT: OpticalModel = OpticalModel {
         "--variant",
         "--pass-timings",
     ],
+    // (The eikonal transport's light simulation is the eikonal model's scope.)
     rebuild_scopes: &[],
-    state: None,
+    // The light volume of the eikonal transport, made when a frame asks for it.
+    state: Some(ModelStateDecl {
+        what: "the light volume (--light-transport eikonal)",
+        bytes: |_| 0,
+        make: |shared| Ok(Box::new(SweepLight::new(shared)?)),
+    }),
     experimental: None,
 };
 
@@ -428,6 +437,7 @@ pub const MIN_LIGHT_SPACING: f32 = 0.25;
 pub const MAX_LIGHT_SPACING: f32 = 4.0;
 
 mod compute;
+mod eikonal_light;
 mod levers;
 mod options;
 mod params;
@@ -440,6 +450,7 @@ mod region;
 mod traffic;
 
 use compute::ComputeFrame;
+pub(crate) use eikonal_light::SweepLight;
 pub use levers::{Deposit, Gather, Levers, Region, Splat, SweepPath};
 pub use options::*;
 use params::*;

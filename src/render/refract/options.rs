@@ -12,8 +12,15 @@ pub enum LightTransport {
     /// since issue 12 (docs/NOTES.md, "Light transport for caustics").
     Forward,
     /// The thesis' backward (semi-Lagrangian) step with the intensity law (eqs. 4.4–4.8):
-    /// one direction per pixel, gain bounded per plane. The default.
+    /// one direction per pixel, gain bounded per plane.
     Backward,
+    /// Not propagated with the sweep at all: the light is simulated beforehand by the
+    /// eikonal model's light simulator (adaptive wavefronts, seed 001; render/eikonal)
+    /// into a light volume, and the viewing rays read their light from it (issue 35
+    /// item 5). So the light may come from any direction, also against the sweep, and
+    /// moving the camera reruns only the sweep. The planes run as the backward
+    /// transport's (one pass each) with the light step replaced by the volume's.
+    Eikonal,
 }
 
 impl LightTransport {
@@ -21,6 +28,7 @@ impl LightTransport {
         match self {
             LightTransport::Forward => "forward",
             LightTransport::Backward => "backward",
+            LightTransport::Eikonal => "eikonal",
         }
     }
 
@@ -28,7 +36,8 @@ impl LightTransport {
         match s {
             "forward" => Ok(LightTransport::Forward),
             "backward" => Ok(LightTransport::Backward),
-            _ => bail!("unknown light transport '{s}'; one of forward, backward"),
+            "eikonal" => Ok(LightTransport::Eikonal),
+            _ => bail!("unknown light transport '{s}'; one of forward, backward, eikonal"),
         }
     }
 }

@@ -385,6 +385,11 @@ impl SweepPass {
         plane_bindings.push(Binding::Storage(&sprite_groups));
         plane_bindings.push(Binding::Storage(&sprite_fallback));
         plane_bindings.push(Binding::Storage(&sprite_draws));
+        // 26: the eikonal transport's light volume (glsl/sweep_light.glsl, specialization
+        // constant 10), or a placeholder never read.
+        plane_bindings.push(Binding::Storage(
+            inputs.state::<super::SweepLight>()?.buffer(),
+        ));
         // Every set of the sweep is made `with_explicit_barriers`: the sweep records its
         // per-plane barriers itself (the design's explicit barriers between planes; its
         // sets bind both layers of the ping-pong images, one read and one written per

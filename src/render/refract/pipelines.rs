@@ -29,6 +29,10 @@ pub(crate) struct Features {
     /// The `gather` lever: how the compute sweep's splat sums the deposits. Not a
     /// constant: it chooses the splat's shaders.
     pub(crate) gather: super::Gather,
+    /// The eikonal light transport: the plane's light read from the light volume instead
+    /// of the backward step (constant 10, glsl/sweep_light.glsl). Not a lever: it
+    /// chooses what the light is, so it is always specialised.
+    pub(crate) light_volume: bool,
 }
 
 impl Features {
@@ -43,6 +47,7 @@ impl Features {
         clear: true,
         cells: true,
         gather: super::Gather::Pairs,
+        light_volume: false,
     };
 
     /// `have_field`: whether the field texture exists (it may not fit in memory);
@@ -56,6 +61,7 @@ impl Features {
             clear: levers.clear,
             cells: levers.deposit == super::Deposit::Cells,
             gather: levers.gather,
+            light_volume: sweep.light_transport == super::LightTransport::Eikonal,
             ..Self::ALL
         };
         if !levers.specialize {
@@ -71,8 +77,8 @@ impl Features {
         }
     }
 
-    /// Constant 0 (the gradient volume is bound), then 1-9.
-    pub(super) fn constants(self, have_gradient: bool) -> [u32; 10] {
+    /// Constant 0 (the gradient volume is bound), then 1-10.
+    pub(super) fn constants(self, have_gradient: bool) -> [u32; 11] {
         [
             have_gradient as u32,
             self.specular as u32,
@@ -84,6 +90,7 @@ impl Features {
             self.films as u32,
             self.clear as u32,
             self.cells as u32,
+            self.light_volume as u32,
         ]
     }
 }
@@ -108,7 +115,7 @@ impl PlanePipelines {
         ctx: &Context,
         passes: [&RenderPass; 4],
         set: &DescriptorSet,
-        constants: [u32; 10],
+        constants: [u32; 11],
         cells: bool,
         forward: bool,
     ) -> Result<Self> {
@@ -309,7 +316,7 @@ impl ComputePlanes {
     pub(super) fn new(
         ctx: &Context,
         set: &DescriptorSet,
-        constants: [u32; 10],
+        constants: [u32; 11],
         gather: super::Gather,
         cells: bool,
     ) -> Result<Self> {

@@ -75,7 +75,7 @@ impl SweepPass {
         // path needs neither point sprites nor fragment-shader atomics.
         let forward_on = sweep.light_transport == LightTransport::Forward;
         let forward = match (sweep.light_transport, &self.forward) {
-            (LightTransport::Backward, _) => None,
+            (LightTransport::Backward | LightTransport::Eikonal, _) => None,
             (LightTransport::Forward, Some(f)) => Some(f),
             (LightTransport::Forward, None) if compute => None,
             (LightTransport::Forward, None) => bail!(
