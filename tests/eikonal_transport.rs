@@ -49,10 +49,9 @@ fn eikonal_options(width: u32, height: u32, light: Light) -> RenderOptions {
 /// the light volume, is the single-scattering integral of an isotropic medium of albedo 1
 /// (the sweep's model: a sample returns its colour times the light): within 2 % for a
 /// light beside the camera, behind it, and in front of it (travelling towards the eye,
-/// against the sweep, which the forward and backward transports refuse). Breaks it: the
-/// volume read in view coordinates instead of the box's, light attenuated again within
-/// the segment (the layer weight of the plane transports), the planes' light read
-/// instead of the volume's.
+/// against the sweep, which the forward and backward transports refuse). Measured:
+/// within 0.27 %. Breaks it (measured): the light volume read with x and z swapped
+/// (−72 % for the light above and behind the camera).
 #[test]
 fn a_homogeneous_block_lit_from_anywhere_matches_the_single_scattering_integral() {
     with_context(|ctx| {
@@ -90,6 +89,99 @@ fn a_homogeneous_block_lit_from_anywhere_matches_the_single_scattering_integral(
             "worst error {:.2} % (bound 2 %)",
             100.0 * worst
         );
+    });
+}
+
+/// Several lights, directional and point, light the sweep with the eikonal transport
+/// (their wavefronts add in the light volume): in a homogeneous block, where nothing
+/// depends on the light's direction, each pixel with both lights is the sum of the two
+/// frames with one each, to 1e-4 of the brightest pixel; a light moved changes the
+/// frame. The other transports refuse both a second light and a point light, naming the
+/// eikonal transport. Measured: 3e-7 of the brightest pixel. Breaks it: only the first
+/// light simulated (the point light's part, a third of the blue, would be missing).
+#[test]
+fn several_lights_and_point_lights_add_up() {
+    with_context(|ctx| {
+        let n = 33u32;
+        let camera = face_on(3.0, 10.0);
+        let volume = f32_volume(n, |_| 1.0);
+        let mut renderer = Renderer::new(ctx, &volume, &white_tf(0.05)).unwrap();
+        let sun = directional(Vec3::new(0.0, 1.0, 0.4));
+        let lamp = Light {
+            source: LightSource::Point {
+                position: Vec3::new(0.9, -0.3, -0.6),
+            },
+            colour: [0.6, 0.8, 1.0],
+            softness: 0.0,
+        };
+        let frame = |renderer: &mut Renderer, lights: Vec<Light>| {
+            let mut opts = eikonal_options(24, 24, lights[0]);
+            opts.lights = lights;
+            renderer
+                .render(Model::Refract, &camera, &opts)
+                .unwrap()
+                .pixels
+        };
+        let a = frame(&mut renderer, vec![sun]);
+        let b = frame(&mut renderer, vec![lamp]);
+        let both = frame(&mut renderer, vec![sun, lamp]);
+        let peak = both
+            .iter()
+            .flat_map(|p| &p[..3])
+            .fold(0.0f32, |m, &c| m.max(c));
+        let worst = a
+            .iter()
+            .zip(&b)
+            .zip(&both)
+            .flat_map(|((a, b), s)| (0..3).map(move |c| (a[c] + b[c] - s[c]).abs()))
+            .fold(0.0f32, f32::max);
+        let lamp_share =
+            b.iter().map(|p| p[2]).sum::<f32>() / both.iter().map(|p| p[2]).sum::<f32>();
+        eprintln!(
+            "brightest {peak:.4}; |one + other - both| at most {worst:.2e}; the point light's \
+             share of the blue {lamp_share:.3}"
+        );
+        assert!(peak > 0.05, "the block must be lit: {peak}");
+        assert!(
+            lamp_share > 0.1,
+            "the point light must light the block: {lamp_share}"
+        );
+        assert!(
+            worst <= 1e-4 * peak,
+            "lights do not add: {worst:.2e} of {peak:.4}"
+        );
+        let mut moved = lamp;
+        moved.source = LightSource::Point {
+            position: Vec3::new(-0.9, -0.3, -0.6),
+        };
+        let c = frame(&mut renderer, vec![moved]);
+        let change = b
+            .iter()
+            .zip(&c)
+            .map(|(p, q)| (p[2] - q[2]).abs())
+            .fold(0.0f32, f32::max);
+        assert!(
+            change > 0.01 * peak,
+            "moving the point light changed nothing"
+        );
+
+        for transport in [LightTransport::Forward, LightTransport::Backward] {
+            for lights in [vec![sun, sun], vec![lamp]] {
+                let mut opts = eikonal_options(24, 24, lights[0]);
+                opts.lights = lights;
+                opts.sweep.light_transport = transport;
+                let err = renderer
+                    .render(Model::Refract, &camera, &opts)
+                    .err()
+                    .map(|e| format!("{e:#}"))
+                    .unwrap_or_default();
+                assert!(
+                    err.contains("refract model takes")
+                        && err.contains("--light-transport eikonal"),
+                    "{transport:?}: {err:?}"
+                );
+            }
+        }
     });
 }
 
@@ -145,8 +237,10 @@ fn in_shadow(p: Vec3, towards: Vec3) -> bool {
 /// shows the sphere's shadow on the floor in front of it where geometry puts it: the
 /// centroid of the floor pixels darker than half the lit floor within 2 % of R of the
 /// centroid of those whose ray to the light meets the sphere, and the two sets agreeing
-/// but for the penumbra. Breaks it: the light's direction taken the other way round
-/// (the shadow falls behind the sphere), the volume read with x and z swapped.
+/// but for the penumbra. Measured: 1.56 % R. Breaks it (measured): the volume read with
+/// x and z swapped (95 % R); a surface's light read at the viewing segment's middle
+/// without the step upstream along the light (10 % R in a 48³ version of this scene,
+/// and the floor banded at the plane spacing), at its front (3.6 % R there).
 #[test]
 fn a_light_from_behind_the_sphere_casts_its_shadow_where_geometry_puts_it() {
     with_context(|ctx| {

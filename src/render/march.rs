@@ -118,6 +118,7 @@ pub(crate) const RAY_MARCHER: OpticalModel = OpticalModel {
     flags: &[],
     rebuild_scopes: &[],
     state: None,
+    more_lights: None,
     experimental: None,
 };
 

@@ -159,6 +159,9 @@ pub(crate) struct OpticalModel {
     pub summary: &'static str,
     /// How many lights it takes and whether point lights are among them.
     pub lights: LightSupport,
+    /// More lights it takes with some of its settings (the sweep's eikonal light
+    /// transport), if any.
+    pub more_lights: Option<MoreLights>,
     /// Whether it has a phase function (a phase-function change applies).
     pub phase_function: bool,
     /// Whether it reads the gradient volume (built on its first frame).
@@ -194,6 +197,15 @@ pub(crate) struct OpticalModel {
     pub experimental: Option<&'static str>,
 }
 
+/// The lights a model takes with some of its settings: [`OpticalModel::more_lights`].
+pub(crate) struct MoreLights {
+    pub lights: LightSupport,
+    /// Whether these settings are given.
+    pub when: fn(&RenderOptions) -> bool,
+    /// The settings, as a user gives them ("--light-transport eikonal").
+    pub how: &'static str,
+}
+
 /// How a model's state is made: [`OpticalModel::state`].
 pub(crate) struct ModelStateDecl {
     /// What it is, for errors ("the transmittance cache").
@@ -227,11 +239,24 @@ pub(crate) fn check(
     camera: &Camera,
     opts: &RenderOptions,
 ) -> Result<()> {
-    let support = model.light_support();
+    let declared = model.declaration();
+    let support = match &declared.more_lights {
+        Some(more) if (more.when)(opts) => more.lights,
+        _ => declared.lights,
+    };
+    // What the model would take with other settings, for the refusals.
+    let other = declared.more_lights.as_ref().filter(|m| !(m.when)(opts));
+    let more = other
+        .map(|m| format!("; with {} it takes up to {}", m.how, m.lights.max))
+        .unwrap_or_default();
+    let more_point = other
+        .filter(|m| m.lights.point)
+        .map(|m| format!("; with {} it takes point lights too", m.how))
+        .unwrap_or_default();
     if support.max > 0 {
         ensure!(
             opts.lights.len() <= support.max,
-            "{} lights given; the {} model takes {}{}",
+            "{} lights given; the {} model takes {}{}{more}",
             opts.lights.len(),
             model.name(),
             if support.max == 1 {
@@ -253,13 +278,12 @@ pub(crate) fn check(
         {
             bail!(
                 "light {} is a {}: the {} model takes directional lights only (point \
-                 lights are the ambient-scattering model's: --model ambient)",
+                 lights are the ambient-scattering model's: --model ambient){more_point}",
                 i + 1,
                 l.describe(),
                 model.name()
             );
         }
     }
-    let declared = model.declaration();
     (declared.check)(declared, info, camera, opts)
 }

@@ -28,7 +28,9 @@ use anyhow::{bail, ensure, Result};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-use super::model::{FrameReadback, Inputs, ModelPass, ModelStateDecl, OpticalModel, Recorded};
+use super::model::{
+    FrameReadback, Inputs, ModelPass, ModelStateDecl, MoreLights, OpticalModel, Recorded,
+};
 use super::LightSupport;
 use super::{Camera, FrameTarget, RenderOptions, VolumeInfo};
 use crate::shaders;
@@ -230,8 +232,18 @@ pub(super) fn check_model(info: VolumeInfo, camera: &Camera, opts: &RenderOption
 pub(crate) static REFRACT: OpticalModel = OpticalModel {
     name: "refract",
     summary: "The refractive plane sweep: refraction, caustics, soft shadows, tinted media (the default).",
-    // One directional light (thesis sect. 4.2; several lights are future work).
+    // One directional light (thesis sect. 4.2; several lights are future work), propagated
+    // with the planes; the eikonal transport's light volume sums up to MAX_LIGHTS,
+    // directional or point, simulated apart.
     lights: LightSupport::ONE_DIRECTIONAL,
+    more_lights: Some(MoreLights {
+        lights: LightSupport {
+            max: crate::render::limits::MAX_LIGHTS,
+            point: true,
+        },
+        when: |opts| opts.sweep.light_transport == LightTransport::Eikonal,
+        how: "--light-transport eikonal",
+    }),
     phase_function: false,
     gradient: true,
     extinction: None,
