@@ -373,9 +373,10 @@ void PLANE_MAIN() {
     // light volume's (`--light-transport eikonal`).
     vec3 light, light_dir;
     if (LIGHT_FROM_VOLUME) {
-        // The eikonal light transport: the plane's light from the light volume (for
-        // dumps and the plane's record; the viewing rays read the volume themselves).
-        volume_light(plane_point(uv, pc.depth), light, light_dir);
+        // The eikonal light transport: no light on the planes (the viewing rays read the
+        // light volume themselves; its light-colour dumps are refused).
+        light = vec3(0.0);
+        light_dir = P.light_dir.xyz;
     } else {
         backward_light_step(uv, pixel, light, light_dir);
     }

@@ -1265,8 +1265,9 @@ fn settings_that_do_not_apply_are_refused_from_files_and_flags() {
         assert!(!o.status.success() && err.contains(needle), "{body}: {err}");
         assert!(!out.exists(), "{body}: an image was written");
     }
-    assert_clean_failure(
-        &[
+    // An 8³ volume rendered at 8 × 8 with these settings.
+    let tiny = |settings: &[&'static str]| -> Vec<&'static str> {
+        let mut args = vec![
             "render",
             "--volume-size",
             "8",
@@ -1274,14 +1275,24 @@ fn settings_that_do_not_apply_are_refused_from_files_and_flags() {
             "8",
             "--height",
             "8",
-            "--light-transport",
-            "backward",
-            "--light-rays",
-            "4",
-            "-o",
-            "x.png",
-        ],
+        ];
+        args.extend_from_slice(settings);
+        args.extend_from_slice(&["-o", "x.png"]);
+        args
+    };
+    assert_clean_failure(
+        &tiny(&["--light-transport", "backward", "--light-rays", "4"]),
         "--light-rays only applies to the forward light transport",
+    );
+    // The eikonal transport's light is the simulator's: no softness filter, and nothing
+    // on the planes to dump.
+    assert_clean_failure(
+        &tiny(&["--light-transport", "eikonal", "--softness", "1"]),
+        "--softness does not apply to the eikonal light transport",
+    );
+    assert_clean_failure(
+        &tiny(&["--light-transport", "eikonal", "--dump", "light-colour@1"]),
+        "the light is in the light volume, not on the planes",
     );
 }
 

@@ -649,12 +649,21 @@ pub(crate) fn simulate(
             p(cycle, max_cycles);
         }
         if words[CTRL_NEEDED] > 0 {
+            // The default budget is what the device binds: only a smaller volume helps.
+            let remedy = match settings.max_patches {
+                Some(_) => "raise the patch budget, coarsen the volume, or raise the energy \
+                            threshold"
+                    .to_string(),
+                None => format!(
+                    "that is the most device '{}' binds as one storage buffer \
+                     (maxStorageBufferRange); use a smaller volume (--volume-size, --scale)",
+                    ctx.info().name
+                ),
+            };
             bail!(
                 "the light simulation needed {} patches at once, more than its budget of \
-                     {capacity} ({} bytes of patch list); raise the patch budget, coarsen the \
-                     volume, or raise the energy threshold",
+                 {capacity} ({list_bytes} bytes of patch list, after {cycle} cycles); {remedy}",
                 words[CTRL_NEEDED],
-                list_bytes
             );
         }
         if words[CTRL_COUNT + (cycle % 2) as usize] == 0 {

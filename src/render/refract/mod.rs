@@ -205,6 +205,19 @@ pub(super) fn check(
     )?;
     for (b, plane) in &sweep.dumps {
         ensure!(
+            sweep.light_transport != LightTransport::Eikonal
+                || !matches!(
+                    b,
+                    StateBuffer::LightColour
+                        | StateBuffer::LightDirection
+                        | StateBuffer::LightRays
+                        | StateBuffer::LightRayDirections
+                ),
+            "--dump {}: with the eikonal light transport the light is in the light volume, \
+             not on the planes",
+            b.name()
+        );
+        ensure!(
             *plane < planes.count,
             "--dump {}@{plane}: this frame has planes 0..{}",
             b.name(),
