@@ -1384,3 +1384,59 @@ fn settings_that_would_be_ignored_are_refused() {
     }
     assert_clean_failure(&["--device", "", "info"], "--device '' is empty");
 }
+
+/// `render` with the eikonal light simulation (the eikonal model, the sweep's eikonal
+/// transport) prints each light's simulation summary, and its accounting is physics: in
+/// a volume of clear air all the launched light leaves the box (none absorbed, torn or
+/// diluted), in one of opaque matter none does, and through the sphere-on-floor scene
+/// (its floor a slab narrower than the box) some does not.
+#[test]
+fn render_prints_where_the_simulated_light_went() {
+    let dir = tempfile::tempdir().unwrap();
+    let tf = |name: &str, opacity: f32| {
+        let path = dir.path().join(name);
+        let text = format!("colour = [[0.0, 1, 1, 1]]\nopacity = [[0.0, {opacity}]]\n");
+        std::fs::write(&path, text).unwrap();
+        path.to_str().unwrap().to_string()
+    };
+    let (air, opaque) = (tf("air.toml", 0.0), tf("opaque.toml", 1.0));
+    let out = dir.path().join("x.png");
+    let left_the_box = |extra: &[&str]| -> f64 {
+        let mut args = vec![
+            "render",
+            "--volume-size",
+            "12",
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let o = refrakt(&args);
+        let text = String::from_utf8_lossy(&o.stdout).into_owned();
+        assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+        let line = text
+            .lines()
+            .find(|l| l.starts_with("light simulation, light 1: "))
+            .unwrap_or_else(|| panic!("{args:?}: no simulation summary in:\n{text}"));
+        let left: f64 = line
+            .split(" % left the box")
+            .next()
+            .and_then(|s| s.rsplit(' ').next())
+            .and_then(|s| s.parse().ok())
+            .unwrap_or_else(|| panic!("no share that left the box in: {line}"));
+        eprintln!("{args:?}: {line}");
+        left
+    };
+    let clear = left_the_box(&["--model", "eikonal", "--tf", &air]);
+    assert!(clear > 99.9, "in clear air {clear} % left the box");
+    let dark = left_the_box(&["--model", "eikonal", "--tf", &opaque]);
+    assert!(dark < 0.1, "through opaque matter {dark} % left the box");
+    let floor = left_the_box(&["--light-transport", "eikonal"]);
+    assert!(
+        (1.0..99.0).contains(&floor),
+        "past the sphere on its floor {floor} % left the box"
+    );
+}

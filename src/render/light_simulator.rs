@@ -219,6 +219,39 @@ pub struct SimulationStats {
     pub gpu_ms: f64,
 }
 
+impl SimulationStats {
+    /// One line for users: how long the simulation ran, how large the list grew, and
+    /// where the launched flux went (per cent, mean over the channels; the rest was
+    /// absorbed on the way or still travelling).
+    pub fn summary(&self) -> String {
+        let share = |f: [f64; 3]| {
+            let parts: Vec<f64> = f
+                .iter()
+                .zip(&self.launched_flux)
+                .filter(|(_, &l)| l > 0.0)
+                .map(|(x, l)| x / l)
+                .collect();
+            100.0 * parts.iter().sum::<f64>() / parts.len().max(1) as f64
+        };
+        format!(
+            "{} cycles, {} patches launched, list peak {}, worst kept patch {:.2} voxels; \
+             of the light launched: {:.1} % left the box, {:.2} % retired torn, {:.2} % \
+             retired diluted (the rest absorbed, or still travelling); {} patches still \
+             travelling at the end; \
+             {:.0} ms",
+            self.cycles,
+            self.launched,
+            self.peak_patches,
+            self.worst_span,
+            share(self.left),
+            share(self.torn),
+            share(self.diluted),
+            self.live_at_end,
+            self.gpu_ms
+        )
+    }
+}
+
 /// The light volumes: per voxel (x fastest), the fluence (rgb, the light's irradiance
 /// units) and the luminance-weighted mean direction of the light crossing it (not unit:
 /// its length is 1 where one wavefront crosses, less where several do).

@@ -247,6 +247,14 @@ impl Renderer {
         &self.gradient_timings
     }
 
+    /// The statistics of `model`'s last light simulation, one per light: the eikonal
+    /// model's, and the sweep's with `--light-transport eikonal`; empty for the others.
+    pub fn light_simulation_stats(&self, model: Model) -> Vec<light_simulator::SimulationStats> {
+        self.existing_model_state(model)
+            .map(|s| s.simulation_stats().to_vec())
+            .unwrap_or_default()
+    }
+
     /// Whether the sweep has its gradient volume (or computes normals on the fly).
     pub fn gradient_status(&self) -> &gradient::GradientStatus {
         &self.gradient_status

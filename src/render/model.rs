@@ -112,6 +112,11 @@ pub(crate) trait ModelState: std::any::Any + Send {
     fn bytes(&self) -> u64 {
         0
     }
+    /// The statistics of its last light simulation, one per light (the eikonal light
+    /// volume's), if it simulates light.
+    fn simulation_stats(&self) -> &[super::light_simulator::SimulationStats] {
+        &[]
+    }
     fn as_any(&self) -> &dyn std::any::Any;
     fn as_any_mut(&mut self) -> &mut dyn std::any::Any;
 }

@@ -193,6 +193,10 @@ impl ModelState for LightVolume {
         self.device_bytes()
     }
 
+    fn simulation_stats(&self) -> &[SimulationStats] {
+        self.stats()
+    }
+
     fn as_any(&self) -> &dyn std::any::Any {
         self
     }

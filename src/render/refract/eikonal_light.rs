@@ -67,6 +67,10 @@ impl ModelState for SweepLight {
             .unwrap_or_default()
     }
 
+    fn simulation_stats(&self) -> &[crate::render::light_simulator::SimulationStats] {
+        self.volume.as_ref().map_or(&[], |v| v.stats())
+    }
+
     fn bytes(&self) -> u64 {
         self.placeholder.size() + self.volume.as_ref().map_or(0, |v| v.device_bytes())
     }
