@@ -19,7 +19,14 @@
 //   a_h = 1 - (1 - a)^(h / ref),
 //
 // and what the ray sees where it leaves the box (the environment in its bent direction, or
-// the background) through (1 - A) M. Not yet here: the Fresnel split at faces (the ray
+// the background) through (1 - A) M.
+//
+// Dispersion (issue 35 item 3; render/eikonal/dispersion.rs): each colour channel's
+// refractive index is the field's scaled about 1 by its own factor (eta_scales). A ray is
+// traced first with red's; if it met no gradient of eta its path is every channel's and
+// its colour is kept whole, else it is traced again with green's and blue's and each
+// trace gives its own channel (the light volume holds each channel's own wavefront).
+// Not yet here: the Fresnel split at faces (the ray
 // refracts through every face; the reflected part is not traced) and an ambient term.
 #extension GL_GOOGLE_include_directive : require
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -38,7 +45,8 @@ layout(set = 0, binding = 0) uniform Params {
     // As ea.comp up to here.
     vec4 field;        // xyz: the volume's voxels per axis; w: the eta scale k
     vec4 scatter;      // x: g; y: albedo; z: environment rotation (rad); w: 1 = environment map
-    uvec4 steps;       // x: steps at most per ray
+    vec4 eta_scales;   // xyz: the eta scale k per colour channel (all P.field.w without dispersion)
+    uvec4 steps;       // x: steps at most per ray; y: colour channels traced apart (1 or 3)
 } P;
 layout(set = 0, binding = 1) uniform sampler3D volume;
 layout(set = 0, binding = 2) uniform sampler1DArray tf;
@@ -56,7 +64,9 @@ layout(std430, set = 0, binding = 6) readonly buffer Light {
 #define RAY_HALF P.box_half.xyz
 #define RAY_DIMS P.field.xyz
 #define RAY_REF_STEP P.box_half.w
-#define RAY_ETA_SCALE P.field.w
+// The eta scale of the channel being traced (trace_ray sets it).
+float ray_k = 1.0;
+#define RAY_ETA_SCALE ray_k
 #include "ray_equation.glsl"
 #include "raycast.glsl"
 #include "environment.glsl"
@@ -83,10 +93,11 @@ float inside_length(vec3 a, vec3 u, float len) {
     return max(min(t1, len) - t0, 0.0);
 }
 
-void main() {
-    uvec2 id = gl_GlobalInvocationID.xy;
-    if (any(greaterThanEqual(id, P.size.xy))) return;
-    vec3 dir = camera_ray(id, P.size.xy, P.cam_pos, P.cam_forward, P.cam_right.xyz, P.cam_up.xyz);
+// The ray from the eye along `dir` with eta scale k: its colour and opacity, composited
+// front to back, with what it sees behind; `bent` whether any gradient of eta turned it.
+vec4 trace_ray(vec3 dir, float k, out bool bent) {
+    ray_k = k;
+    bent = false;
     vec3 eye = P.cam_pos.xyz;
     vec3 C = vec3(0.0), M = vec3(1.0);
     float A = 0.0;
@@ -99,6 +110,7 @@ void main() {
         float h_try = h, h_min = min(0.01 * ref, h);
         vec3 x = eye + t_near * dir;
         vec3 v = dir * ray_eta(x);
+        vec3 v_start = v;
         for (uint k = 0u; k < P.steps.x && A < P.march.y; ++k) {
             vec3 x0 = x;
             ray_rk4_adaptive(x, v, h_try, h, h_min);
@@ -131,9 +143,28 @@ void main() {
             bvec3 away = greaterThan(x * v, vec3(0.0));
             if (any(bvec3(beyond.x && away.x, beyond.y && away.y, beyond.z && away.z))) break;
         }
+        // Unchanged only where every RK4 stage met a zero gradient.
+        bent = any(notEqual(v, v_start));
         dir = normalize(v);
     }
     vec3 rgb = C + (1.0 - A) * M * background_seen(dir);
     float alpha = A + (1.0 - A) * (P.scatter.w < 0.5 ? P.background.a : 1.0);
-    imageStore(frame, ivec2(id), vec4(rgb, alpha));
+    return vec4(rgb, alpha);
+}
+
+void main() {
+    uvec2 id = gl_GlobalInvocationID.xy;
+    if (any(greaterThanEqual(id, P.size.xy))) return;
+    vec3 dir = camera_ray(id, P.size.xy, P.cam_pos, P.cam_forward, P.cam_right.xyz, P.cam_up.xyz);
+    bool bent;
+    vec4 seen = trace_ray(dir, P.eta_scales.x, bent);
+    if (P.steps.y == 3u && bent) {
+        // Dispersion: green and blue along their own paths; the opacity is the mean of
+        // the three (each channel's path met its own matter).
+        bool unused;
+        vec4 green = trace_ray(dir, P.eta_scales.y, unused);
+        vec4 blue = trace_ray(dir, P.eta_scales.z, unused);
+        seen = vec4(seen.r, green.g, blue.b, (seen.a + green.a + blue.a) / 3.0);
+    }
+    imageStore(frame, ivec2(id), seen);
 }

@@ -1440,3 +1440,70 @@ fn render_prints_where_the_simulated_light_went() {
         "past the sphere on its floor {floor} % left the box"
     );
 }
+
+/// `--abbe` (dispersion): the eikonal model simulates the light once per colour channel
+/// and says so, each wavefront's line naming its channel and wavelength; other models
+/// refuse it naming the one that takes it, and an Abbe number outside 5–1000 (not 0) is
+/// refused with the range. Scene files take it as `abbe`.
+#[test]
+fn abbe_splits_the_light_by_colour_and_is_refused_elsewhere() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.png");
+    let small = [
+        "--volume-size",
+        "12",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    let mut args = vec!["render", "--model", "eikonal", "--abbe", "40"];
+    args.extend_from_slice(&small);
+    let o = refrakt(&args);
+    assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout).into_owned();
+    let lines: Vec<&str> = text
+        .lines()
+        .filter(|l| l.starts_with("light simulation, light 1"))
+        .collect();
+    let prefixes: Vec<&str> = lines.iter().map(|l| l.split(':').next().unwrap()).collect();
+    assert_eq!(
+        prefixes,
+        [
+            "light simulation, light 1, red (656 nm)",
+            "light simulation, light 1, green (588 nm)",
+            "light simulation, light 1, blue (486 nm)"
+        ],
+        "{text}"
+    );
+    for (model, needle) in [
+        ("refract", "--abbe only applies to --model eikonal"),
+        (
+            "eikonal",
+            "the Abbe number must be 0 (no dispersion) or from 5 to 1000",
+        ),
+    ] {
+        let value = if model == "eikonal" { "3" } else { "40" };
+        let mut a = vec!["render", "--model", model, "--abbe", value];
+        a.extend_from_slice(&small);
+        assert_clean_failure(&a, needle);
+    }
+    let scene = dir.path().join("s.toml");
+    std::fs::write(
+        &scene,
+        "[volume]\nbuiltin = \"shell\"\nsize = 8\n[render]\nmodel = \"refract\"\nabbe = 30\n",
+    )
+    .unwrap();
+    let a = [
+        "render",
+        scene.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ];
+    assert_clean_failure(
+        &a,
+        "[render] abbe only applies to --model eikonal, not refract",
+    );
+}

@@ -242,8 +242,8 @@ pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
     }
     // The eikonal light simulation (the eikonal model, the sweep's eikonal transport):
     // how each light's wavefront grew and where its light went.
-    for (i, stats) in renderer.light_simulation_stats(model).iter().enumerate() {
-        println!("light simulation, light {}: {}", i + 1, stats.summary());
+    for stats in renderer.light_simulation_stats(model).iter() {
+        println!("light simulation, {}: {}", stats.label(), stats.summary());
     }
     if frame.timings.scopes.is_empty() {
         println!("GPU timings: this device has no timestamp queries");

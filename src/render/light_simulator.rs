@@ -217,9 +217,26 @@ pub struct SimulationStats {
     pub list_sizes: Vec<(u32, u32)>,
     /// GPU time of the whole simulation, milliseconds.
     pub gpu_ms: f64,
+    /// Which of a frame's lights this wavefront was (0-based), and with dispersion which
+    /// colour channel (red, green, blue) it carried; set by the light volume.
+    pub light: usize,
+    pub channel: Option<usize>,
 }
 
 impl SimulationStats {
+    /// "light 1", or with dispersion "light 1, red (656 nm)".
+    pub fn label(&self) -> String {
+        match self.channel {
+            None => format!("light {}", self.light + 1),
+            Some(c) => format!(
+                "light {}, {} ({:.0} nm)",
+                self.light + 1,
+                ["red", "green", "blue"][c.min(2)],
+                crate::render::eikonal::dispersion::WAVELENGTHS_NM[c.min(2)]
+            ),
+        }
+    }
+
     /// One line for users: how long the simulation ran, how large the list grew, and
     /// where the launched flux went (per cent, mean over the channels; the rest was
     /// absorbed on the way or still travelling).
@@ -228,7 +245,9 @@ impl SimulationStats {
             let parts: Vec<f64> = f
                 .iter()
                 .zip(&self.launched_flux)
-                .filter(|(_, &l)| l > 0.0)
+                .enumerate()
+                .filter(|(c, (_, &l))| l > 0.0 && !matches!(self.channel, Some(only) if only != *c))
+                .map(|(_, p)| p)
                 .map(|(x, l)| x / l)
                 .collect();
             100.0 * parts.iter().sum::<f64>() / parts.len().max(1) as f64

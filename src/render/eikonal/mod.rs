@@ -25,6 +25,8 @@ use super::{RenderOptions, ScatterOptions, SCATTER_ALBEDO, SCATTER_G};
 use crate::shaders;
 use crate::vk::{self, Binding, Buffer, Memory, Recorder, Timings};
 
+pub mod dispersion;
+
 /// The timings scope of the light simulation (all lights).
 pub const SIMULATION_SCOPE: &str = "light simulation";
 
@@ -103,8 +105,11 @@ impl LightVolume {
         /// What the light volume depends on besides the volume (a renderer holds one).
         fn key(shared: &Shared, opts: &RenderOptions) -> String {
             format!(
-                "{:?} eta scale {:?} tf change {}",
-                opts.lights, opts.sweep.eta_scale, shared.tf_changes
+                "{:?} eta scale {:?} tf change {} abbe {}",
+                opts.lights,
+                opts.sweep.eta_scale,
+                shared.tf_changes,
+                opts.model_option(&dispersion::ABBE)
             )
         }
 
@@ -130,22 +135,50 @@ impl LightVolume {
         let mut weighted = vec![[0.0f32; 3]; voxels as usize];
         let mut stats = Vec::new();
         let mut ms = 0.0;
-        for light in &opts.lights {
-            let sim = light_simulator::simulate(&inputs, opts, light, &settings, &[], None)?;
-            let volume = sim.fluence.as_ref().expect("asked for the fluence volume");
-            for ((f, w), (e, d)) in fluence
-                .iter_mut()
-                .zip(weighted.iter_mut())
-                .zip(volume.fluence.iter().zip(&volume.direction))
-            {
-                let lum = luminance(*e);
-                for c in 0..3 {
-                    f[c] += e[c];
-                    w[c] += lum * d[c];
+        // With dispersion each colour channel's light is a wavefront of its own, through
+        // the field of that channel's η (dispersion.rs), and gives the volume that
+        // channel alone; without, one wavefront carries all three.
+        let runs: Vec<(RenderOptions, Option<usize>)> = match dispersion::channel_eta_scales(opts)?
+        {
+            None => vec![(opts.clone(), None)],
+            Some(scales) => (0..3)
+                .map(|c| {
+                    let mut o = opts.clone();
+                    o.sweep.eta_scale = scales[c];
+                    (o, Some(c))
+                })
+                .collect(),
+        };
+        for (index, light) in opts.lights.iter().enumerate() {
+            for (run_opts, only) in &runs {
+                let sim =
+                    light_simulator::simulate(&inputs, run_opts, light, &settings, &[], None)?;
+                let volume = sim.fluence.as_ref().expect("asked for the fluence volume");
+                let channels = match only {
+                    Some(c) => *c..*c + 1,
+                    None => 0..3,
+                };
+                for ((f, w), (e, d)) in fluence
+                    .iter_mut()
+                    .zip(weighted.iter_mut())
+                    .zip(volume.fluence.iter().zip(&volume.direction))
+                {
+                    for c in channels.clone() {
+                        // The direction weighted by the channel's share of the luminance.
+                        let lum = LUMINANCE[c] * e[c];
+                        f[c] += e[c];
+                        for (wk, dk) in w.iter_mut().zip(d) {
+                            *wk += lum * dk;
+                        }
+                    }
                 }
+                ms += sim.stats.gpu_ms;
+                stats.push(SimulationStats {
+                    light: index,
+                    channel: *only,
+                    ..sim.stats
+                });
             }
-            ms += sim.stats.gpu_ms;
-            stats.push(sim.stats);
         }
         let mut texels: Vec<[f32; 4]> = Vec::with_capacity(2 * fluence.len());
         for (f, w) in fluence.iter().zip(&weighted) {
@@ -206,8 +239,11 @@ impl ModelState for LightVolume {
     }
 }
 
+/// Rec. 709 luminance weights.
+const LUMINANCE: [f32; 3] = [0.2126, 0.7152, 0.0722];
+
 fn luminance(c: [f32; 3]) -> f32 {
-    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+    LUMINANCE[0] * c[0] + LUMINANCE[1] * c[1] + LUMINANCE[2] * c[2]
 }
 
 /// std140 mirror of `Params` in glsl/eikonal_view.comp (ea.comp's block, then the
@@ -218,6 +254,9 @@ struct Params {
     march: super::march::MarchParams,
     field: [f32; 4],
     scatter: [f32; 4],
+    /// The refractive-index scale per colour channel (all three the same without
+    /// dispersion).
+    eta_scales: [f32; 4],
     steps: [u32; 4],
 }
 
@@ -245,7 +284,7 @@ impl EikonalPass {
 /// The eikonal model's declaration (listed in render/registry.rs).
 pub(crate) static EIKONAL: OpticalModel = OpticalModel {
     name: "eikonal",
-    summary: "Eikonal rendering (Ihrke et al.): the light simulated as adaptive wavefronts into a light volume, then viewing rays along the ray equation; lights from any direction, several, point lights (--light, --g, --albedo).",
+    summary: "Eikonal rendering (Ihrke et al.): the light simulated as adaptive wavefronts into a light volume, then viewing rays along the ray equation; lights from any direction, several, point lights, dispersion (--light, --g, --albedo, --abbe).",
     lights: LightSupport {
         max: super::limits::MAX_LIGHTS,
         point: true,
@@ -254,7 +293,7 @@ pub(crate) static EIKONAL: OpticalModel = OpticalModel {
     // The refractive-index scale and the environment behind, as the sweep's.
     flags: &["--eta-scale", "--env", "--env-rotation"],
     make_pass: |inputs| Ok(Box::new(EikonalPass::new(inputs)?)),
-    options: &[&SCATTER_G, &SCATTER_ALBEDO],
+    options: &[&SCATTER_G, &SCATTER_ALBEDO, &dispersion::ABBE],
     rebuild_scopes: &[SIMULATION_SCOPE],
     state: Some(ModelStateDecl {
         what: "the light volume",
@@ -284,6 +323,12 @@ impl ModelPass for EikonalPass {
         // reflection inside glass is cut there).
         let step = opts.sample_distance * info.ref_step;
         let max_steps = ((16.0 * info.half_extent.length() / step).ceil() as u32).max(1);
+        // With dispersion a viewing ray that meets refractive matter is traced once per
+        // colour channel, each through its own field.
+        let (eta_scales, channels) = match dispersion::channel_eta_scales(opts)? {
+            Some([r, g, b]) => ([r, g, b, 0.0], 3),
+            None => ([opts.sweep.eta_scale; 4], 1),
+        };
         let mut recorded = self.march.record(rec, inputs, |march| Params {
             march,
             field: info.dims_and(opts.sweep.eta_scale),
@@ -293,7 +338,8 @@ impl ModelPass for EikonalPass {
                 opts.sweep.env_rotation.to_radians(),
                 if inputs.env.enabled { 1.0 } else { 0.0 },
             ],
-            steps: [max_steps, 0, 0, 0],
+            eta_scales,
+            steps: [max_steps, channels, 0, 0],
         })?;
         recorded.max_steps = max_steps;
         Ok(recorded)
@@ -301,5 +347,5 @@ impl ModelPass for EikonalPass {
 }
 
 crate::render::march::test_blocks_match_the_shaders!(
-    params: shaders::EIKONAL_VIEW_COMP, Params { field, scatter, steps }
+    params: shaders::EIKONAL_VIEW_COMP, Params { field, scatter, eta_scales, steps }
 );
