@@ -12,7 +12,9 @@
 //! (the simulation reads the list's size back between submissions), when the lights, the
 //! transfer functions or the refractive-index scale change; its GPU time is the frame's
 //! scope [`SIMULATION_SCOPE`], what a light or transfer-function change costs this model.
-//! Changing g, the albedo or the camera rebuilds nothing.
+//! Changing g, the albedo or the camera rebuilds nothing. With dispersion (`--abbe`,
+//! [`dispersion`]) each colour channel's light is a wavefront of its own and viewing rays
+//! through glass are traced once per channel.
 
 use anyhow::{ensure, Result};
 use bytemuck::{Pod, Zeroable};
