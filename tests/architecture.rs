@@ -116,7 +116,18 @@ fn only_the_registry_declares_the_models_folders() {
 /// reads back as a failure), and one it refuses.
 fn other_and_refused(option: &refrakt::render::ModelOption) -> (f64, f64) {
     let d = option.default;
-    let candidates = [d * 2.0, d / 2.0, d + 0.1, d - 0.1, 1.0, 0.5, 2.0, 4.0];
+    let candidates = [
+        d * 2.0,
+        d / 2.0,
+        d + 0.1,
+        d - 0.1,
+        1.0,
+        0.5,
+        2.0,
+        4.0,
+        10.0,
+        50.0,
+    ];
     let other = candidates
         .into_iter()
         .find(|&v| v != d && option.checked(v).is_ok())
