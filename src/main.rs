@@ -110,6 +110,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Render(args) => cli::render::render(&desc, &args),
         Command::View(args) => cli::view::view(&desc, *args),
         Command::Photons(args) => cli::photons::photons(&args),
+        Command::Reference(args) => cli::reference::reference(&args),
         Command::Generate(args) => cli::bench::generate(&args),
         Command::Bench(BenchCommand::Thesis(args)) => cli::bench::bench_thesis(&desc, &args),
         Command::Bench(BenchCommand::Scaling(args)) => cli::bench::bench_scaling(&desc, &args),

@@ -93,6 +93,10 @@ pub enum Command {
     /// the sweep (--plane K, as `render --dump light-colour@K`) or at a view depth,
     /// written as linear EXR; the oracle for the sweep's caustics, shadows and power.
     Photons(Box<PhotonsArgs>),
+    /// Reference CPU renderer: a camera image of the refractive model without the sweep's
+    /// approximations (light as photons binned in the volume, viewing rays by the ray
+    /// equation, Fresnel reflections traced through the volume); slow, for comparisons.
+    Reference(Box<ReferenceArgs>),
     /// Generate (and cache) thesis stand-ins ahead of time, printing the time each took;
     /// `render` and `bench` generate missing ones themselves.
     Generate(GenerateArgs),
@@ -304,6 +308,66 @@ pub struct ViewArgs {
     /// bottom-left corner; X toggles it).
     #[arg(long)]
     pub no_axes: bool,
+}
+
+#[derive(Args)]
+pub struct ReferenceArgs {
+    /// Output image (.png: tone mapped 8-bit sRGB; .exr: linear float).
+    #[arg(short, long, default_value = "reference.png")]
+    pub output: PathBuf,
+    /// Photons per voxel side of each light's launch plane (N x N per voxel area).
+    #[arg(
+        long,
+        value_name = "N",
+        default_value_t = 8,
+        allow_negative_numbers = true
+    )]
+    pub photons_per_voxel: u32,
+    /// Bins of the light volume per voxel side (the light's resolution).
+    #[arg(
+        long,
+        value_name = "N",
+        default_value_t = 2,
+        allow_negative_numbers = true
+    )]
+    pub light_bins: u32,
+    /// RK4 step of photons and viewing rays, in voxels.
+    #[arg(long, default_value_t = 0.1, allow_negative_numbers = true)]
+    pub step: f32,
+    /// Viewing rays per pixel side (N x N per pixel, averaged).
+    #[arg(
+        long,
+        value_name = "N",
+        default_value_t = 1,
+        allow_negative_numbers = true
+    )]
+    pub rays_per_pixel: u32,
+    /// Fresnel reflections traced through the volume at most this deep (0: none; the
+    /// scene's --reflections off turns them off too).
+    #[arg(
+        long,
+        value_name = "N",
+        default_value_t = 3,
+        allow_negative_numbers = true
+    )]
+    pub bounces: u32,
+    /// How eta is interpolated between voxels: "cubic" (the cubic B-spline of the values:
+    /// smooth surfaces of glass) or "trilinear" (as the GPU samples it, and the photon
+    /// tracer; its iso-surfaces are corrugated, which turns rays through a voxelised
+    /// ball by about 1° RMS, up to 3°, and the view through glass into speckle). The
+    /// matter's colour and opacity are trilinear either way.
+    #[arg(long, value_name = "cubic|trilinear", default_value = "cubic",
+          value_parser = ["cubic", "trilinear"])]
+    pub eta_interpolation: String,
+    /// Worker threads, 1 to 1024 [default: all cores].
+    #[arg(long, value_parser = parse_threads)]
+    pub threads: Option<usize>,
+    /// Refuse a phase (the light, the view) of more RK4 steps than this, estimated before
+    /// tracing; the default is about 40 minutes on 2 cores.
+    #[arg(long, value_name = "N", default_value_t = refrakt::photons::PhotonOptions::DEFAULT_MAX_STEPS)]
+    pub max_steps: f64,
+    #[command(flatten)]
+    pub scene: SceneArgs,
 }
 
 #[derive(Args)]

@@ -9,6 +9,7 @@ pub mod info;
 pub mod model_flags;
 pub mod photons;
 pub mod precompute;
+pub mod reference;
 pub mod render;
 pub mod scene_args;
 pub mod scene_flags;

@@ -19,6 +19,16 @@ pub(super) fn lut(tab: &[f32], s: f64) -> f64 {
     tab[i] as f64 * (1.0 - f) + tab[i + 1] as f64 * f
 }
 
+/// d lut(tab, s) / ds: the slope of the table's segment holding s (0 outside [0, 1]).
+pub(super) fn lut_slope(tab: &[f32], s: f64) -> f64 {
+    if !(0.0..=1.0).contains(&s) {
+        return 0.0;
+    }
+    let n = (tab.len() - 1) as f64;
+    let i = ((s * n) as usize).min(tab.len() - 2);
+    (tab[i + 1] - tab[i]) as f64 * n
+}
+
 pub(super) fn lut3(tab: &[[f32; 3]], s: f64) -> [f64; 3] {
     let x = s.clamp(0.0, 1.0) * (tab.len() - 1) as f64;
     let i = (x as usize).min(tab.len() - 2);
@@ -85,6 +95,7 @@ impl Field {
             .collect();
         let alpha: Vec<f32> = l0.iter().map(|t| t[3]).collect();
         let medium: Vec<[f32; 3]> = l1.iter().map(|t| [t[0], t[1], t[2]]).collect();
+        let colour: Vec<[f32; 3]> = l0.iter().map(|t| [t[0], t[1], t[2]]).collect();
         let clip = opts
             .sweep
             .clip
@@ -112,10 +123,12 @@ impl Field {
             eta,
             alpha,
             medium,
+            colour,
             clip,
             rate0: [0.0; 3],
             rate0_clipped: [0.0; 3],
             exterior_transparent: false,
+            cubic_eta: false,
             g0,
             nb,
             flags: Vec::new(),
@@ -135,7 +148,9 @@ impl Field {
     pub(super) fn brick_flags(&self) -> Vec<u8> {
         let [nx, ny, nz] = self.nb;
         let b = BRICK as f64;
-        let h = GRADIENT_STEP;
+        // How far beyond a brick the values that η inside it reads lie: the gradient's
+        // stencil, and the cubic B-spline's support (one more voxel either side).
+        let h = GRADIENT_STEP + if self.cubic_eta { 1.0 } else { 0.0 };
         let mut flags = vec![0u8; nx * ny * nz];
         for jz in 0..nz {
             for jy in 0..ny {
@@ -249,12 +264,95 @@ impl Field {
     }
 
     pub(super) fn eta_w(&self, p: DVec3) -> f64 {
-        lut(&self.eta, self.value_tex(self.tex(p)))
+        let t = self.tex(p);
+        let s = if self.cubic_eta {
+            self.value_grad_cubic(t).0
+        } else {
+            self.value_tex(t)
+        };
+        lut(&self.eta, s)
     }
 
-    /// ∇η (world units) by central differences GRADIENT_STEP voxels apart.
+    /// ∇η (world units): by central differences GRADIENT_STEP voxels apart of the
+    /// trilinear field, or the cubic B-spline field's own ([`Self::use_cubic_eta`]).
     pub(super) fn grad_eta(&self, p: DVec3) -> DVec3 {
         let t = self.tex(p);
+        if self.cubic_eta {
+            let (s, g) = self.value_grad_cubic(t);
+            return lut_slope(&self.eta, s) * g;
+        }
+        self.grad_eta_trilinear(t)
+    }
+
+    /// η and the refraction it causes from the value interpolated with the cubic
+    /// B-spline (C², so its iso-surfaces are smooth) instead of trilinearly; the matter
+    /// (opacity, colour, medium) stays trilinear, as the GPU samples it. The trilinear
+    /// field's iso-surfaces are corrugated with a period of one voxel: a ray through a
+    /// planar face swings by ±1.5° (docs/NOTES.md), and the view through a glass ball
+    /// departs from Snell's law by 1° RMS, up to 3° (the reference renderer's test),
+    /// scattering the checkered environment seen through it into speckle. The B-spline
+    /// reproduces linear ramps exactly, so a planar face stays where it is; it smooths
+    /// curvature below a voxel or two. The bricks' test widens by the spline's support.
+    pub fn use_cubic_eta(&mut self) {
+        self.cubic_eta = true;
+        self.flags = self.brick_flags();
+    }
+
+    /// The cubic B-spline interpolation of the value at texture coordinate t (clamped
+    /// at the volume's edge, 0 outside [0,1]³, as the trilinear one) and its gradient in
+    /// world units.
+    pub(super) fn value_grad_cubic(&self, t: DVec3) -> (f64, DVec3) {
+        if t.x < 0.0 || t.y < 0.0 || t.z < 0.0 || t.x > 1.0 || t.y > 1.0 || t.z > 1.0 {
+            return (0.0, DVec3::ZERO);
+        }
+        let mut idx = [[0usize; 4]; 3];
+        let mut w = [[0f64; 4]; 3];
+        let mut dw = [[0f64; 4]; 3];
+        for k in 0..3 {
+            let n = self.dims[k] as i64;
+            let x = t[k] * n as f64 - 0.5;
+            let i = x.floor();
+            let f = x - i;
+            let g = 1.0 - f;
+            w[k] = [
+                g * g * g / 6.0,
+                (3.0 * f * f * f - 6.0 * f * f + 4.0) / 6.0,
+                (-3.0 * f * f * f + 3.0 * f * f + 3.0 * f + 1.0) / 6.0,
+                f * f * f / 6.0,
+            ];
+            dw[k] = [
+                -0.5 * g * g,
+                1.5 * f * f - 2.0 * f,
+                -1.5 * f * f + f + 0.5,
+                0.5 * f * f,
+            ];
+            for (m, slot) in idx[k].iter_mut().enumerate() {
+                *slot = (i as i64 - 1 + m as i64).clamp(0, n - 1) as usize;
+            }
+        }
+        let (mut s, mut g) = (0.0, DVec3::ZERO);
+        for c in 0..4 {
+            for b in 0..4 {
+                let row = (idx[2][c] * self.dims[1] + idx[1][b]) * self.dims[0];
+                let (mut v, mut vx) = (0.0, 0.0);
+                for a in 0..4 {
+                    let x = self.values[row + idx[0][a]] as f64;
+                    v += w[0][a] * x;
+                    vx += dw[0][a] * x;
+                }
+                s += w[2][c] * w[1][b] * v;
+                g += DVec3::new(
+                    w[2][c] * w[1][b] * vx,
+                    w[2][c] * dw[1][b] * v,
+                    dw[2][c] * w[1][b] * v,
+                );
+            }
+        }
+        (s, g * self.vox_scale)
+    }
+
+    /// ∇η by central differences of the trilinear field, GRADIENT_STEP voxels apart.
+    fn grad_eta_trilinear(&self, t: DVec3) -> DVec3 {
         if let Some(g) = self.grad_eta_in_cell(t) {
             return g;
         }
@@ -529,6 +627,10 @@ impl Field {
 
     /// Trace from p with v = η d until the target plane is crossed moving forward; the
     /// plane's normal is the view direction (for the steepness statistic).
+    ///
+    /// `visit(a, b, len, log_t at a, log_t at b)` is called for every piece of the path
+    /// (a chord of arc length `len`), in order: the reference renderer's light volume
+    /// deposits the photon's flux along it ([`super::reference`]).
     pub(super) fn trace(
         &self,
         mut p: DVec3,
@@ -536,6 +638,7 @@ impl Field {
         target: Target,
         h: f64,
         cutoff: bool,
+        visit: &mut impl FnMut(DVec3, DVec3, f64, [f64; 3], [f64; 3]),
     ) -> Trace {
         let ln_cut = FLUX_CUTOFF.ln();
         let mut log_t = [0.0f64; 3];
@@ -567,27 +670,33 @@ impl Field {
                             end = End::Backward;
                             break;
                         }
+                        let before = log_t;
                         if !self.exterior_transparent {
                             self.attenuate_straight(p, d, t_plane, h, &mut log_t);
                         }
+                        visit(p, p + d * t_plane, t_plane, before, log_t);
                         p += d * t_plane;
                         length += t_plane;
                         end = End::Plane;
                         break;
                     }
                     let t = t_grid + eps;
+                    let before = log_t;
                     if !self.exterior_transparent {
                         self.attenuate_straight(p, d, t, h, &mut log_t);
                     }
+                    visit(p, p + d * t, t, before, log_t);
                     p += d * t;
                     length += t;
                 }
                 Some((i, lo, hi)) if self.flags[i] & ETA_CONST != 0 => {
                     let t_exit = self.brick_exit(p, d, lo, hi) + eps;
                     let t = t_exit.min(t_plane);
+                    let before = log_t;
                     if self.flags[i] & TRANSPARENT == 0 {
                         self.attenuate_straight(p, d, t, h, &mut log_t);
                     }
+                    visit(p, p + d * t, t, before, log_t);
                     p += d * t;
                     length += t;
                     if t_plane <= t_exit {
@@ -601,9 +710,11 @@ impl Field {
                     let z1 = target.n.dot(p1) - target.c;
                     let frac = if z1 >= 0.0 { zrel / (zrel - z1) } else { 1.0 };
                     let q = p + (p1 - p) * frac;
+                    let before = log_t;
                     if self.flags[i] & TRANSPARENT == 0 || self.flags_at(p1) & TRANSPARENT == 0 {
                         self.integrate_chord(p, q, hh * frac, &mut log_t);
                     }
+                    visit(p, q, hh * frac, before, log_t);
                     length += hh * frac;
                     if z1 >= 0.0 {
                         p = q;
@@ -666,7 +777,14 @@ impl Field {
             "ray origin {origin:?} is already at or beyond view depth {depth}"
         );
         let v = direction.as_dvec3().normalize() * self.eta_w(p);
-        let t = self.trace(p, v, target, step as f64 * self.ref_step, false);
+        let t = self.trace(
+            p,
+            v,
+            target,
+            step as f64 * self.ref_step,
+            false,
+            &mut |_, _, _, _, _| {},
+        );
         if t.end != End::Plane {
             return Ok(None);
         }

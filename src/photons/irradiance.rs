@@ -165,7 +165,7 @@ pub fn trace_irradiance(
                 let ly = half_h - (j as f64 + uy) * dy - shift.y;
                 let p = eye + right * lx + up * ly + forward * z_l;
                 let v = travel * eta_launch(p);
-                let t = field.trace(p, v, target, step, true);
+                let t = field.trace(p, v, target, step, true, &mut |_, _, _, _, _| {});
                 if t.min_forward < MIN_FORWARD as f64 {
                     acc.steep += 1;
                 }

@@ -295,11 +295,15 @@ pub struct Field {
     eta: Vec<f32>,
     alpha: Vec<f32>,
     medium: Vec<[f32; 3]>,
+    /// The transfer function's colour (what the matter returns of the light it receives).
+    colour: Vec<[f32; 3]>,
     clip: Option<(DVec3, f64)>,
     /// Rates (σ + −ln m / ref_step per channel) at s = 0, unclipped and clipped.
     rate0: [f64; 3],
     rate0_clipped: [f64; 3],
     exterior_transparent: bool,
+    /// η from the cubic B-spline of the values ([`Field::use_cubic_eta`]).
+    cubic_eta: bool,
     // Bricks: voxel coordinate x = t N - 0.5; brick j covers [g0 + jB, g0 + (j+1)B).
     g0: f64,
     nb: [usize; 3],
@@ -356,8 +360,10 @@ pub fn plane_depth(
 
 mod field;
 mod irradiance;
+pub mod reference;
 #[cfg(test)]
 mod tests;
 
 use field::*;
 pub use irradiance::trace_irradiance;
+pub use reference::{render_reference, ReferenceImage, ReferenceOptions};

@@ -2,7 +2,7 @@ use super::*;
 use crate::render::Light;
 use crate::transfer::Piecewise;
 
-fn f32_volume(n: u32, f: impl Fn(DVec3) -> f32) -> Volume {
+pub(super) fn f32_volume(n: u32, f: impl Fn(DVec3) -> f32) -> Volume {
     let mut v = Vec::with_capacity((n as usize).pow(3));
     for z in 0..n {
         for y in 0..n {
@@ -17,7 +17,7 @@ fn f32_volume(n: u32, f: impl Fn(DVec3) -> f32) -> Volume {
     vol
 }
 
-fn axial() -> Camera {
+pub(super) fn axial() -> Camera {
     Camera {
         azimuth: 0.0,
         elevation: 0.0,
@@ -27,7 +27,7 @@ fn axial() -> Camera {
     }
 }
 
-fn options(size: u32, towards: Vec3, colour: [f32; 3]) -> RenderOptions {
+pub(super) fn options(size: u32, towards: Vec3, colour: [f32; 3]) -> RenderOptions {
     let mut o = RenderOptions {
         width: size,
         height: size,
