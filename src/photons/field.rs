@@ -692,11 +692,23 @@ impl Field {
                 Some((i, lo, hi)) if self.flags[i] & ETA_CONST != 0 => {
                     let t_exit = self.brick_exit(p, d, lo, hi) + eps;
                     let t = t_exit.min(t_plane);
-                    let before = log_t;
                     if self.flags[i] & TRANSPARENT == 0 {
-                        self.attenuate_straight(p, d, t, h, &mut log_t);
+                        // In steps of at most h, each visited with its own attenuation:
+                        // the matter may change within the brick (a surface), where
+                        // interpolating ln T across the whole brick spread its
+                        // attenuation over the brick (the reference's light volume had
+                        // a lattice of the bricks' period on a lit floor).
+                        let steps = (t / h).ceil().max(1.0);
+                        let dt = t / steps;
+                        for k in 0..steps as usize {
+                            let a = p + d * (k as f64 * dt);
+                            let before = log_t;
+                            self.attenuate_straight(a, d, dt, h, &mut log_t);
+                            visit(a, a + d * dt, dt, before, log_t);
+                        }
+                    } else {
+                        visit(p, p + d * t, t, log_t, log_t);
                     }
-                    visit(p, p + d * t, t, before, log_t);
                     p += d * t;
                     length += t;
                     if t_plane <= t_exit {

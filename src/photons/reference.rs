@@ -207,11 +207,6 @@ impl LightBins {
         1.0 / (self.scale.x * self.scale.y * self.scale.z)
     }
 
-    /// Side of a bin, the smallest, in world units.
-    fn bin_side(&self) -> f64 {
-        1.0 / self.scale.max_element()
-    }
-
     /// The 8 bins around p and their trilinear (tent) weights, in bin-centre coordinates,
     /// indices clamped at the box's faces (so that near a face the weights still add up to
     /// 1: uniform light stays uniform up to the face). None outside the box.
@@ -244,6 +239,98 @@ impl LightBins {
         }))
     }
 
+    /// Adds a photon's track a→b (arc length len, ln T from la to lb, linear between)
+    /// times `flux` (per channel, over the bin volume) to the bins, each bin by the
+    /// integral of its trilinear weight along the track. The track is cut where it
+    /// crosses a plane of bin centres or a face of the box, so each piece lies in one
+    /// cell of the trilinear kernel, where the weight is a cubic in t: Simpson's rule
+    /// integrates it exactly (the attenuation, smooth, to high order). Sampled at pieces'
+    /// midpoints instead, oblique light through clear air read 1-4 % unevenly, in the
+    /// bins' pattern.
+    #[allow(clippy::too_many_arguments)]
+    fn deposit(
+        &self,
+        acc: &mut [[f32; 3]],
+        a: DVec3,
+        b: DVec3,
+        len: f64,
+        la: [f64; 3],
+        lb: [f64; 3],
+        flux: [f64; 3],
+    ) {
+        // Cell coordinates: bin centres at the integers, the box from -0.5 to n - 0.5.
+        let ca = a * self.scale + self.offset - 0.5;
+        let cb = b * self.scale + self.offset - 0.5;
+        let dc = cb - ca;
+        let mut cuts: Vec<f64> = vec![0.0, 1.0];
+        for k in 0..3 {
+            if dc[k] == 0.0 {
+                continue;
+            }
+            let (lo, hi) = (ca[k].min(cb[k]), ca[k].max(cb[k]));
+            let mut m = lo.floor() + 1.0;
+            while m < hi {
+                cuts.push((m - ca[k]) / dc[k]);
+                m += 1.0;
+            }
+            for face in [-0.5, self.n[k] as f64 - 0.5] {
+                if face > lo && face < hi {
+                    cuts.push((face - ca[k]) / dc[k]);
+                }
+            }
+        }
+        cuts.sort_by(f64::total_cmp);
+        for w in cuts.windows(2) {
+            let (t0, t1) = (w[0], w[1]);
+            if t1 <= t0 {
+                continue;
+            }
+            let tm = 0.5 * (t0 + t1);
+            let mid = ca + dc * tm;
+            let mut i0 = [0usize; 3];
+            let mut i1 = [0usize; 3];
+            let mut cell = [0f64; 3];
+            let mut outside = false;
+            for k in 0..3 {
+                let n = self.n[k] as f64;
+                if !(mid[k] > -0.5 && mid[k] < n - 0.5) {
+                    outside = true;
+                }
+                cell[k] = mid[k].floor();
+                i0[k] = (cell[k] as i64).clamp(0, self.n[k] as i64 - 1) as usize;
+                i1[k] = (cell[k] as i64 + 1).clamp(0, self.n[k] as i64 - 1) as usize;
+            }
+            if outside {
+                continue;
+            }
+            let piece = (t1 - t0) * len;
+            for (t, simpson) in [(t0, 1.0), (tm, 4.0), (t1, 1.0)] {
+                let c = ca + dc * t;
+                let f = [c.x - cell[0], c.y - cell[1], c.z - cell[2]];
+                let scale: [f64; 3] =
+                    std::array::from_fn(|ch| flux[ch] * transmitted(la[ch], lb[ch], t));
+                let weight = simpson / 6.0 * piece;
+                for corner in 0..8 {
+                    let mut wgt = weight;
+                    let mut idx = [0usize; 3];
+                    for k in 0..3 {
+                        if corner >> k & 1 == 0 {
+                            wgt *= 1.0 - f[k];
+                            idx[k] = i0[k];
+                        } else {
+                            wgt *= f[k];
+                            idx[k] = i1[k];
+                        }
+                    }
+                    let slot = &mut acc[(idx[2] * self.n[1] + idx[1]) * self.n[0] + idx[0]];
+                    for ch in 0..3 {
+                        slot[ch] += (wgt * scale[ch]) as f32;
+                    }
+                }
+            }
+        }
+    }
+
     /// Trilinear between the bins' centres, clamped at the box (0 outside it).
     fn at(&self, p: DVec3) -> [f64; 3] {
         let mut out = [0.0; 3];
@@ -254,6 +341,20 @@ impl LightBins {
             }
         }
         out
+    }
+}
+
+/// e^(ln T) at t in [0, 1] between ln T = la at 0 and lb at 1 (linear), where either
+/// may be -inf (all absorbed).
+fn transmitted(la: f64, lb: f64, t: f64) -> f64 {
+    if t <= 0.0 {
+        la.exp()
+    } else if t >= 1.0 {
+        lb.exp()
+    } else if la.is_finite() && lb.is_finite() {
+        (la + (lb - la) * t).exp()
+    } else {
+        0.0
     }
 }
 
@@ -527,7 +628,6 @@ fn trace_light(
     let h = ropts.step as f64 * field.ref_step;
     let radius = half.length() + 2.0 * field.ref_step;
     let bin_volume = bins.bin_volume();
-    let piece = 0.5 * bins.bin_side();
     let mut total = vec![[0.0f32; 3]; cells];
     let mut photons = 0u64;
     for (li, light) in opts.lights.iter().enumerate() {
@@ -578,25 +678,9 @@ fn trace_light(
                     let p = start + e1 * x + e2 * y;
                     let v = d * field.eta_w(p);
                     let mut deposit = |a: DVec3, b: DVec3, len: f64, la: [f64; 3], lb: [f64; 3]| {
-                        if len <= 0.0 || la.iter().all(|l| *l < FLUX_CUTOFF.ln()) {
-                            return;
-                        }
-                        let n = (len / piece).ceil().max(1.0);
-                        let dl = len / n;
-                        for i in 0..n as usize {
-                            let t = (i as f64 + 0.5) / n;
-                            let Some(corners) = bins.corners(a + (b - a) * t) else {
-                                continue;
-                            };
-                            let flux: [f64; 3] = std::array::from_fn(|ch| {
-                                let l = la[ch] + (lb[ch] - la[ch]) * t;
-                                colour[ch] * cell * l.exp() * dl / bin_volume
-                            });
-                            for (idx, w) in corners {
-                                for ch in 0..3 {
-                                    acc[idx][ch] += (w * flux[ch]) as f32;
-                                }
-                            }
+                        if len > 0.0 && la.iter().any(|l| *l >= FLUX_CUTOFF.ln()) {
+                            let flux = colour.map(|c| c * cell / bin_volume);
+                            bins.deposit(&mut acc, a, b, len, la, lb, flux);
                         }
                     };
                     field.trace(p, v, target, h, true, &mut deposit);
