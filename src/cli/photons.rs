@@ -91,38 +91,32 @@ pub fn photons(args: &PhotonsArgs) -> Result<ExitCode> {
 /// light through the volume and its η; no viewing rays, surfaces, environment or tone
 /// mapping): refused, as `render` refuses flags of another model, rather than ignored.
 fn refuse_unused_flags(a: &SceneArgs) -> Result<()> {
-    let unused: Vec<&str> = [
-        ("--model", a.model.is_some()),
-        ("--no-preintegration", a.no_preintegration),
-        ("--background", a.background.is_some()),
-        ("--add-light", !a.add_light.is_empty()),
-        ("--ambient-table", a.ambient_table.is_some()),
-        ("--softness", a.softness.is_some()),
-        ("--roughness", a.roughness.is_some()),
-        ("--specular", a.specular.is_some()),
-        ("--light-transport", a.light_transport.is_some()),
-        ("--light-rays", a.light_rays.is_some()),
-        ("--light-spacing", a.light_spacing.is_some()),
-        ("--reflections", a.reflections.is_some()),
-        ("--clip", a.clip.is_some()),
-        ("--env", a.env.is_some()),
-        ("--env-rotation", a.env_rotation.is_some()),
-        ("--exposure", a.exposure.is_some()),
-        ("--tonemap", a.tonemap.is_some()),
-    ]
-    .into_iter()
-    .filter_map(|(flag, given)| given.then_some(flag))
-    // The models' own options: the photon tracer follows the sweep's light, which has none.
-    .chain(a.model_options.flags_given())
-    .collect();
-    if !unused.is_empty() {
-        bail!(
-            "{} {} not apply to the photon tracer (it traces the refractive model's light \
-             through the volume onto one plane, with the scene's volume, transfer functions, \
-             camera, image size, sample distance, light and --eta-scale)",
-            unused.join(", "),
-            if unused.len() == 1 { "does" } else { "do" }
-        );
-    }
-    Ok(())
+    // (Nor the models' own options: the photon tracer follows the sweep's light, which
+    // has none.)
+    refuse_flags_not_read(
+        a,
+        &[
+            ("--model", a.model.is_some()),
+            ("--no-preintegration", a.no_preintegration),
+            ("--background", a.background.is_some()),
+            ("--add-light", !a.add_light.is_empty()),
+            ("--ambient-table", a.ambient_table.is_some()),
+            ("--softness", a.softness.is_some()),
+            ("--roughness", a.roughness.is_some()),
+            ("--specular", a.specular.is_some()),
+            ("--light-transport", a.light_transport.is_some()),
+            ("--light-rays", a.light_rays.is_some()),
+            ("--light-spacing", a.light_spacing.is_some()),
+            ("--reflections", a.reflections.is_some()),
+            ("--clip", a.clip.is_some()),
+            ("--env", a.env.is_some()),
+            ("--env-rotation", a.env_rotation.is_some()),
+            ("--exposure", a.exposure.is_some()),
+            ("--tonemap", a.tonemap.is_some()),
+        ],
+        "the photon tracer",
+        "it traces the refractive model's light through the volume onto one plane, with \
+         the scene's volume, transfer functions, camera, image size, sample distance, light \
+         and --eta-scale",
+    )
 }

@@ -2,7 +2,7 @@
 
 use std::process::ExitCode;
 
-use anyhow::{bail, ensure, Result};
+use anyhow::{ensure, Result};
 
 use refrakt::output;
 use refrakt::scene::LoadedScene;
@@ -103,30 +103,23 @@ pub fn reference(args: &ReferenceArgs) -> Result<ExitCode> {
 /// soft-shadow kernel, no light transport of its own to choose): refused, as `render`
 /// refuses flags of another model, rather than ignored.
 fn refuse_unused_flags(a: &SceneArgs) -> Result<()> {
-    let unused: Vec<&str> = [
-        ("--model", a.model.is_some()),
-        ("--no-preintegration", a.no_preintegration),
-        ("--ambient-table", a.ambient_table.is_some()),
-        ("--softness", a.softness.is_some()),
-        ("--roughness", a.roughness.is_some()),
-        ("--specular", a.specular.is_some()),
-        ("--light-transport", a.light_transport.is_some()),
-        ("--light-rays", a.light_rays.is_some()),
-        ("--light-spacing", a.light_spacing.is_some()),
-    ]
-    .into_iter()
-    .filter_map(|(flag, given)| given.then_some(flag))
-    .chain(a.model_options.flags_given())
-    .collect();
-    if !unused.is_empty() {
-        bail!(
-            "{} {} not apply to the reference renderer (it renders the refractive model's \
-             image formation with exact light: the scene's volume, transfer functions, camera, \
-             image size, lights, ambient level, background or environment, reflections, \
-             clipping plane, --eta-scale and tone mapping; no specular highlight)",
-            unused.join(", "),
-            if unused.len() == 1 { "does" } else { "do" }
-        );
-    }
-    Ok(())
+    refuse_flags_not_read(
+        a,
+        &[
+            ("--model", a.model.is_some()),
+            ("--no-preintegration", a.no_preintegration),
+            ("--ambient-table", a.ambient_table.is_some()),
+            ("--softness", a.softness.is_some()),
+            ("--roughness", a.roughness.is_some()),
+            ("--specular", a.specular.is_some()),
+            ("--light-transport", a.light_transport.is_some()),
+            ("--light-rays", a.light_rays.is_some()),
+            ("--light-spacing", a.light_spacing.is_some()),
+        ],
+        "the reference renderer",
+        "it renders the refractive model's image formation with exact light: the scene's \
+         volume, transfer functions, camera, image size, lights, ambient level, background \
+         or environment, reflections, clipping plane, --eta-scale and tone mapping; no \
+         specular highlight",
+    )
 }

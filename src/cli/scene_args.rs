@@ -366,3 +366,28 @@ pub fn parse_resize(s: &str) -> Result<([u32; 2], u64)> {
     }
     Ok(([w, h], frame))
 }
+
+/// Refuses the scene flags of `given` ((flag, whether given) pairs) that were given, and
+/// any model option, naming them all: a command that does not read them says so rather
+/// than ignoring them, as `render` refuses the flags of another model. `who` names the
+/// command's renderer and `reads` what it does read.
+pub fn refuse_flags_not_read(
+    a: &SceneArgs,
+    given: &[(&'static str, bool)],
+    who: &str,
+    reads: &str,
+) -> Result<()> {
+    let unused: Vec<&str> = given
+        .iter()
+        .filter_map(|&(flag, given)| given.then_some(flag))
+        .chain(a.model_options.flags_given())
+        .collect();
+    if !unused.is_empty() {
+        bail!(
+            "{} {} not apply to {who} ({reads})",
+            unused.join(", "),
+            if unused.len() == 1 { "does" } else { "do" }
+        );
+    }
+    Ok(())
+}
