@@ -38,6 +38,7 @@
 #include "sweep_buffers.glsl"
 #include "sweep_light.glsl"
 #include "environment.glsl"
+#include "fresnel.glsl"
 #if FORWARD_LIGHT
 #include "sweep_rays.glsl"
 #endif
@@ -114,18 +115,6 @@ float hash(uvec3 v) {
     return float(h & 0xffffu) / 65536.0;
 }
 
-// Cook-Torrance Fresnel for unpolarised light (eq. 4.12; the thesis prints the bracket's
-// square and (g+c) as (g+2) wrongly). eta_ratio = eta_t / eta_i; total reflection where g
-// would be imaginary.
-float fresnel(float c, float eta_ratio) {
-    float g2 = eta_ratio * eta_ratio - 1.0 + c * c;
-    if (g2 <= 0.0) return 1.0;
-    float g = sqrt(g2);
-    float a = (g - c) / (g + c);
-    float b = (c * (g + c) - 1.0) / (c * (g - c) + 1.0);
-    return 0.5 * a * a * (1.0 + b * b);
-}
-
 // Cook-Torrance specular (eqs. 4.9-4.11): GGX D with alpha = roughness^2, Smith-Schlick G
 // with k = (roughness + 1)^2 / 8. Returns the reflected fraction of the incident light
 // (R_s times n.l).
@@ -142,16 +131,6 @@ float specular_term(vec3 n, vec3 l, vec3 v, float eta_ratio) {
     float G = (nl / (nl * (1.0 - k) + k)) * (nv / (nv * (1.0 - k) + k));
     float F = fresnel(max(dot(v, h), 0.0), eta_ratio);
     return D * F * G / (4.0 * nv);
-}
-
-// Fresnel reflectance of a face between eta_a and eta_b for a ray whose v = eta dx/ds has
-// the tangential part vt (kept across the face, Snell): F is the same both ways through a
-// face (reciprocity), from the angle on its low side; 1 beyond the critical angle.
-float face_fresnel(float vt, float eta_a, float eta_b) {
-    float lo = min(eta_a, eta_b), hi = max(eta_a, eta_b);
-    float sin_lo = vt / lo;
-    if (sin_lo >= 1.0) return 1.0;
-    return fresnel(sqrt(1.0 - sin_lo * sin_lo), hi / lo);
 }
 
 // The part of the straight segment a -> b (view space) inside the volume box, as the
@@ -194,6 +173,7 @@ vec3 film_between(float v_a, float v_b, float e_a, float e_b) {
 // crossed so far in sixteenths of a reference step (up to 63), the luminance from 2^-32
 // to 2^31, log-coded so a caustic's light keeps its precision (~2e-4 relative).
 const float CHAIN_DEPTH = 4.0;  // reference steps of depth (along the gradient) a chain runs
+const float MATTER_OPACITY = 1e-3;   // a segment this opaque or less starts no chain
 float chain_encode(float light, float depth) {
     float l = clamp(log2(max(light, 1e-30)) + 32.0, 0.0, 63.99);
     return min(round(depth * 16.0), 63.0) * 64.0 + max(l, 1e-3);
