@@ -26,8 +26,21 @@
 // traced first with red's; if it met no gradient of eta its path is every channel's and
 // its colour is kept whole, else it is traced again with green's and blue's and each
 // trace gives its own channel (the light volume holds each channel's own wavefront).
-// Not yet here: the Fresnel split at faces (the ray
-// refracts through every face; the reflected part is not traced) and an ambient term.
+//
+// Faces reflect (Fresnel; issue 35 item 2, with issue 32 item 4's reflections that see
+// the volume), as the reference renderer splits its rays (src/photons/reference.rs,
+// View::face): a face is where a step passes eta's middle between the plateaus probed
+// FACE_PROBE voxels either side along grad eta, the plateaus differ by MIN_FACE_STEP or
+// more (the sweep's threshold) and half-way out eta is already on either side. There the fraction F (unpolarised Fresnel between the
+// plateaus, at the angle of v's tangential part, which a face keeps) leaves in the
+// mirrored direction and the ray goes on with the rest (F folded into its opacity, as the
+// sweep does). The first face's reflected ray is traced through the volume after the
+// ray itself (one bounce: GLSL has no recursion), so glass shows the floor it stands on;
+// later faces, and the faces the reflected ray meets, reflect the environment (or the
+// background). Beyond the critical angle nothing splits: the ray equation turns the ray
+// itself back. Films (eta rising and falling back within the probes) are not faces.
+// P.steps.z: 1 with reflections (`--reflections`, the sweep's flag), 0 without.
+// Not yet here: an ambient term.
 #extension GL_GOOGLE_include_directive : require
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -46,7 +59,8 @@ layout(set = 0, binding = 0) uniform Params {
     vec4 field;        // xyz: the volume's voxels per axis; w: the eta scale k
     vec4 scatter;      // x: g; y: albedo; z: environment rotation (rad); w: 1 = environment map
     vec4 eta_scales;   // xyz: the eta scale k per colour channel (all P.field.w without dispersion)
-    uvec4 steps;       // x: steps at most per ray; y: colour channels traced apart (1 or 3)
+    uvec4 steps;       // x: steps at most per ray; y: colour channels traced apart (1 or 3);
+                       // z: 1 = Fresnel reflections at faces
 } P;
 layout(set = 0, binding = 1) uniform sampler3D volume;
 layout(set = 0, binding = 2) uniform sampler1DArray tf;
@@ -71,6 +85,7 @@ float ray_k = 1.0;
 #include "raycast.glsl"
 #include "environment.glsl"
 #include "phase.glsl"
+#include "fresnel.glsl"
 #define LIGHT_VOLUME light
 #include "light_volume.glsl"
 
@@ -93,26 +108,76 @@ float inside_length(vec3 a, vec3 u, float len) {
     return max(min(t1, len) - t0, 0.0);
 }
 
-// The ray from the eye along `dir` with eta scale k: its colour and opacity, composited
+// Smallest step of eta between a face's plateaus that reflects (the sweep's
+// MIN_FACE_STEP, glsl/sweep_plane.glsl; the reference renderer's): below it the change
+// is noise or a graded medium.
+const float MIN_FACE_STEP = 0.02;
+// How far either side of a step the face's plateaus are probed, in reference steps
+// (beyond half the step): past a graded face's ramp of two or three voxels.
+const float FACE_PROBE = 2.5;
+
+// The face the step a -> b (eta eta_a, eta_b at its ends; v = va at a) crosses, if any:
+// the fraction it reflects (0: none) and the mirrored direction (unit).
+float face_split(vec3 a, vec3 b, float eta_a, float eta_b, vec3 va, out vec3 mirrored) {
+    mirrored = vec3(0.0);
+    if (abs(eta_b - eta_a) < 1e-7) return 0.0;
+    vec3 mid = 0.5 * (a + b);
+    vec3 g = ray_grad_eta(mid);
+    if (dot(g, g) < 1e-20) return 0.0;
+    vec3 n = normalize(g);
+    float reach = 0.5 * length(b - a) + FACE_PROBE * P.box_half.w;
+    float e_minus = ray_eta(mid - reach * n), e_plus = ray_eta(mid + reach * n);
+    float lo = min(e_minus, e_plus), hi = max(e_minus, e_plus), middle = 0.5 * (lo + hi);
+    if (hi - lo < MIN_FACE_STEP || (eta_a < middle) == (eta_b < middle)) return 0.0;
+    // A step, not a film: half-way out eta lies on either side of the middle already. (A
+    // film between two regions of equal eta, as an opaque block's skin passing through
+    // a glass's values, read as a face where one probe reached the glass beyond it: the
+    // block seen in the slab's reflection let 4-9 % of the environment through.)
+    float h_minus = ray_eta(mid - 0.5 * reach * n), h_plus = ray_eta(mid + 0.5 * reach * n);
+    if ((h_minus < middle) == (h_plus < middle)) return 0.0;
+    if (e_plus < e_minus) n = -n;   // towards higher eta
+    // The angle on the low side from the tangential part of v (kept across a face).
+    vec3 vt = va - dot(va, n) * n;
+    float vt_len = length(vt);
+    if (vt_len >= lo) return 0.0;   // totally reflected: the ray equation turns the ray
+    // The incident direction on the side the ray comes from, mirrored about the face.
+    float eta_in = eta_b > eta_a ? lo : hi;
+    float vn = sqrt(max(eta_in * eta_in - vt_len * vt_len, 0.0));
+    vec3 incident = (vt + (dot(va, n) >= 0.0 ? vn : -vn) * n) / eta_in;
+    mirrored = normalize(incident - 2.0 * dot(incident, n) * n);
+    return face_fresnel(vt_len, lo, hi);
+}
+
+// The ray from `origin` along `dir` with eta scale k: its colour and opacity, composited
 // front to back, with what it sees behind; `bent` whether any gradient of eta turned it.
-vec4 trace_ray(vec3 dir, float k, out bool bent) {
+// With `split`, the first face it meets hands its reflected ray back (from `r_origin`
+// along `r_dir`, to be traced with its colour weighted by `r_weight`, (1 - A) M F there;
+// r_weight stays 0 where it met none); the other faces' reflections see what lies behind.
+vec4 trace_ray(vec3 origin, vec3 dir, float k, bool split, out bool bent, out vec3 r_origin,
+               out vec3 r_dir, out vec3 r_weight) {
     ray_k = k;
     bent = false;
-    vec3 eye = P.cam_pos.xyz;
+    r_origin = vec3(0.0);
+    r_dir = vec3(0.0, 0.0, 1.0);
+    r_weight = vec3(0.0);
+    bool reflections = P.steps.z != 0u;
     vec3 C = vec3(0.0), M = vec3(1.0);
     float A = 0.0;
     float t_near, t_far;
-    box_span(eye, dir, P.box_half.xyz, t_near, t_far);
+    box_span(origin, dir, P.box_half.xyz, t_near, t_far);
+    t_near = max(t_near, 0.0);   // a reflected ray starts inside the box
     if (t_far > t_near) {
         float ref = P.box_half.w, h = P.march.x * ref;
         // The sample distance is the longest step; faces and films take shorter ones
         // (ray_rk4_adaptive), down to a hundredth of a voxel.
         float h_try = h, h_min = min(0.01 * ref, h);
-        vec3 x = eye + t_near * dir;
-        vec3 v = dir * ray_eta(x);
+        vec3 x = origin + t_near * dir;
+        float eta_x = ray_eta(x);
+        vec3 v = dir * eta_x;
         vec3 v_start = v;
         for (uint k = 0u; k < P.steps.x && A < P.march.y; ++k) {
-            vec3 x0 = x;
+            vec3 x0 = x, v0 = v;
+            float eta_0 = eta_x;
             ray_rk4_adaptive(x, v, h_try, h, h_min);
             vec3 chord = x - x0;
             float len = length(chord);
@@ -138,6 +203,22 @@ vec4 trace_ray(vec3 dir, float k, out bool bent) {
                 A += (1.0 - A) * a;
                 M *= correct_medium(m, ratio);
             }
+            if (reflections) {
+                eta_x = ray_eta(x);
+                vec3 mirrored;
+                float F = face_split(x0, x, eta_0, eta_x, v0, mirrored);
+                if (F > 0.0) {
+                    vec3 w = (1.0 - A) * M * F;
+                    if (split && r_weight == vec3(0.0)) {
+                        r_origin = x0;
+                        r_dir = mirrored;
+                        r_weight = w;
+                    } else {
+                        C += w * background_seen(mirrored);
+                    }
+                    A += (1.0 - A) * F;
+                }
+            }
             // Left the box, moving away from it: the rest is uniform (eta 1 outside).
             bvec3 beyond = greaterThan(abs(x), P.box_half.xyz);
             bvec3 away = greaterThan(x * v, vec3(0.0));
@@ -152,18 +233,32 @@ vec4 trace_ray(vec3 dir, float k, out bool bent) {
     return vec4(rgb, alpha);
 }
 
+// The viewing ray from the eye along `dir` with eta scale k, and the reflected ray of the
+// first face it meets (trace_ray), traced through the volume.
+vec4 view_ray(vec3 dir, float k, out bool bent) {
+    vec3 r_origin, r_dir, r_weight;
+    vec4 seen = trace_ray(P.cam_pos.xyz, dir, k, true, bent, r_origin, r_dir, r_weight);
+    if (r_weight != vec3(0.0)) {
+        bool unused;
+        vec3 o2, d2, w2;
+        vec4 reflected = trace_ray(r_origin, r_dir, k, false, unused, o2, d2, w2);
+        seen.rgb += r_weight * reflected.rgb;
+    }
+    return seen;
+}
+
 void main() {
     uvec2 id = gl_GlobalInvocationID.xy;
     if (any(greaterThanEqual(id, P.size.xy))) return;
     vec3 dir = camera_ray(id, P.size.xy, P.cam_pos, P.cam_forward, P.cam_right.xyz, P.cam_up.xyz);
     bool bent;
-    vec4 seen = trace_ray(dir, P.eta_scales.x, bent);
+    vec4 seen = view_ray(dir, P.eta_scales.x, bent);
     if (P.steps.y == 3u && bent) {
         // Dispersion: green and blue along their own paths; the opacity is the mean of
         // the three (each channel's path met its own matter).
         bool unused;
-        vec4 green = trace_ray(dir, P.eta_scales.y, unused);
-        vec4 blue = trace_ray(dir, P.eta_scales.z, unused);
+        vec4 green = view_ray(dir, P.eta_scales.y, unused);
+        vec4 blue = view_ray(dir, P.eta_scales.z, unused);
         seen = vec4(seen.r, green.g, blue.b, (seen.a + green.a + blue.a) / 3.0);
     }
     imageStore(frame, ivec2(id), seen);

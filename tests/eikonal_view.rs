@@ -178,12 +178,15 @@ fn viewing_rays_refract_as_the_photon_tracer_traces_them() {
             (0.1, 0.001, 0.003),
         ];
         for (sd, p95_bound, worst_bound) in bounds {
-            let opts = RenderOptions {
+            let mut opts = RenderOptions {
                 width: w,
                 height: h,
                 sample_distance: sd,
                 ..Default::default()
             };
+            // The paths alone: the ball's face would add its reflection to the colour
+            // that codes the exit direction (faces_reflect_as_fresnel_says tests that).
+            opts.sweep.reflections = false;
             let frame = renderer.render(Model::Eikonal, &camera, &opts).unwrap();
             let mut errors: Vec<f32> = frame
                 .pixels
@@ -310,5 +313,148 @@ fn the_light_is_simulated_again_only_when_it_changes_and_lights_add() {
         renderer.set_transfer_functions(&block_tf(0.4)).unwrap();
         let thicker = renderer.render(Model::Eikonal, &camera, &opts).unwrap();
         assert!(simulated(&thicker), "new transfer functions are simulated");
+    });
+}
+
+/// A slab of clear glass (η 1.5) across the box at |z| < 0.25 with one-voxel faces (value
+/// 0.4), and with `block` an opaque blue block in front of it (value 1: y < 0.2, z > 0.35),
+/// below the path of a viewing ray from 45° above through the centre.
+fn glass_slab(n: u32, block: bool) -> (refrakt::volume::Volume, TransferFunctions) {
+    use refrakt::transfer::Piecewise;
+    let nf = n as f32;
+    let volume = f32_volume(n, |p| {
+        if block && p[1] < 0.2 && p[2] > 0.35 {
+            1.0
+        } else {
+            0.4 * ((0.25 - p[2].abs()) * nf + 0.5).clamp(0.0, 1.0)
+        }
+    });
+    let tf = TransferFunctions {
+        colour: Piecewise::new(vec![
+            (0.0, [0.0; 3]),
+            (0.6, [0.0; 3]),
+            (0.7, [0.0, 0.0, 1.0]),
+        ]),
+        opacity: Piecewise::new(vec![(0.0, [0.0]), (0.6, [0.0]), (0.7, [1.0])]),
+        eta: Piecewise::new(vec![(0.0, [1.0]), (0.4, [1.5]), (0.5, [1.5]), (0.6, [1.0])]),
+        ..Default::default()
+    };
+    (volume, tf)
+}
+
+/// Faces reflect by Fresnel (glsl/eikonal_view.comp, face_split). A clear glass slab seen
+/// through its centre, against an environment red towards the camera's side (+z) and
+/// green beyond: the front face reflects R (traced on, it leaves the box: red), the back
+/// face R of the (1 - R) that reaches it (mirrored inside the glass, towards +z: red, the
+/// environment's), and (1 - R)² passes (green), with R the textbook unpolarised
+/// reflectance at η 1.5: 0.04 at 0°, 0.050245 at 45° (Rs 0.09202, Rp 0.00847). So red
+/// R (2 - R), green (1 - R)², at sample distances 1 and 0.25. With `--reflections off` the
+/// slab passes everything. Breaks it: F taken at the angle inside the glass (45°: red
+/// 0.0816 of 0.0980), the reflected part not folded into the opacity (green 1.0), faces
+/// found between a step's ends instead of between the plateaus (none at small steps).
+#[test]
+fn faces_reflect_as_fresnel_says() {
+    with_context(|ctx| {
+        let (volume, tf) = glass_slab(32, false);
+        let mut renderer = Renderer::new(ctx, &volume, &tf).unwrap();
+        let env = common::environment_from(256, |d| {
+            if d.z > 0.0 {
+                [1.0, 0.0, 0.0, 1.0]
+            } else {
+                [0.0, 1.0, 0.0, 1.0]
+            }
+        });
+        renderer.set_environment(Some(&env)).unwrap();
+        for (elevation, r) in [(0.0f32, 0.04f32), (45.0, 0.050245)] {
+            let camera = refrakt::render::Camera {
+                elevation,
+                ..face_on(2.2, 35.0)
+            };
+            for (sd, reflections) in [(1.0f32, true), (0.25, true), (1.0, false)] {
+                let mut opts = RenderOptions {
+                    width: 9,
+                    height: 9,
+                    sample_distance: sd,
+                    ..Default::default()
+                };
+                // The slab is clear, so the light does not show; from behind, at normal
+                // incidence, its wavefront needs no refinement (the default light's took
+                // the simulator a minute on lavapipe).
+                opts.lights = vec![Light {
+                    source: LightSource::Directional {
+                        towards: Vec3::NEG_Z,
+                    },
+                    colour: [1.0; 3],
+                    softness: 0.0,
+                }];
+                opts.sweep.reflections = reflections;
+                let frame = renderer.render(Model::Eikonal, &camera, &opts).unwrap();
+                let px = frame.pixels[4 * 9 + 4];
+                let (want_r, want_g) = if reflections {
+                    (r * (2.0 - r), (1.0 - r) * (1.0 - r))
+                } else {
+                    (0.0, 1.0)
+                };
+                eprintln!(
+                    "elevation {elevation}, sample distance {sd}, reflections {reflections}: \
+                     {px:?}; want red {want_r:.5}, green {want_g:.5}"
+                );
+                let what = format!("elevation {elevation}°, sd {sd}, reflections {reflections}");
+                assert!((px[0] - want_r).abs() < 0.01 * r, "{what}: red {}", px[0]);
+                assert!((px[1] - want_g).abs() < 0.002, "{what}: green {}", px[1]);
+            }
+        }
+    });
+}
+
+/// The first face's reflection is traced through the volume: seen from 45° above, the
+/// front face of the glass slab mirrors the ray down towards the front of the box, where
+/// an opaque blue block stands below the incoming ray's path. Lit from behind the slab
+/// (through the glass at normal incidence), the block's face towards the glass is lit.
+/// Without the block the pixel's red is R (2 - R) (faces_reflect_as_fresnel_says); with
+/// it the front face's R meets the block (blue) instead of the sky, and only the back
+/// face's (1 - R) R (an environment lookup) stays red. What passes is the same.
+#[test]
+fn a_reflection_sees_the_volume_not_the_sky() {
+    with_context(|ctx| {
+        let env = common::environment_from(256, |d| {
+            if d.z > 0.0 {
+                [1.0, 0.0, 0.0, 1.0]
+            } else {
+                [0.0, 1.0, 0.0, 1.0]
+            }
+        });
+        let camera = refrakt::render::Camera {
+            elevation: 45.0,
+            ..face_on(2.2, 35.0)
+        };
+        let mut opts = RenderOptions {
+            width: 9,
+            height: 9,
+            sample_distance: 0.5,
+            ..Default::default()
+        };
+        opts.lights = vec![Light {
+            source: LightSource::Directional {
+                towards: Vec3::NEG_Z,
+            },
+            colour: [1.0; 3],
+            softness: 0.0,
+        }];
+        let r = 0.050245f32;
+        let mut seen = Vec::new();
+        for block in [false, true] {
+            let (volume, tf) = glass_slab(32, block);
+            let mut renderer = Renderer::new(ctx, &volume, &tf).unwrap();
+            renderer.set_environment(Some(&env)).unwrap();
+            let frame = renderer.render(Model::Eikonal, &camera, &opts).unwrap();
+            seen.push(frame.pixels[4 * 9 + 4]);
+        }
+        eprintln!("without the block {:?}, with it {:?}", seen[0], seen[1]);
+        assert!((seen[0][0] - r * (2.0 - r)).abs() < 0.01 * r, "{seen:?}");
+        assert!(seen[0][2] < 1e-6, "{seen:?}");
+        assert!((seen[1][0] - (1.0 - r) * r).abs() < 0.01 * r, "{seen:?}");
+        assert!(seen[1][2] > 0.005, "the block is not seen: {seen:?}");
+        assert!((seen[1][1] - seen[0][1]).abs() < 1e-4, "{seen:?}");
     });
 }

@@ -236,9 +236,10 @@ pub struct SceneArgs {
     /// bound widened the spacing [default: 1].
     #[arg(help_heading = "Light", long, value_name = "PIXELS")]
     pub light_spacing: Option<f32>,
-    /// Fresnel reflection of viewing rays at changes of η (refract): the reflected part
-    /// sees the environment (or background) in the mirrored direction, not occluded by
-    /// the volume; "off" is the thesis' model, everything transmitted [default: on].
+    /// Fresnel reflection of viewing rays at changes of η (refract, eikonal): refract's
+    /// reflected part sees the environment (or background) in the mirrored direction,
+    /// not occluded by the volume; eikonal traces the first face's reflection through the
+    /// volume; "off" is the thesis' model, everything transmitted [default: on].
     #[arg(help_heading = "Look", long, value_name = "on|off")]
     pub reflections: Option<String>,
     /// Clipping plane "nx,ny,nz,offset" in world space: opacity is zero where

@@ -36,7 +36,8 @@
 //!    conventions and rotation) or the background, through (1 − A) M.
 //! 3. **Faces reflect (Fresnel).** A face is where η steps between two plateaus: where a
 //!    piece of path passes η's middle between the plateaus found 2.5 voxels (plus half the
-//!    piece) either side along ∇η, and the plateaus differ by [`MIN_FACE_STEP`] or more.
+//!    piece) either side along ∇η, the plateaus differ by [`MIN_FACE_STEP`] or more, and
+//!    half-way out η is already on either side of the middle (not a film).
 //!    There the ray splits: the fraction F (unpolarised Fresnel between the plateaus, at
 //!    the angle of the tangential part of v, which crossing the face keeps) is traced on
 //!    as a new ray in the mirrored direction, **through the volume** (it sees the floor a
@@ -507,6 +508,17 @@ impl View<'_> {
         let (lo, hi) = (e_minus.min(e_plus), e_minus.max(e_plus));
         let middle = 0.5 * (lo + hi);
         if hi - lo < MIN_FACE_STEP || (eta_a < middle) == (eta_b < middle) {
+            return None;
+        }
+        // A step, not a film: half-way out η lies on either side of the middle already.
+        // (A film between two regions of equal η, as an opaque block's skin passing
+        // through a glass's values, read as a face where one probe reached the glass
+        // beyond it: measured on the GPU's eikonal view, glsl/eikonal_view.comp.)
+        let (h_minus, h_plus) = (
+            f.eta_w(mid - 0.5 * reach * n),
+            f.eta_w(mid + 0.5 * reach * n),
+        );
+        if (h_minus < middle) == (h_plus < middle) {
             return None;
         }
         if e_plus < e_minus {

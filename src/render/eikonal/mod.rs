@@ -14,7 +14,9 @@
 //! scope [`SIMULATION_SCOPE`], what a light or transfer-function change costs this model.
 //! Changing g, the albedo or the camera rebuilds nothing. With dispersion (`--abbe`,
 //! [`dispersion`]) each colour channel's light is a wavefront of its own and viewing rays
-//! through glass are traced once per channel.
+//! through glass are traced once per channel. Faces reflect by Fresnel (`--reflections`,
+//! on by default as for the sweep): the first face's reflected ray is traced through the
+//! volume, the others look up the environment.
 
 use anyhow::{ensure, Result};
 use bytemuck::{Pod, Zeroable};
@@ -259,6 +261,7 @@ struct Params {
     /// The refractive-index scale per colour channel (all three the same without
     /// dispersion).
     eta_scales: [f32; 4],
+    /// Steps at most per ray, colour channels traced apart, 1 with Fresnel reflections.
     steps: [u32; 4],
 }
 
@@ -292,8 +295,9 @@ pub(crate) static EIKONAL: OpticalModel = OpticalModel {
         point: true,
     },
     phase_function: true,
-    // The refractive-index scale and the environment behind, as the sweep's.
-    flags: &["--eta-scale", "--env", "--env-rotation"],
+    // The refractive-index scale, the Fresnel reflections at faces and the environment
+    // behind, as the sweep's.
+    flags: &["--eta-scale", "--reflections", "--env", "--env-rotation"],
     make_pass: |inputs| Ok(Box::new(EikonalPass::new(inputs)?)),
     options: &[&SCATTER_G, &SCATTER_ALBEDO, &dispersion::ABBE],
     rebuild_scopes: &[SIMULATION_SCOPE],
@@ -341,7 +345,7 @@ impl ModelPass for EikonalPass {
                 if inputs.env.enabled { 1.0 } else { 0.0 },
             ],
             eta_scales,
-            steps: [max_steps, channels, 0, 0],
+            steps: [max_steps, channels, opts.sweep.reflections as u32, 0],
         })?;
         recorded.max_steps = max_steps;
         Ok(recorded)
