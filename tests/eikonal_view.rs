@@ -342,6 +342,37 @@ fn glass_slab(n: u32, block: bool) -> (refrakt::volume::Volume, TransferFunction
     (volume, tf)
 }
 
+/// An environment red where a direction points to +z (the camera's side of the slab) and
+/// green where it points to -z.
+fn red_towards_camera_green_beyond() -> refrakt::environment::EnvironmentMap {
+    common::environment_from(256, |d| {
+        if d.z > 0.0 {
+            [1.0, 0.0, 0.0, 1.0]
+        } else {
+            [0.0, 1.0, 0.0, 1.0]
+        }
+    })
+}
+
+/// A 9² frame of the slab at sample distance `sd`, lit from behind the slab through the
+/// glass at normal incidence (a wavefront that needs no refinement: the default light's
+/// took the simulator a minute on lavapipe).
+fn slab_options(sd: f32) -> RenderOptions {
+    RenderOptions {
+        width: 9,
+        height: 9,
+        sample_distance: sd,
+        lights: vec![Light {
+            source: LightSource::Directional {
+                towards: Vec3::NEG_Z,
+            },
+            colour: [1.0; 3],
+            softness: 0.0,
+        }],
+        ..Default::default()
+    }
+}
+
 /// Faces reflect by Fresnel (glsl/eikonal_view.comp, face_split). A clear glass slab seen
 /// through its centre, against an environment red towards the camera's side (+z) and
 /// green beyond: the front face reflects R (traced on, it leaves the box: red), the back
@@ -357,13 +388,7 @@ fn faces_reflect_as_fresnel_says() {
     with_context(|ctx| {
         let (volume, tf) = glass_slab(32, false);
         let mut renderer = Renderer::new(ctx, &volume, &tf).unwrap();
-        let env = common::environment_from(256, |d| {
-            if d.z > 0.0 {
-                [1.0, 0.0, 0.0, 1.0]
-            } else {
-                [0.0, 1.0, 0.0, 1.0]
-            }
-        });
+        let env = red_towards_camera_green_beyond();
         renderer.set_environment(Some(&env)).unwrap();
         for (elevation, r) in [(0.0f32, 0.04f32), (45.0, 0.050245)] {
             let camera = refrakt::render::Camera {
@@ -371,22 +396,8 @@ fn faces_reflect_as_fresnel_says() {
                 ..face_on(2.2, 35.0)
             };
             for (sd, reflections) in [(1.0f32, true), (0.25, true), (1.0, false)] {
-                let mut opts = RenderOptions {
-                    width: 9,
-                    height: 9,
-                    sample_distance: sd,
-                    ..Default::default()
-                };
-                // The slab is clear, so the light does not show; from behind, at normal
-                // incidence, its wavefront needs no refinement (the default light's took
-                // the simulator a minute on lavapipe).
-                opts.lights = vec![Light {
-                    source: LightSource::Directional {
-                        towards: Vec3::NEG_Z,
-                    },
-                    colour: [1.0; 3],
-                    softness: 0.0,
-                }];
+                // The slab is clear, so the light does not show (slab_options).
+                let mut opts = slab_options(sd);
                 opts.sweep.reflections = reflections;
                 let frame = renderer.render(Model::Eikonal, &camera, &opts).unwrap();
                 let px = frame.pixels[4 * 9 + 4];
@@ -417,30 +428,12 @@ fn faces_reflect_as_fresnel_says() {
 #[test]
 fn a_reflection_sees_the_volume_not_the_sky() {
     with_context(|ctx| {
-        let env = common::environment_from(256, |d| {
-            if d.z > 0.0 {
-                [1.0, 0.0, 0.0, 1.0]
-            } else {
-                [0.0, 1.0, 0.0, 1.0]
-            }
-        });
+        let env = red_towards_camera_green_beyond();
         let camera = refrakt::render::Camera {
             elevation: 45.0,
             ..face_on(2.2, 35.0)
         };
-        let mut opts = RenderOptions {
-            width: 9,
-            height: 9,
-            sample_distance: 0.5,
-            ..Default::default()
-        };
-        opts.lights = vec![Light {
-            source: LightSource::Directional {
-                towards: Vec3::NEG_Z,
-            },
-            colour: [1.0; 3],
-            softness: 0.0,
-        }];
+        let opts = slab_options(0.5);
         let r = 0.050245f32;
         let mut seen = Vec::new();
         for block in [false, true] {
