@@ -45,6 +45,14 @@ vec4 ray_field(vec3 w) {
 }
 #endif
 
+// The trilinear interpolant of a cell's eight voxels (cell_voxels' order) at fraction f:
+// along x, then y, then z (ray_eta_grad relies on this one order for its bits).
+float ray_trilinear(float c[8], vec3 f) {
+    float y0 = mix(mix(c[0], c[1], f.x), mix(c[2], c[3], f.x), f.y);
+    float y1 = mix(mix(c[4], c[5], f.x), mix(c[6], c[7], f.x), f.y);
+    return mix(y0, y1, f.z);
+}
+
 // The value at world point w: the trilinear interpolant of the voxels (clamp to edge),
 // zero outside the box (as the sweep's value_at_tex and the CPU tracer).
 float ray_value(vec3 w) {
@@ -56,9 +64,7 @@ float ray_value(vec3 w) {
     float c[8];
     vec3 f;
     cell_voxels(RAY_VOLUME, t, RAY_DIMS, c, f);
-    float y0 = mix(mix(c[0], c[1], f.x), mix(c[2], c[3], f.x), f.y);
-    float y1 = mix(mix(c[4], c[5], f.x), mix(c[6], c[7], f.x), f.y);
-    return mix(y0, y1, f.z);
+    return ray_trilinear(c, f);
 }
 
 // A transfer function's layer at value s: linear between its TF_SAMPLES samples (the
@@ -84,18 +90,113 @@ float ray_eta(vec3 w) {
 // tried first and sent a ray that ran 0.02 voxel beside a cell face, along it, 64 mrad
 // away from the CPU tracer's (docs/NOTES.md, "The ray equation on the GPU").
 const float RAY_GRADIENT_STEP = 0.05;
-vec3 ray_grad_eta(vec3 w) {
+
+// The trilinear interpolant as ray_trilinear computes it, of a cell given as its z = 0
+// and z = 1 faces (voxels in cell_voxels' order).
+float ray_trilinear4(vec4 z0, vec4 z1, vec3 f) {
+    float y0 = mix(mix(z0.x, z0.y, f.x), mix(z0.z, z0.w, f.x), f.y);
+    float y1 = mix(mix(z1.x, z1.y, f.x), mix(z1.z, z1.w, f.x), f.y);
+    return mix(y0, y1, f.z);
+}
+
+// eta' (1 + k (eta_tf - 1)) of value s at texture point t, 0 outside the box.
+float ray_eta_of(float s, vec3 t) {
+    bool inside = !(any(lessThan(t, vec3(0.0))) || any(greaterThan(t, vec3(1.0))));
+    float e = ray_tf(inside ? s : 0.0, 1).a;
+    return RAY_ETA_SCALE == 1.0 ? e : 1.0 + RAY_ETA_SCALE * (e - 1.0);
+}
+
+// The voxel lines along one axis through a cell's four other-axes corners: the cell's
+// own two ends (lo, up), and the line's voxel beyond the cell on w's nearer side; a
+// point shifted along that axis whose cell starts `shift` (-1, 0, 1) voxels from w's
+// takes its lines' ends from these. Returns the shifted cell's lower (xy) and upper ends.
+void ray_shift_lines(vec4 lo, vec4 up, vec4 beyond, int shift, out vec4 a, out vec4 b) {
+    a = shift < 0 ? beyond : (shift == 0 ? lo : up);
+    b = shift < 0 ? lo : (shift == 0 ? up : beyond);
+}
+
+// eta' at w and grad eta' there (the central differences above), from one fetch of the
+// cell around w and one more slab of four voxels per axis: 20 texel fetches where seven
+// ray_eta calls take 56. Each of the six points w +- h e_k differs from w along axis k
+// only, by RAY_GRADIENT_STEP < 0.5 voxel, so it shares w's cell along the other two
+// axes and its own cell along k starts at most one voxel from w's: the slab beyond w's
+// cell on the side of w's nearer face (index i - 1 below the cell's middle, i + 2 above
+// it) is the only other one it can need. Every point's value is interpolated from the
+// same clamped voxels, with the same fraction and in the same order as ray_value takes
+// it on its own, so the result is the seven lookups' to the bit. Written out per axis
+// with no indexed arrays: llvmpipe spills an array indexed by a loop it does not unroll
+// to memory, which made a first, looped version slower than the seven lookups.
+void ray_eta_grad(vec3 w, out float eta, out vec3 grad) {
 #ifdef RAY_FIELD
-    // eta' = 1 + k (eta_tf - 1); d/dw = d/dt / (2 half).
-    if (RAY_USE_FIELD) return RAY_ETA_SCALE * ray_field(w).yzw / (2.0 * RAY_HALF);
-#endif
-    vec3 h = RAY_GRADIENT_STEP * 2.0 * RAY_HALF / RAY_DIMS;
-    vec3 g;
-    for (int k = 0; k < 3; ++k) {
-        vec3 e = vec3(0.0);
-        e[k] = h[k];
-        g[k] = (ray_eta(w + e) - ray_eta(w - e)) / (2.0 * h[k]);
+    if (RAY_USE_FIELD) {
+        eta = ray_eta(w);
+        // eta' = 1 + k (eta_tf - 1); d/dw = d/dt / (2 half).
+        grad = RAY_ETA_SCALE * ray_field(w).yzw / (2.0 * RAY_HALF);
+        return;
     }
+#endif
+    vec3 t = ray_tex(w);
+    vec3 xc = t * RAY_DIMS - 0.5;
+    ivec3 i = ivec3(floor(xc));
+    vec3 f = xc - vec3(i);
+    ivec3 hi = ivec3(RAY_DIMS) - 1;
+#define RAY_VOXEL(dx, dy, dz) texelFetch(RAY_VOLUME, clamp(i + ivec3(dx, dy, dz), ivec3(0), hi), 0).r
+    // The cell's z = 0 and z = 1 faces, (x, y) = (0,0), (1,0), (0,1), (1,1).
+    vec4 z0 = vec4(RAY_VOXEL(0, 0, 0), RAY_VOXEL(1, 0, 0), RAY_VOXEL(0, 1, 0), RAY_VOXEL(1, 1, 0));
+    vec4 z1 = vec4(RAY_VOXEL(0, 0, 1), RAY_VOXEL(1, 0, 1), RAY_VOXEL(0, 1, 1), RAY_VOXEL(1, 1, 1));
+    // The slab beyond the cell along each axis, as an offset from i.
+    ivec3 by = ivec3(f.x < 0.5 ? -1 : 2, f.y < 0.5 ? -1 : 2, f.z < 0.5 ? -1 : 2);
+    // Along x, lines at (y, z) = (0,0), (1,0), (0,1), (1,1).
+    vec4 bx = vec4(RAY_VOXEL(by.x, 0, 0), RAY_VOXEL(by.x, 1, 0), RAY_VOXEL(by.x, 0, 1), RAY_VOXEL(by.x, 1, 1));
+    // Along y, lines at (x, z) = (0,0), (1,0), (0,1), (1,1).
+    vec4 byy = vec4(RAY_VOXEL(0, by.y, 0), RAY_VOXEL(1, by.y, 0), RAY_VOXEL(0, by.y, 1), RAY_VOXEL(1, by.y, 1));
+    // Along z, lines at (x, y) = (0,0), (1,0), (0,1), (1,1).
+    vec4 bz = vec4(RAY_VOXEL(0, 0, by.z), RAY_VOXEL(1, 0, by.z), RAY_VOXEL(0, 1, by.z), RAY_VOXEL(1, 1, by.z));
+#undef RAY_VOXEL
+    eta = ray_eta_of(ray_trilinear4(z0, z1, f), t);
+
+    vec3 h = RAY_GRADIENT_STEP * 2.0 * RAY_HALF / RAY_DIMS;
+    vec2 sides[3];  // per axis, eta' at w - h e_k and w + h e_k
+    for (int s = 0; s < 2; ++s) {
+        float sign = s == 0 ? -1.0 : 1.0;
+        vec4 a, b;
+        // x: the shifted point's lines along x and its fraction along x.
+        {
+            vec3 tp = ray_tex(w + vec3(sign * h.x, 0.0, 0.0));
+            float xp = tp.x * RAY_DIMS.x - 0.5;
+            float ip = floor(xp);
+            ray_shift_lines(vec4(z0.x, z0.z, z1.x, z1.z), vec4(z0.y, z0.w, z1.y, z1.w), bx,
+                            int(ip) - i.x, a, b);
+            float e = ray_eta_of(ray_trilinear4(vec4(a.x, b.x, a.y, b.y), vec4(a.z, b.z, a.w, b.w),
+                                                vec3(xp - ip, f.y, f.z)), tp);
+            if (s == 0) sides[0].x = e; else sides[0].y = e;
+        }
+        {
+            vec3 tp = ray_tex(w + vec3(0.0, sign * h.y, 0.0));
+            float yp = tp.y * RAY_DIMS.y - 0.5;
+            float ip = floor(yp);
+            ray_shift_lines(vec4(z0.x, z0.y, z1.x, z1.y), vec4(z0.z, z0.w, z1.z, z1.w), byy,
+                            int(ip) - i.y, a, b);
+            float e = ray_eta_of(ray_trilinear4(vec4(a.x, a.y, b.x, b.y), vec4(a.z, a.w, b.z, b.w),
+                                                vec3(f.x, yp - ip, f.z)), tp);
+            if (s == 0) sides[1].x = e; else sides[1].y = e;
+        }
+        {
+            vec3 tp = ray_tex(w + vec3(0.0, 0.0, sign * h.z));
+            float zp = tp.z * RAY_DIMS.z - 0.5;
+            float ip = floor(zp);
+            ray_shift_lines(z0, z1, bz, int(ip) - i.z, a, b);
+            float e = ray_eta_of(ray_trilinear4(a, b, vec3(f.x, f.y, zp - ip)), tp);
+            if (s == 0) sides[2].x = e; else sides[2].y = e;
+        }
+    }
+    grad = vec3(sides[0].y - sides[0].x, sides[1].y - sides[1].x, sides[2].y - sides[2].x) / (2.0 * h);
+}
+
+vec3 ray_grad_eta(vec3 w) {
+    float eta;
+    vec3 g;
+    ray_eta_grad(w, eta, g);
     return g;
 }
 
@@ -158,17 +259,19 @@ float ray_rk4_adaptive(inout vec3 x, inout vec3 v, inout float h, float h_max, f
 // every particle by the same optical path dt (eta ds = dt): particles launched on a
 // wavefront stay on one (the intensity law, eq. 16, needs that of a stream tube's ends).
 void ray_rk4_temporal(inout vec3 x, inout vec3 v, float dt) {
-    float e1 = ray_eta(x);
-    vec3 k1x = v / (e1 * e1), k1v = ray_grad_eta(x) / e1;
+    float e1, e2, e3, e4;
+    vec3 g1, g2, g3, g4;
+    ray_eta_grad(x, e1, g1);
+    vec3 k1x = v / (e1 * e1), k1v = g1 / e1;
     vec3 x2 = x + 0.5 * dt * k1x, v2 = v + 0.5 * dt * k1v;
-    float e2 = ray_eta(x2);
-    vec3 k2x = v2 / (e2 * e2), k2v = ray_grad_eta(x2) / e2;
+    ray_eta_grad(x2, e2, g2);
+    vec3 k2x = v2 / (e2 * e2), k2v = g2 / e2;
     vec3 x3 = x + 0.5 * dt * k2x, v3 = v + 0.5 * dt * k2v;
-    float e3 = ray_eta(x3);
-    vec3 k3x = v3 / (e3 * e3), k3v = ray_grad_eta(x3) / e3;
+    ray_eta_grad(x3, e3, g3);
+    vec3 k3x = v3 / (e3 * e3), k3v = g3 / e3;
     vec3 x4 = x + dt * k3x, v4 = v + dt * k3v;
-    float e4 = ray_eta(x4);
-    vec3 k4x = v4 / (e4 * e4), k4v = ray_grad_eta(x4) / e4;
+    ray_eta_grad(x4, e4, g4);
+    vec3 k4x = v4 / (e4 * e4), k4v = g4 / e4;
     x += dt / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
     v += dt / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
 }
