@@ -79,7 +79,8 @@ vec3 fluence_grid(vec3 p) {
     return (p / (2.0 * pc.half_extent.xyz) + 0.5) * pc.dims.xyz - 0.5;
 }
 
-// The fluence deposits of a patch's four points (deposit_fluence of each), merged where
+// The fluence deposits of a patch's four points p0..p3 (each its amount, rgb, trilinearly
+// into the fluence volume, and the direction dir weighted by its luminance), merged where
 // points share a trilinear cell: their weights on the cell's eight voxels are summed
 // before the atomic adds, so a cell shared by all four costs 48 adds, not 192. Points
 // of a patch lie within about a voxel of each other and often share their cell; the
@@ -99,10 +100,12 @@ void deposit_fluence4(vec3 p0, vec3 p1, vec3 p2, vec3 p3, vec3 a0, vec3 a1, vec3
     while (todo != 0u) {
         int lead = findLSB(todo);
         vec3 b = lead == 0 ? b0 : (lead == 1 ? b1 : (lead == 2 ? b2 : b3));
-        bool m0 = (todo & 1u) != 0u && b0 == b;
-        bool m1 = (todo & 2u) != 0u && b1 == b;
-        bool m2 = (todo & 4u) != 0u && b2 == b;
-        bool m3 = (todo & 8u) != 0u && b3 == b;
+        // The lead always takes its own point (a NaN cell equals nothing, not even
+        // itself: the loop would never end).
+        bool m0 = (todo & 1u) != 0u && (lead == 0 || b0 == b);
+        bool m1 = (todo & 2u) != 0u && (lead == 1 || b1 == b);
+        bool m2 = (todo & 4u) != 0u && (lead == 2 || b2 == b);
+        bool m3 = (todo & 8u) != 0u && (lead == 3 || b3 == b);
         todo &= ~((m0 ? 1u : 0u) | (m1 ? 2u : 0u) | (m2 ? 4u : 0u) | (m3 ? 8u : 0u));
         for (int k = 0; k < 8; ++k) {
             vec3 o = vec3(k & 1, (k >> 1) & 1, (k >> 2) & 1);
@@ -132,7 +135,6 @@ vec3 on_plane(vec3 a, vec3 b, vec3 n, float c) {
     float t = db != da ? da / (da - db) : 0.0;
     return mix(a, b, t);
 }
-
 
 // v after a step brought back to |v| = eta at x (the ray equation's invariant) by
 // changing it only along the step's kick dv, the direction of the gradients it met: a
