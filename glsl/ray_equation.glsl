@@ -45,11 +45,12 @@ vec4 ray_field(vec3 w) {
 }
 #endif
 
-// The trilinear interpolant of a cell's eight voxels (cell_voxels' order) at fraction f:
-// along x, then y, then z (ray_eta_grad relies on this one order for its bits).
-float ray_trilinear(float c[8], vec3 f) {
-    float y0 = mix(mix(c[0], c[1], f.x), mix(c[2], c[3], f.x), f.y);
-    float y1 = mix(mix(c[4], c[5], f.x), mix(c[6], c[7], f.x), f.y);
+// The trilinear interpolant of a cell given as its z = 0 and z = 1 faces (voxels in
+// cell_voxels' order) at fraction f: along x, then y, then z. ray_value and ray_eta_grad
+// both take it, so their values agree to the bit.
+float ray_trilinear4(vec4 z0, vec4 z1, vec3 f) {
+    float y0 = mix(mix(z0.x, z0.y, f.x), mix(z0.z, z0.w, f.x), f.y);
+    float y1 = mix(mix(z1.x, z1.y, f.x), mix(z1.z, z1.w, f.x), f.y);
     return mix(y0, y1, f.z);
 }
 
@@ -64,7 +65,7 @@ float ray_value(vec3 w) {
     float c[8];
     vec3 f;
     cell_voxels(RAY_VOLUME, t, RAY_DIMS, c, f);
-    return ray_trilinear(c, f);
+    return ray_trilinear4(vec4(c[0], c[1], c[2], c[3]), vec4(c[4], c[5], c[6], c[7]), f);
 }
 
 // A transfer function's layer at value s: linear between its TF_SAMPLES samples (the
@@ -77,10 +78,14 @@ vec4 ray_tf(float s, int layer) {
     return mix(a, b, x - float(j));
 }
 
-// eta' = 1 + k (eta_tf - 1) at world point w.
+// eta' = 1 + k (eta_tf - 1) of the transfer function's eta_tf.
+float ray_scaled_eta(float eta_tf) {
+    return RAY_ETA_SCALE == 1.0 ? eta_tf : 1.0 + RAY_ETA_SCALE * (eta_tf - 1.0);
+}
+
+// eta' at world point w.
 float ray_eta(vec3 w) {
-    float eta = ray_tf(ray_value(w), 1).a;
-    return RAY_ETA_SCALE == 1.0 ? eta : 1.0 + RAY_ETA_SCALE * (eta - 1.0);
+    return ray_scaled_eta(ray_tf(ray_value(w), 1).a);
 }
 
 // grad eta' at w (per world unit): central differences RAY_GRADIENT_STEP voxels apart of
@@ -91,19 +96,10 @@ float ray_eta(vec3 w) {
 // away from the CPU tracer's (docs/NOTES.md, "The ray equation on the GPU").
 const float RAY_GRADIENT_STEP = 0.05;
 
-// The trilinear interpolant as ray_trilinear computes it, of a cell given as its z = 0
-// and z = 1 faces (voxels in cell_voxels' order).
-float ray_trilinear4(vec4 z0, vec4 z1, vec3 f) {
-    float y0 = mix(mix(z0.x, z0.y, f.x), mix(z0.z, z0.w, f.x), f.y);
-    float y1 = mix(mix(z1.x, z1.y, f.x), mix(z1.z, z1.w, f.x), f.y);
-    return mix(y0, y1, f.z);
-}
-
 // eta' (1 + k (eta_tf - 1)) of value s at texture point t, 0 outside the box.
 float ray_eta_of(float s, vec3 t) {
     bool inside = !(any(lessThan(t, vec3(0.0))) || any(greaterThan(t, vec3(1.0))));
-    float e = ray_tf(inside ? s : 0.0, 1).a;
-    return RAY_ETA_SCALE == 1.0 ? e : 1.0 + RAY_ETA_SCALE * (e - 1.0);
+    return ray_scaled_eta(ray_tf(inside ? s : 0.0, 1).a);
 }
 
 // The voxel lines along one axis through a cell's four other-axes corners: the cell's
