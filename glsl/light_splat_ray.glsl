@@ -36,6 +36,32 @@ const bool DEPOSIT_CELLS = false;
 layout(constant_id = 9) const bool DEPOSIT_CELLS = true;
 #endif
 
+// What a light ray deposits per unit area (constant 11; `SweepOptions::plane_flux` sets it
+// off). On (the default): the fluence, the ray's flux per unit area *across the ray*,
+// which is what matter scatters (the in-scattered radiance is sigma_s p(theta) times the
+// fluence of each beam, summed over the beams that cross there). The intensity law
+// spreads a ray's flux over the area its cell spans on the plane, A_plane = A_perp /
+// cos(theta), theta the ray's angle to the sweep axis; the plane's light is normalised
+// so that the light as launched (theta_0) reads its colour. So each ray's share is
+// scaled by cos(theta_0) / cos(theta) (fluence_weight): 1 for light going as launched,
+// more for light turned towards the planes. Per ray, before the deposits add: where
+// rays cross at different angles no per-pixel direction could undo it afterwards (the
+// pixel's mean direction recovered a quarter of the difference in the oblique shadow
+// of the sphere on its floor; docs/NOTES.md, "The light the matter scatters"). Off: the
+// flux per unit plane area, the thesis' intensity law, which power through a plane is
+// the sum of (the power tests) and a photon tracer's plane tally measures. Rays turned
+// beyond 84 degrees are dropped (sweep_plane.glsl), so cos(theta) >= 0.104 and the weight
+// stays below 10.
+layout(constant_id = 11) const bool LIGHT_FLUENCE = true;
+
+float fluence_weight(vec3 v) {
+    if (!LIGHT_FLUENCE) return 1.0;
+    float speed = length(v);
+    // A dropped ray (v = 0) deposits nothing anyway; keep its weight finite.
+    if (!(speed > 0.0)) return 1.0;
+    return abs(P.light_dir.z) / max(abs(v.z) / speed, 0.1);
+}
+
 struct RayDeposit {
     // Cells: the corners' fluxes (rgb, a = luminance) per pixel's world area, halved:
     // each triangle's density is linear between its corners, f_v / (2 area) at corner v
@@ -117,7 +143,7 @@ Neighbourhood neighbourhood(ivec2 c, uint layer, float depth) {
         vec4 lc = READ_RAY(rays_flux, layer, r);
         vec4 lv = READ_RAY(rays_direction, layer, r);
         n.at[k] = project(vec3(lc.w, lv.w, depth)) * P.camera.zw;
-        n.flux[k] = n.exists[k] ? lc.rgb : vec3(0.0);
+        n.flux[k] = n.exists[k] ? lc.rgb * fluence_weight(lv.xyz) : vec3(0.0);
         n.live[k] = n.exists[k] && dot(lv.xyz, lv.xyz) > 0.0;
         if (k == 4) n.direction = lv.xyz;
     }
@@ -161,7 +187,7 @@ bool box_of_ray(int index, uint layer, float depth, out RayDeposit d) {
         e[k] = (k % 2 == 0 ? p - here : here - p) * px_per_unit;
     }
     vec2 centre = project(vec3(here, depth)) * P.camera.zw;
-    ray_box(lc.rgb, centre, shorter(e[0], e[1]), shorter(e[2], e[3]),
+    ray_box(lc.rgb * fluence_weight(lv.xyz), centre, shorter(e[0], e[1]), shorter(e[2], e[3]),
             1.0 / (px_per_unit.x * px_per_unit.y), d);
     d.footprint = d.box;   // the gather's packed deposit and the boxes' sprite rely on it
     d.direction = normalize(lv.xyz);

@@ -61,6 +61,9 @@ fn power_is_conserved_through_a_focus() {
                     sweep: path,
                     ..Default::default()
                 },
+                // Power through a plane is the sum of the flux per unit plane area (the
+                // fluence, the default, weights turned rays by cos θ₀ / cos θ).
+                plane_flux: true,
                 dumps: (0..planes.count)
                     .map(|p| (StateBuffer::LightColour, p))
                     .collect(),
@@ -97,6 +100,7 @@ fn power_is_conserved_through_a_focus() {
                     planes.depth(p),
                     &refrakt::photons::PhotonOptions {
                         photons_per_pixel: 4,
+                        plane_flux: true,
                         ..Default::default()
                     },
                     None,
@@ -305,6 +309,8 @@ fn light_beyond_graded_wedge(
     opts.sweep = SweepOptions {
         light_transport: transport,
         dumps: vec![(StateBuffer::LightColour, last)],
+        // The fraction of the power beyond the face.
+        plane_flux: true,
         ..Default::default()
     };
     opts.lights = vec![headlight(&cam, 0.0)];
@@ -433,6 +439,8 @@ fn sphere_on_floor_caustic_matches_the_photon_tracer() {
             opts.sweep = SweepOptions {
                 light_transport: transport,
                 dumps: vec![(StateBuffer::LightColour, k)],
+                // Where the flux lands, as the tracer counts it (below).
+                plane_flux: true,
                 ..Default::default()
             };
             let f = sweep(ctx, vol, tf, cam, &opts);
@@ -450,6 +458,9 @@ fn sphere_on_floor_caustic_matches_the_photon_tracer() {
                     depth,
                     &refrakt::photons::PhotonOptions {
                         photons_per_pixel: 16,
+                        // Where the flux lands: the tracer lets photons turned beyond
+                        // the sweep's 84° land, which the fluence weights by up to 10.
+                        plane_flux: true,
                         ..Default::default()
                     },
                     None,
@@ -534,6 +545,7 @@ impl DemoFromAbove {
     fn traced(&self, opts: &RenderOptions, depth: f32, photons_per_pixel: u32) -> Vec<[f32; 4]> {
         let photons = refrakt::photons::PhotonOptions {
             photons_per_pixel,
+            plane_flux: true,
             ..Default::default()
         };
         refrakt::photons::trace_irradiance(
@@ -556,6 +568,8 @@ impl DemoFromAbove {
         };
         opts.sweep = SweepOptions {
             dumps: vec![(StateBuffer::LightColour, k)],
+            // Where the flux lands and its power, as the tracer counts them.
+            plane_flux: true,
             ..Default::default()
         };
         opts.lights = vec![self.light];

@@ -685,12 +685,30 @@ fn ea_refuses_the_refractive_models_flags() {
         (&["--light-spacing", "0.5"][..], "--light-spacing"),
         (&["--dump", "medium@1"][..], "dumps"),
         (&["--pass-timings"][..], "--pass-timings"),
+        (&["--plane-flux"][..], "--plane-flux"),
     ] {
         let mut args = vec!["render", "--model", "ea", "--volume-size", "16", "-o", o];
         args.extend(flags);
         assert_clean_failure(&args, needle);
         assert!(!out.exists(), "{flags:?} left an image");
     }
+    // The planes' flux per unit area is the forward transport's choice: the backward
+    // step's planes hold it already.
+    let args = [
+        "render",
+        "--light-transport",
+        "backward",
+        "--plane-flux",
+        "--volume-size",
+        "16",
+        "-o",
+        o,
+    ];
+    assert_clean_failure(&args, "forward light transport's");
+    assert!(
+        !out.exists(),
+        "--plane-flux with the backward step left an image"
+    );
 }
 
 /// Issue 17: the AO and single-scattering models take the light but not the sweep's flags; its own flags are

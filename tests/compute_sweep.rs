@@ -201,8 +201,13 @@ fn grouped_sprites_deposit_what_the_atomic_splat_does() {
                         .fold(0.0f32, |m, v| m.max(v.abs()));
                     lit += a.pixels.iter().filter(|p| p[0] > 0.0).count();
                     let d = linear_max(&a.pixels, &g.pixels);
+                    // Float rounding of the sprites' blended sums against the exact
+                    // integer sums. The bound was 1e-5 of the peak until the fluence
+                    // weighted the rays (up to 10 for steep ones, glsl/light_splat_ray.glsl);
+                    // since, the light-direction sums measured 1.8e-5. A lost or
+                    // misplaced deposit is orders of magnitude off.
                     assert!(
-                        d <= 1e-5 * peak,
+                        d <= 3e-5 * peak,
                         "{what}: {:?} at plane {}: the grouped sprites deposit {d} off the \
                          atomic splat's sums (peak {peak})",
                         a.buffer,

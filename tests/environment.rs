@@ -763,12 +763,17 @@ fn the_environment_lights_the_scene_from_its_brightest_spot() {
     let same = mean_diff(&from_env, &explicit) / mean_level;
     let moved = mean_diff(&elsewhere, &explicit) / mean_level;
     println!("relative mean difference: env vs explicit {same:.4}, 30° away {moved:.4}");
+    // The spot's direction is found to about 0.1°; under the glass the caustic's crossing
+    // rays move with the slightest turn. Measured 0.025 while the planes held the flux
+    // per plane area, 0.042 since they hold the fluence (2026-11-29: rays turned towards
+    // the planes weigh up to 10 times their flux there); 30° away it is 0.196.
     assert!(
-        same < 0.03,
+        same < 0.06,
         "--light env differs from the spot's light by {same:.4} of the mean"
     );
+    // (5 times until the fluence; 4.7 times since.)
     assert!(
-        moved > 5.0 * same.max(0.005),
+        moved > 3.0 * same.max(0.005),
         "a light 30° away differs by only {moved:.4}"
     );
     // --env-rotation turns the light with the map. With rotation r a world direction of

@@ -309,6 +309,8 @@ fn sphere_on_floor_matches_the_photon_tracer() {
             depth,
             &refrakt::photons::PhotonOptions {
                 photons_per_pixel: 16,
+                // The receiver counts the flux crossing it.
+                plane_flux: true,
                 ..Default::default()
             },
             None,

@@ -89,8 +89,9 @@ pub enum Command {
     /// right-drag or the arrow keys move the light, H prints every key. Takes the same
     /// scene options as `render`.
     View(Box<ViewArgs>),
-    /// Reference CPU photon tracer: the irradiance of the scene's light on one plane of
-    /// the sweep (--plane K, as `render --dump light-colour@K`) or at a view depth,
+    /// Reference CPU photon tracer: the light (fluence, or with --plane-flux the flux per
+    /// unit plane area) on one plane of the sweep (--plane K, as `render --dump
+    /// light-colour@K`) or at a view depth,
     /// written as linear EXR; the oracle for the sweep's caustics, shadows and power.
     Photons(Box<PhotonsArgs>),
     /// Reference CPU renderer: a camera image of the refractive model without the sweep's
@@ -222,7 +223,9 @@ pub struct RenderArgs {
     /// Write state buffers after given planes as EXR: "BUFFER@PLANE[,...]" with BUFFER one
     /// of light-colour, light-direction, view-position, view-direction, colour-opacity,
     /// medium, light-rays, light-ray-directions (refract). With the forward light transport
-    /// light-colour is the plane's irradiance and light-direction its luminance-weighted
+    /// light-colour is the plane's fluence (the light rays' flux per unit area across
+    /// each ray, normalised so that the light as launched reads its colour; what matter
+    /// scatters) and light-direction its luminance-weighted
     /// direction sum (weight in alpha); light-rays / light-ray-directions are the rays
     /// themselves (with `--variant rays=needed`, the default on the fragment path, rows a
     /// plane has not moved yet still hold their launch state, on the launch plane). Files
@@ -245,6 +248,14 @@ pub struct RenderArgs {
         help = variant_help("The sweep's speed levers (refract) [default: default].")
     )]
     pub variant: Option<Levers>,
+    /// The forward transport's light planes hold the flux per unit plane area (the
+    /// thesis' intensity law) instead of the fluence, the flux per unit area across each
+    /// ray (cos θ₀ / cos θ of it, θ its angle to the view axis): with --dump
+    /// light-colour@K their sum over a plane is the power through it, to compare with
+    /// `refrakt photons --plane-flux`. The image then shows light turned towards the
+    /// planes too dark (refract).
+    #[arg(help_heading = "Diagnostics", long)]
+    pub plane_flux: bool,
     /// Time the forward light transport's three draws of every plane apart (light rays,
     /// splat, viewing rays; summed over the planes) with GPU timestamps around each: a
     /// profile, which the extra timestamps may slow a little (refract).
@@ -384,7 +395,8 @@ pub struct PhotonsArgs {
     /// View depth of the plane instead of a plane number.
     #[arg(long, value_name = "Z", allow_negative_numbers = true)]
     pub depth: Option<f32>,
-    /// Output image (.exr only: rgb = irradiance, a = 0, the layout of the dumps).
+    /// Output image (.exr only: rgb = fluence or, with --plane-flux, flux per unit plane
+    /// area; a = 0; the layout of the dumps).
     #[arg(short, long, default_value = "photons.exr")]
     pub output: PathBuf,
     /// Photons per pixel of the plane (round(sqrt(N)) per axis).
@@ -396,6 +408,12 @@ pub struct PhotonsArgs {
     /// Jitter photons within their launch cells (stratified) instead of a regular grid.
     #[arg(long)]
     pub jitter: bool,
+    /// Tally the flux per unit plane area (what crosses the plane: summed over the
+    /// plane, the power through it) instead of the fluence (the flux per unit area across
+    /// each photon, cos θ₀ / cos θ of it, what `render`'s light planes hold and matter
+    /// scatters)
+    #[arg(long)]
+    pub plane_flux: bool,
     /// Seed of the jitter.
     #[arg(long, default_value_t = 1, allow_negative_numbers = true)]
     pub seed: u64,

@@ -28,6 +28,7 @@ pub fn photons(args: &PhotonsArgs) -> Result<ExitCode> {
         jitter: args.jitter,
         threads: args.threads.unwrap_or(0),
         max_steps: Some(args.max_steps),
+        plane_flux: args.plane_flux,
     };
     ensure!(
         args.max_steps.is_finite() && args.max_steps > 0.0,
@@ -68,8 +69,13 @@ pub fn photons(args: &PhotonsArgs) -> Result<ExitCode> {
     bar.finish_and_clear();
     output::write_pixels(img.width, img.height, &img.pixels, &args.output)?;
     println!(
-        "irradiance of the {} scene ({}x{}x{}, transfer functions {}) on the plane at view \
+        "{} of the {} scene ({}x{}x{}, transfer functions {}) on the plane at view \
          depth {depth:.5}{}, {}x{}",
+        if args.plane_flux {
+            "flux per unit plane area"
+        } else {
+            "fluence"
+        },
         name,
         volume.dims[0],
         volume.dims[1],

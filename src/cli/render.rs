@@ -92,6 +92,9 @@ pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
     if args.pass_timings {
         flags.push("--pass-timings");
     }
+    if args.plane_flux {
+        flags.push("--plane-flux");
+    }
     let scene = scene_with_refract_only(&args.scene, &flags)?;
     let dumps = match &args.dump {
         Some(d) => parse_dumps(d)?,
@@ -158,6 +161,12 @@ pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
     progress.suspend(|| notes.iter().for_each(|n| println!("{n}")));
     opts.sweep.dumps = dumps;
     opts.sweep.pass_timings = args.pass_timings;
+    ensure!(
+        !args.plane_flux || opts.sweep.light_transport == LightTransport::Forward,
+        "--plane-flux is the forward light transport's: the backward step's planes hold the \
+         flux per unit plane area already, and the eikonal transport reads a light volume"
+    );
+    opts.sweep.plane_flux = args.plane_flux;
     if let Some(levers) = args.variant {
         opts.sweep.levers = levers;
         progress.suspend(|| println!("sweep variant: {levers}"));

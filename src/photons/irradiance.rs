@@ -1,5 +1,5 @@
-//! The irradiance of the light on one plane: photons launched on a grid, traced, and
-//! box-binned where they cross the target plane.
+//! The light on one plane: photons launched on a grid, traced, and box-binned where they
+//! cross the target plane, as fluence (the default) or flux per unit plane area.
 
 use super::*;
 
@@ -177,8 +177,15 @@ pub fn trace_irradiance(
                         let (fx, fy) = ((ux * w as f64).floor(), (uy * h as f64).floor());
                         if fx >= 0.0 && fy >= 0.0 && fx < w as f64 && fy < h as f64 {
                             let idx = fy as usize * w + fx as usize;
+                            // The fluence's weight (PhotonOptions::plane_flux): the flux
+                            // per unit area across the photon, relative to the launch's.
+                            let weight = if popts.plane_flux {
+                                1.0
+                            } else {
+                                d.z / (t.v.normalize().dot(forward)).max(0.1)
+                            };
                             for (ch, c) in colour.iter().enumerate() {
-                                acc.flux[idx][ch] += c * cell * t.log_t[ch].exp();
+                                acc.flux[idx][ch] += weight * c * cell * t.log_t[ch].exp();
                             }
                             acc.counts[idx] += 1;
                             acc.landed += 1;

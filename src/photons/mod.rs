@@ -36,8 +36,11 @@
 //!   unobstructed photons land on the sub-pixel centres of the target plane (optionally
 //!   jittered, stratified, with a seeded hash). Each photon carries colour × its launch cell
 //!   area; photons are box-binned where they first cross the target plane moving forward,
-//!   and the image is flux / pixel area on that plane: irradiance per unit *plane* area,
-//!   the sweep's light-colour unit, so unobstructed light reads exactly `light.colour`.
+//!   and the image is flux / pixel area on that plane, each photon's flux weighted by
+//!   cos θ₀ / cos θ (θ its angle to the view axis where it lands, θ₀ the light's): the
+//!   fluence, what the sweep's light planes hold, so unobstructed light reads exactly
+//!   `light.colour`. With `plane_flux` the weight is 1: irradiance per unit *plane* area,
+//!   whose sum over a plane is the power through it.
 //!
 //! # The tracer's own error
 //!
@@ -118,6 +121,12 @@ pub struct PhotonOptions {
     /// length / step) exceed this; `None`: no limit (the library's default; the command
     /// line sets [`PhotonOptions::DEFAULT_MAX_STEPS`]).
     pub max_steps: Option<f64>,
+    /// Tally the flux per unit plane area (what crosses the plane; the sweep's
+    /// `SweepOptions::plane_flux`) instead of the fluence (false, the default, what the
+    /// sweep's light planes hold): each photon's flux × cos θ₀ / cos θ, θ its angle to the
+    /// view axis where it lands and θ₀ the light's, cos θ taken no smaller than 0.1 as
+    /// the sweep takes it (glsl/light_splat_ray.glsl; the sweep drops rays beyond 84°).
+    pub plane_flux: bool,
 }
 
 impl Default for PhotonOptions {
@@ -129,6 +138,7 @@ impl Default for PhotonOptions {
             jitter: false,
             threads: 0,
             max_steps: None,
+            plane_flux: false,
         }
     }
 }
@@ -166,7 +176,8 @@ impl PhotonOptions {
 pub struct PhotonImage {
     pub width: u32,
     pub height: u32,
-    /// Row-major, top row first: rgb = irradiance (flux per unit plane area; unobstructed
+    /// Row-major, top row first: rgb = fluence (or flux per unit plane area with
+    /// `PhotonOptions::plane_flux`; unobstructed
     /// light = the light's colour), a = 0. The layout of `render --dump light-colour@K`.
     pub pixels: Vec<[f32; 4]>,
     /// Photons that landed in each pixel.

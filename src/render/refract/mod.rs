@@ -281,6 +281,7 @@ pub(crate) static REFRACT: OpticalModel = OpticalModel {
         "--env-rotation",
         "--variant",
         "--pass-timings",
+        "--plane-flux",
     ],
     // (The eikonal transport's light simulation is the eikonal model's scope.)
     rebuild_scopes: &[],

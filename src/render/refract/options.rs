@@ -122,6 +122,15 @@ pub struct SweepOptions {
     /// rays' number, 1 / spacing². `light_rays` bounds that number: where it binds the
     /// spacing widens evenly, and [`SweepStats::light_spacing`] says so.
     pub light_spacing: f32,
+    /// Forward transport: the light planes hold the flux per unit plane area (the
+    /// thesis' intensity law: power through a plane is their sum, and a photon tracer's
+    /// plane tally measures it, `PhotonOptions::plane_flux`) instead of the fluence
+    /// (false, the default: each ray's flux per unit area across the ray, what matter
+    /// scatters; glsl/light_splat_ray.glsl). The two differ where light has turned from
+    /// its launched direction, by cos θ₀ / cos θ per ray (θ to the sweep axis). For the
+    /// tests of power and of the light's transport against the photon tracer's planes;
+    /// the images are the fluence's.
+    pub plane_flux: bool,
     /// Fresnel reflection of viewing rays at changes of η: the reflected fraction sees the
     /// environment (or background) in the mirrored direction, unoccluded; false = the
     /// thesis' model (no reflection, everything transmitted).
@@ -166,6 +175,7 @@ impl Default for SweepOptions {
             light_transport: LightTransport::Forward,
             light_rays: 2,
             light_spacing: 1.0,
+            plane_flux: false,
             reflections: true,
             floor: false,
             skeleton: false,

@@ -5,7 +5,7 @@
 use super::*;
 
 /// The features a frame uses that the plane shaders can leave out, and the shader levers:
-/// specialization constants 1-9 (glsl/sweep_common.glsl, sweep_buffers.glsl,
+/// specialization constants 1-11 (glsl/sweep_common.glsl, sweep_buffers.glsl,
 /// light_splat_ray.glsl). The first
 /// four are on exactly when their runtime condition can hold, so switching one off changes
 /// no image (tested) and costs nothing; `arrays` and `field` choose how the shaders read
@@ -33,6 +33,10 @@ pub(crate) struct Features {
     /// of the backward step (constant 10, glsl/sweep_light.glsl). Not a lever: it
     /// chooses what the light is, so it is always specialised.
     pub(crate) light_volume: bool,
+    /// What the forward transport's light planes hold (constant 11,
+    /// glsl/light_splat_ray.glsl): the fluence (true) or the flux per unit plane area
+    /// (`SweepOptions::plane_flux`). Not a lever: it chooses what the light is.
+    pub(crate) fluence: bool,
 }
 
 impl Features {
@@ -48,6 +52,7 @@ impl Features {
         cells: true,
         gather: super::Gather::Pairs,
         light_volume: false,
+        fluence: true,
     };
 
     /// `have_field`: whether the field texture exists (it may not fit in memory);
@@ -62,6 +67,7 @@ impl Features {
             cells: levers.deposit == super::Deposit::Cells,
             gather: levers.gather,
             light_volume: sweep.light_transport == super::LightTransport::Eikonal,
+            fluence: !sweep.plane_flux,
             ..Self::ALL
         };
         if !levers.specialize {
@@ -77,8 +83,8 @@ impl Features {
         }
     }
 
-    /// Constant 0 (the gradient volume is bound), then 1-10.
-    pub(super) fn constants(self, have_gradient: bool) -> [u32; 11] {
+    /// Constant 0 (the gradient volume is bound), then 1-11.
+    pub(super) fn constants(self, have_gradient: bool) -> [u32; 12] {
         [
             have_gradient as u32,
             self.specular as u32,
@@ -91,6 +97,7 @@ impl Features {
             self.clear as u32,
             self.cells as u32,
             self.light_volume as u32,
+            self.fluence as u32,
         ]
     }
 }
@@ -115,7 +122,7 @@ impl PlanePipelines {
         ctx: &Context,
         passes: [&RenderPass; 4],
         set: &DescriptorSet,
-        constants: [u32; 11],
+        constants: [u32; 12],
         cells: bool,
         forward: bool,
     ) -> Result<Self> {
@@ -316,7 +323,7 @@ impl ComputePlanes {
     pub(super) fn new(
         ctx: &Context,
         set: &DescriptorSet,
-        constants: [u32; 11],
+        constants: [u32; 12],
         gather: super::Gather,
         cells: bool,
     ) -> Result<Self> {
