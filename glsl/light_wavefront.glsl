@@ -12,7 +12,8 @@
 //   light_wavefront_scan_sums.comp   prefix sum of the blocks' totals (one workgroup), the
 //                                    next list's size and its indirect dispatch;
 //   light_wavefront_emit.comp        write each patch's 0, 1 or ku kv patches into the other
-//                                    half of the list, at its offset.
+//                                    half of the list, at its offset;
+// and once before the first cycle, light_wavefront_clear.comp (the clear-space cells).
 // src/render/light_simulator.rs records them and documents the units.
 #ifndef REFRAKT_LIGHT_WAVEFRONT_GLSL
 #define REFRAKT_LIGHT_WAVEFRONT_GLSL
@@ -75,7 +76,9 @@ layout(std430, set = 0, binding = 4) buffer BlockSums {
 #define CTRL_DROPPED 34u        // lost to the capacity (not written)
 #define CTRL_TORN 40u           // retired torn (longer than tear_span)
 #define CTRL_DILUTED 46u        // retired split below min_dilution of its launched flux
-#define CTRL_WORDS 52u
+#define CTRL_PATCH_CYCLES 52u   // patch-cycles advanced, all cycles
+#define CTRL_STRAIGHT 53u       // of them, in clear space (straight lines)
+#define CTRL_WORDS 54u
 layout(std430, set = 0, binding = 5) buffer Control {
     uint control[];
 };
@@ -107,6 +110,26 @@ layout(std430, set = 0, binding = 8) buffer FluenceSums {
     uint fluence_sums[];
 };
 
+// Clear space, the fast path of light_wavefront_step.comp (straight_cycle): per cell of
+// the trilinear field (cell c: voxels c to c + 1 along each axis, clamped), eta where one
+// eta holds throughout the cells within CLEAR_REACH of it, 0 where it may vary. Built
+// once per simulation by light_wavefront_clear.comp into `clear_cells` (the cells' own
+// eta, then dilated along x, y and z in turn through `clear_scratch`); the step reads
+// `clear_cells`. Corners whose whole cycle stays where eta is one move in straight lines.
+layout(set = 0, binding = 10, r32f) uniform image3D clear_cells;
+layout(set = 0, binding = 11, r32f) uniform image3D clear_scratch;
+// Whether corners take the fast path (WavefrontSettings::clear_space).
+layout(constant_id = 1) const bool WAVEFRONT_CLEAR = true;
+// Whether the step deposits into the fluence volume (WavefrontSettings::fluence): a
+// specialization constant, not a push constant, because llvmpipe runs both sides of a
+// branch even where its condition is uniform (the deposits' atomics, masked off, cost as
+// much as when they add).
+layout(constant_id = 3) const bool WAVEFRONT_FLUENCE = false;
+// Cells the dilation reaches along each axis: a corner moving at most 3 voxels per axis
+// in a cycle, with the gradient's differences 0.05 voxels either side and the trilinear
+// cell around each point, reads cells at most 4 from its start's.
+#define CLEAR_REACH 4
+
 layout(push_constant) uniform Push {
     vec4 half_extent;  // xyz: the box's half extent; w: the reference step (world)
     vec4 dims;         // xyz: voxels per axis; w: the eta scale k
@@ -118,7 +141,6 @@ layout(push_constant) uniform Push {
     uint receiver_count;
     uint max_level;    // tessellation levels at most
     uint discard_at_foci;  // 1: retire a patch that crossed a focus (the paper); 0: keep
-    uint fluence;      // 1: deposit into the fluence volume
     float tear_span;   // a patch longer than this (reference steps) is torn: retired
     float min_dilution;  // a patch below this part of its launched share retires
 } pc;

@@ -196,15 +196,19 @@ vec3 ray_grad_eta(vec3 w) {
     return g;
 }
 
-// The attenuation rate per channel at w (per world unit): extinction sigma = -ln(1 -
-// alpha) / ref_step plus the medium's -ln m / ref_step (alpha and m are per reference
-// step). An opacity of 1 or a medium of 0 is infinite: the light stops.
-vec3 ray_rate(vec3 w) {
-    float s = ray_value(w);
-    float alpha = ray_tf(s, 0).a;
-    vec3 m = ray_tf(s, 1).rgb;
+// The attenuation rate per channel (per world unit) of opacity alpha and medium colour m
+// (both per reference step): extinction sigma = -ln(1 - alpha) / ref_step plus the
+// medium's -ln m / ref_step. An opacity of 1 or a medium of 0 is infinite: the light
+// stops.
+vec3 ray_rate_of(float alpha, vec3 m) {
     float sigma = -log(max(1.0 - alpha, 0.0));
     return (vec3(sigma) - log(max(m, vec3(0.0)))) / RAY_REF_STEP;
+}
+
+// The attenuation rate per channel at w (ray_rate_of of the transfer functions there).
+vec3 ray_rate(vec3 w) {
+    float s = ray_value(w);
+    return ray_rate_of(ray_tf(s, 0).a, ray_tf(s, 1).rgb);
 }
 
 // One RK4 step of arc length h from (x, v): the ray equation with dx/ds = v / |v|,

@@ -54,7 +54,9 @@ const CTRL_AT_FOCI: usize = 28;
 const CTRL_DROPPED: usize = 34;
 const CTRL_TORN: usize = 40;
 const CTRL_DILUTED: usize = 46;
-const CTRL_WORDS: usize = 52;
+const CTRL_PATCH_CYCLES: usize = 52;
+const CTRL_STRAIGHT: usize = 53;
+const CTRL_WORDS: usize = 54;
 /// Receiver planes at most (a patch keeps one bit per receiver in a float's mantissa).
 pub const MAX_RECEIVERS: usize = 16;
 /// Cycles recorded per submission: the host reads the list's size after each, to stop
@@ -120,6 +122,13 @@ pub struct WavefrontSettings {
     /// micro-focus of a voxelised surface would otherwise multiply the list every cycle.
     /// Its flux is counted ([`SimulationStats::diluted`]). 0 to 1.
     pub min_dilution: f32,
+    /// Patches whose corners' whole cycle stays where one η holds (by the volume and the
+    /// transfer functions) move them in straight lines instead of integrating the ray
+    /// equation (their attenuation is integrated as before): the same light to rounding,
+    /// cheaper where the light crosses air, glass or an opaque floor's inside
+    /// (docs/NOTES.md, "The light simulator in clear space"). Costs two 32-bit images of
+    /// the volume's size. `false`: every corner is integrated (tests compare the two).
+    pub clear_space: bool,
     /// A beam: only the patches whose centres lie within this radius (world units) of
     /// the line along the light through the box's centre are launched. `None`: the whole
     /// box is lit.
@@ -142,6 +151,7 @@ impl Default for WavefrontSettings {
             tear_span: 4.0,
             gradient: RayGradient::Differences,
             min_dilution: 1e-4,
+            clear_space: true,
         }
     }
 }
@@ -213,6 +223,11 @@ pub struct SimulationStats {
     pub torn: [f64; 3],
     pub diluted: [f64; 3],
     pub live_at_end: u32,
+    /// Patch-cycles advanced (one patch through one cycle), all cycles.
+    pub patch_cycles: u32,
+    /// Of them, those whose four corners crossed clear space in straight lines
+    /// ([`WavefrontSettings::clear_space`]).
+    pub straight_cycles: u32,
     /// The list's size after each submission: (cycles done, patches).
     pub list_sizes: Vec<(u32, u32)>,
     /// GPU time of the whole simulation, milliseconds.
@@ -256,8 +271,8 @@ impl SimulationStats {
             "{} cycles, {} patches launched, list peak {}, worst kept patch {:.2} voxels; \
              of the light launched: {:.1} % left the box, {:.2} % retired torn, {:.2} % \
              retired diluted (the rest absorbed, or still travelling); {} patches still \
-             travelling at the end; \
-             {:.0} ms",
+             travelling at the end; {} patch-cycles, {:.1} % of them straight in clear \
+             space; {:.0} ms",
             self.cycles,
             self.launched,
             self.peak_patches,
@@ -266,6 +281,8 @@ impl SimulationStats {
             share(self.torn),
             share(self.diluted),
             self.live_at_end,
+            self.patch_cycles,
+            100.0 * self.straight_cycles as f64 / self.patch_cycles.max(1) as f64,
             self.gpu_ms
         )
     }
@@ -304,7 +321,6 @@ struct WavefrontPush {
     receiver_count: u32,
     max_level: u32,
     discard_at_foci: u32,
-    fluence: u32,
     tear_span: f32,
     min_dilution: f32,
 }
@@ -595,6 +611,17 @@ pub(crate) fn simulate(
     // The paper's stored η and ∇η volumes (sect. 5.1): the sweep's field texture,
     // built here for this simulation.
     let mut field = super::field::FieldTexture::new(ctx, inputs.volume, inputs.tf, inputs.linear)?;
+    // Clear space (light_wavefront_clear.comp): each cell's η where one η holds within
+    // CLEAR_REACH cells of it, built in the first submission; and its scratch image.
+    let cell_image = |name: &str| {
+        vk::Image::new(
+            ctx,
+            vk::ImageDesc::computed(vk::ImageKind::D3, vk::Format::R32_SFLOAT, info.dims, 1),
+            name,
+        )
+    };
+    let clear_cells = cell_image("wavefront clear cells")?;
+    let clear_scratch = cell_image("wavefront clear scratch")?;
     let set = DescriptorSet::new(
         ctx,
         &[
@@ -608,11 +635,20 @@ pub(crate) fn simulate(
             Binding::Storage(&receiver_geometry),
             Binding::Storage(&fluence_sums),
             Binding::Texture(field.image(), inputs.linear),
+            Binding::StorageImage(&clear_cells),
+            Binding::StorageImage(&clear_scratch),
         ],
         "light simulator",
     )?;
     let push_size = std::mem::size_of::<WavefrontPush>() as u32;
-    let constants = [(settings.gradient == RayGradient::FieldTexture) as u32];
+    // Specialization constants 0 to 3: the field texture, clear space, the clear-space
+    // pass (light_wavefront_clear.comp only), the fluence deposits.
+    let constants = [
+        (settings.gradient == RayGradient::FieldTexture) as u32,
+        settings.clear_space as u32,
+        0,
+        settings.fluence as u32,
+    ];
     let pipeline = |spirv: &[u8], name: &str| {
         ComputePipeline::with_constants(ctx, spirv, &set, push_size, &constants, name)
     };
@@ -626,6 +662,20 @@ pub(crate) fn simulate(
         "wavefront scan sums",
     )?;
     let emit = pipeline(shaders::LIGHT_WAVEFRONT_EMIT_COMP, "wavefront emit")?;
+    // Its four passes (CLEAR_PASS, specialization constant 2).
+    let clear_passes = (0..4u32)
+        .map(|pass| {
+            let constants = [constants[0], constants[1], pass, constants[3]];
+            ComputePipeline::with_constants(
+                ctx,
+                shaders::LIGHT_WAVEFRONT_CLEAR_COMP,
+                &set,
+                push_size,
+                &constants,
+                &format!("wavefront clear space (pass {pass})"),
+            )
+        })
+        .collect::<Result<Vec<_>>>()?;
 
     let mut push = WavefrontPush {
         half_extent: half.extend(reference).into(),
@@ -643,7 +693,6 @@ pub(crate) fn simulate(
         receiver_count: receivers.len() as u32,
         max_level: settings.max_level,
         discard_at_foci: (settings.at_foci == FocusPolicy::Discard) as u32,
-        fluence: settings.fluence as u32,
         tear_span: settings.tear_span,
         min_dilution: settings.min_dilution,
     };
@@ -668,6 +717,12 @@ pub(crate) fn simulate(
                     field.record_build(rec)?;
                     rec.clear_storage(&receiver_sums);
                     rec.clear_storage(&fluence_sums);
+                    if settings.clear_space {
+                        let groups = info.dims.map(|d| d.div_ceil(4));
+                        for pass in &clear_passes {
+                            rec.dispatch(pass, &set, bytemuck::bytes_of(&push), groups)?;
+                        }
+                    }
                     rec.upload_to_storage(&staging, 0, &control, 0, CTRL_WORDS as u64 * 4)?;
                     rec.upload_to_storage(
                         &staging,
@@ -735,6 +790,8 @@ pub(crate) fn simulate(
     stats.torn = fixed_rgb(&words, CTRL_TORN);
     stats.diluted = fixed_rgb(&words, CTRL_DILUTED);
     stats.live_at_end = words[CTRL_COUNT + (cycle % 2) as usize];
+    stats.patch_cycles = words[CTRL_PATCH_CYCLES];
+    stats.straight_cycles = words[CTRL_STRAIGHT];
     let dropped = fixed_rgb(&words, CTRL_DROPPED);
     ensure!(
         dropped.iter().all(|d| *d == 0.0),
@@ -1010,7 +1067,6 @@ mod tests {
                 receiver_count,
                 max_level,
                 discard_at_foci,
-                fluence,
                 tear_span,
                 min_dilution
             },
