@@ -12,9 +12,9 @@
 //
 // Why: where one eta holds, the ray equation's path is a line, and a corner's four RK4
 // steps of four stages (20 texel fetches and seven transfer-function lookups each) compute
-// nothing a line does not. Per cell rather than per brick of value ranges: at 32^3 and 64^3
-// the bricks' 12-voxel neighbourhoods left 0.6 % of the sphere-on-floor scene's
-// patch-cycles clear (docs/NOTES.md, "The light simulator in clear space").
+// nothing a line does not. Per cell rather than per brick of value ranges: at 32^3 the
+// bricks' 12-voxel neighbourhoods left 0.6 % of the sphere-on-floor scene's patch-cycles
+// clear, the cells 2.3 % (docs/NOTES.md, "The light simulator in clear space").
 #extension GL_GOOGLE_include_directive : require
 layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;
 #include "light_wavefront.glsl"
