@@ -76,7 +76,7 @@ layout(std430, set = 0, binding = 4) buffer BlockSums {
 #define CTRL_DROPPED 34u        // lost to the capacity (not written)
 #define CTRL_TORN 40u           // retired torn (longer than tear_span)
 #define CTRL_DILUTED 46u        // retired split below min_dilution of its launched flux
-#define CTRL_PATCH_CYCLES 52u   // patch-cycles advanced, all cycles
+#define CTRL_PATCH_CYCLES 52u   // patch-cycles advanced, all cycles (scan_sums adds)
 #define CTRL_STRAIGHT 53u       // of them, in clear space (straight lines)
 #define CTRL_WORDS 54u
 layout(std430, set = 0, binding = 5) buffer Control {

@@ -39,5 +39,7 @@ void main() {
         control[CTRL_DISPATCH + 4u * other + 1u] = 1u;
         control[CTRL_DISPATCH + 4u * other + 2u] = 1u;
         control[CTRL_PEAK] = max(control[CTRL_PEAK], next);
+        // This cycle advanced `count` patches (one add here, not one atomic per patch).
+        control[CTRL_PATCH_CYCLES] += count;
     }
 }

@@ -274,7 +274,6 @@ void main() {
     for (int k = 0; k < 4; ++k) eta[k] = straight_cycle(p.x[k].xyz, p.v[k].xyz);
     bool lines = eta[0] > 0.0 && eta[1] > 0.0 && eta[2] > 0.0 && eta[3] > 0.0;
     uint curved = lines ? 0u : pc.substeps;
-    atomicAdd(control[CTRL_PATCH_CYCLES], 1u);
     if (lines) atomicAdd(control[CTRL_STRAIGHT], 1u);
     for (uint s = 0u; s < curved; ++s) {
         vec3 x0[4];

@@ -613,10 +613,16 @@ pub(crate) fn simulate(
     let mut field = super::field::FieldTexture::new(ctx, inputs.volume, inputs.tf, inputs.linear)?;
     // Clear space (light_wavefront_clear.comp): each cell's η where one η holds within
     // CLEAR_REACH cells of it, built in the first submission; and its scratch image.
+    // Without the fast path (compiled out) the set still binds them: one texel each.
+    let cells = if settings.clear_space {
+        info.dims
+    } else {
+        [1; 3]
+    };
     let cell_image = |name: &str| {
         vk::Image::new(
             ctx,
-            vk::ImageDesc::computed(vk::ImageKind::D3, vk::Format::R32_SFLOAT, info.dims, 1),
+            vk::ImageDesc::computed(vk::ImageKind::D3, vk::Format::R32_SFLOAT, cells, 1),
             name,
         )
     };
