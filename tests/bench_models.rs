@@ -134,6 +134,8 @@ fn every_model_is_timed_with_its_ratio_to_ea_and_its_change_costs() {
         stdout.contains("| Vis. Human | 202 × 256 × 259 |"),
         "{stdout}"
     );
+    // The eikonal model is experimental: timed only when --models names it.
+    assert!(!stdout.contains("Ihrke"), "{stdout}");
 
     let r = read(&json);
     assert_eq!(r.schema, MODELS_SCHEMA);
@@ -382,4 +384,75 @@ fn help_explains_the_protocol() {
     ] {
         assert!(stdout.contains(needle), "{needle}: {stdout}");
     }
+}
+
+/// Issue 35 item 6: `--models` names the models to time, the experimental eikonal model
+/// among them (EA is always timed: the ratios' base). The eikonal model's light update is
+/// its LS change: the simulation runs again when the light turns (and when the transfer
+/// function changes), while a change of g reruns nothing (the view reads g per frame);
+/// Eikonal Rendering's own figures are printed beside ours. Unknown names are clean
+/// errors that list the models.
+#[test]
+fn the_eikonal_model_is_timed_when_named_with_its_light_update() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("data");
+    std::fs::create_dir(&data).unwrap();
+    let json = dir.path().join("m.json");
+    let o = refrakt(&[
+        "bench",
+        "models",
+        "--models",
+        "eikonal",
+        "--scale",
+        "0.05",
+        "--frames",
+        "1",
+        "--warmup",
+        "0",
+        "--rows",
+        "kiwi",
+        "--data-dir",
+        data.to_str().unwrap(),
+        "--quiet",
+        "--ambient-table",
+        &small_ambient_table(),
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    let (stdout, stderr) = text(&o);
+    assert!(o.status.success(), "{stdout}\n{stderr}");
+    let r = read(&json);
+    assert_eq!(r.settings.models, ["ea", "eikonal"]);
+    let row = &r.rows[0];
+    let names: Vec<&str> = row.models.iter().map(|m| m.model.as_str()).collect();
+    assert_eq!(names, ["ea", "eikonal"]);
+    let eikonal = &row.models[1];
+    let simulated = |c: &Option<refrakt::bench::Change>, what: &str| {
+        let c = c.as_ref().unwrap_or_else(|| panic!("{what}: n/a"));
+        let sim = c.scopes.iter().find(|s| s.scope == "light simulation");
+        assert!(
+            sim.is_some_and(|s| s.ms > 0.0),
+            "{what} must run the light simulation again: {c:?}"
+        );
+    };
+    simulated(&eikonal.ls_change, "the light change");
+    simulated(&eikonal.tf_change, "the transfer-function change");
+    let pf = eikonal.pf_change.as_ref().expect("the eikonal model has g");
+    assert_eq!(pf.ms, 0.0, "a change of g rebuilt {:?}", pf.scopes);
+    assert!(
+        stdout.contains("| Kiwi | 13×13×6 (stand-in) | eikonal |"),
+        "{stdout}"
+    );
+    assert!(
+        stdout.contains("GeForce 8800 GTX") && stdout.contains("5 to 10 s"),
+        "Eikonal Rendering's figures must be beside ours: {stdout}"
+    );
+
+    let o = refrakt(&["bench", "models", "--models", "ea,teapot", "--quiet"]);
+    let (_, stderr) = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("--models") && stderr.contains("teapot") && stderr.contains("eikonal"),
+        "{stderr}"
+    );
 }

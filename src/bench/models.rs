@@ -1,5 +1,5 @@
-//! `bench models`: every optical model of [`Model::benched`] on the same rows, after the
-//! protocol of Table 1 of Ament et al., "Ambient Volume Scattering" (512² viewport, early
+//! `bench models`: every optical model of [`Model::benched`] (or those `--models` names)
+//! on the same rows, after the protocol of Table 1 of Ament et al., "Ambient Volume Scattering" (512² viewport, early
 //! ray termination at α = 0.98): per row and model the rendering time, its ratio to EA's,
 //! and what a change of the transfer function (TF), the light source (LS) and the phase
 //! function (PF) costs: the GPU time of everything the renderer rebuilds for it
@@ -39,6 +39,9 @@ pub const SCAN_ROWS: [(&str, &str); 2] = [("lung-ct", "Lung CT"), ("mri-head", "
 pub struct ModelsSettings {
     /// Rows by name: thesis stand-ins and [`SCAN_ROWS`].
     pub timing: Timing,
+    /// The models timed, in the order each frame renders them, EA first
+    /// ([`select_models`]).
+    pub models: Vec<Model>,
     /// The ambient-scattering model's table (for the default albedo); `None`: each
     /// renderer loads the cached one (built on first use).
     pub ambient_table: Option<crate::render::ambient::table::AmbientTable>,
@@ -93,6 +96,36 @@ pub fn select_models_rows(names: &[String]) -> Result<Vec<ModelsRowSpec>> {
         .filter(|r| names.is_empty() || names.iter().any(|n| n == r.name))
         .collect())
 }
+
+/// The models `--models` names, in [`Model::ALL`]'s order, EA among them (the ratios'
+/// base: added when not named); none named: [`Model::benched`]. An experimental model
+/// ([`Model::experimental`]) is timed only when named. An unknown name is an error that
+/// lists the known ones.
+pub fn select_models(names: &[String]) -> Result<Vec<Model>> {
+    if names.is_empty() {
+        return Ok(Model::benched());
+    }
+    for n in names {
+        if Model::from_name(n).is_none() {
+            let known: Vec<&str> = Model::ALL.iter().map(|m| m.name()).collect();
+            bail!("unknown model '{n}'; the models are {}", known.join(", "));
+        }
+    }
+    Ok(Model::ALL
+        .into_iter()
+        .filter(|m| *m == Model::Ea || names.iter().any(|n| n == m.name()))
+        .collect())
+}
+
+/// Eikonal Rendering's own figures (Ihrke et al. 2007, seed 001, sect. 6), printed
+/// beside the eikonal model's: not Table 1's rows but its own scenes, so a reference line
+/// rather than a column.
+pub const PAPER_EIKONAL: &str = "Eikonal Rendering (Ihrke et al., SIGGRAPH 2007, sect. 6), \
+its own scenes at 128³ on a GeForce 8800 GTX: rendering about 25 fps (40 ms) at 800 × 600 \
+with one object and the light fixed (24.8 fps in its Fig. 1 left, 26.2 fps in Fig. 8 \
+middle); a light update (the simulation run again after the light moved) typically 5 to \
+10 s. Ours: the eikonal model's median ms is its view, its LS change ms the simulation \
+run again for the light turned by 1°.";
 
 /// The paper's figures for one of its optical models on one row (Table 1; "-" there is
 /// None here: the change does not apply to that model).
@@ -268,7 +301,8 @@ pub struct ModelsRow {
     pub source: String,
     pub resolution: [u32; 3],
     pub viewport: [u32; 2],
-    /// In [`Model::benched`] order.
+    /// In the order of [`ModelsSettings::models`] (`--models`; default
+    /// [`Model::benched`]).
     pub models: Vec<ModelRun>,
     /// The paper's figures of every model it has on this row (Supernova only), ours or
     /// not.
@@ -295,7 +329,7 @@ pub struct ModelsSettingsRecord {
     pub orbit_deg_per_frame: f32,
     /// The rows timed.
     pub rows: Vec<String>,
-    /// The models, in the order each frame renders them ([`Model::benched`]).
+    /// The models, in the order each frame renders them ([`ModelsSettings::models`]).
     pub models: Vec<String>,
     /// The model the ratios divide by.
     pub ratio_to: String,
@@ -393,7 +427,7 @@ fn missing(spec: &ModelsRowSpec, data_dir: &Path) -> Option<String> {
 /// Frames one row renders: the interleaved frames, and per model one first frame and one
 /// per applicable change.
 fn frames_per_row(s: &ModelsSettings) -> u64 {
-    let models = Model::benched();
+    let models = &s.models;
     let changes: u64 = models
         .iter()
         .map(|m| 2 + m.uses_light() as u64 + m.has_phase_function() as u64)
@@ -401,12 +435,16 @@ fn frames_per_row(s: &ModelsSettings) -> u64 {
     (s.timing.warmup + s.timing.frames) as u64 * models.len() as u64 + changes
 }
 
-/// Times every model of [`Model::benched`] on every selected row.
+/// Times every model of `s.models` on every selected row.
 pub fn models(ctx: &Context, s: &ModelsSettings) -> Result<ModelsReport> {
     ensure!(s.timing.frames >= 1, "--frames must be at least 1");
     standins::check_scale(s.timing.scale).context("--scale")?;
     let specs = select_models_rows(&s.timing.rows)?;
-    let models = Model::benched();
+    let models = s.models.clone();
+    ensure!(
+        models.contains(&Model::Ea),
+        "the models timed must include ea (the ratios' base)"
+    );
     let ea = models.iter().position(|m| *m == Model::Ea).unwrap_or(0);
     let side = models_side(s.timing.scale);
     let mut skipped = Vec::new();

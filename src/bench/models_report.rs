@@ -116,6 +116,9 @@ pub fn models_markdown(r: &ModelsReport) -> String {
           emission-absorption, ambient occlusion, single scattering, ambient scattering, \
           those the row shows; GTX 560, 512², α = 0.98):\n\n";
     s += PAPER_TABLE_1;
+    if st.models.iter().any(|m| m == Model::Eikonal.name()) {
+        s += &format!("\n{PAPER_EIKONAL}\n");
+    }
     s
 }
 

@@ -146,17 +146,23 @@ pub fn bench_variants(desc: &ContextDesc, args: &VariantsArgs) -> Result<ExitCod
 pub fn bench_models(desc: &ContextDesc, args: &ModelsArgs) -> Result<ExitCode> {
     let t = &args.timed;
     refrakt::bench::select_models_rows(&t.rows).context("--rows")?;
+    let models = refrakt::bench::select_models(&args.models).context("--models")?;
     let timing = timed(t, [20, 2], &[("--svg", args.svg.as_deref(), "svg")])?;
     let ctx = Context::new(desc)?;
+    // Loaded (or built, a minute on first use) only for the model that reads it.
+    let ambient_table = if models.contains(&refrakt::render::Model::Ambient) {
+        let albedo = refrakt::render::ScatterOptions::default().albedo;
+        let (table, line) =
+            super::ambient::table_for(args.ambient_table.as_deref(), albedo, t.quiet)?;
+        println!("{line}");
+        Some(table)
+    } else {
+        None
+    };
     let settings = refrakt::bench::ModelsSettings {
         timing,
-        ambient_table: {
-            let albedo = refrakt::render::ScatterOptions::default().albedo;
-            let (table, line) =
-                super::ambient::table_for(args.ambient_table.as_deref(), albedo, t.quiet)?;
-            println!("{line}");
-            Some(table)
-        },
+        models,
+        ambient_table,
     };
     let report = refrakt::bench::models(&ctx, &settings)?;
     print!("{}", refrakt::bench::models_markdown(&report));

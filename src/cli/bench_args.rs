@@ -34,9 +34,9 @@ pub enum BenchCommand {
 }
 
 const MODELS_ABOUT: &str = "\
-Every optical model refrakt has (`render --model`; EA first, the ratios' base; not yet the \
-experimental eikonal model, whose light simulation is too slow on lavapipe: issue 35) on the same \
-rows, after the protocol of Table 1 of Ament, Sadlo and Weiskopf, \"Ambient Volume \
+Every optical model refrakt has (`render --model`; EA first, the ratios' base; the \
+experimental eikonal model only when --models names it: its light simulation takes seconds to \
+minutes on lavapipe, issue 35) on the same rows, after the protocol of Table 1 of Ament, Sadlo and Weiskopf, \"Ambient Volume \
 Scattering\" (IEEE TVCG 2013):
 
 - Rows: the thesis stand-ins of `bench thesis` (--rows, --data-dir as there), then the real \
@@ -52,10 +52,13 @@ model's median over EA's median on the same row.
 rebuilds (preintegration table, field texture, extinction volume and its 3D SAT, ...) in \
 the first frame of the model after the change, each model on a renderer of its own (a \
 shared one would rebuild every model's data in whichever frame came first). TF: every opacity × 0.999. LS: the light \
-direction turned by 1° (models that use the light; else n/a). PF: the phase function \
-changed (models with one; none yet, so n/a). \"0\" means the change rebuilt nothing.
+direction turned by 1° (models that use the light; else n/a): for the eikonal model, its \
+light update (the simulation run again). PF: the phase function's g moved by 0.01 (models \
+with one: single, ambient, eikonal; else n/a). \"0\" means the change rebuilt nothing.
 - The paper's Supernova figures (GTX 560) are printed beside ours on the supernova row, \
-and its whole Table 1 as a reference.
+and its whole Table 1 as a reference; with the eikonal model, Eikonal Rendering's own \
+figures (Ihrke et al. 2007: 128³ on a GeForce 8800 GTX, about 25 fps at 800 × 600, light \
+updates of 5 to 10 s).
 
 Markdown on stdout; --csv, --json (schema refrakt-bench-models/1) and --svg write the \
 details. See docs/BENCH.md (\"bench models\").";
@@ -166,6 +169,10 @@ pub struct VariantsArgs {
 pub struct ModelsArgs {
     #[command(flatten)]
     pub timed: TimedRows,
+    /// Models to time, comma-separated (ea, ao, single, ambient, refract, eikonal); ea is
+    /// always timed (the ratios' base). Default: all but the experimental eikonal model.
+    #[arg(long, value_delimiter = ',', value_name = "MODELS")]
+    pub models: Vec<String>,
     /// Draw the median rendering time per model and row as an SVG bar chart.
     #[arg(long, value_name = "FILE.svg", visible_alias = "plot")]
     pub svg: Option<PathBuf>,
