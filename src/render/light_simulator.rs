@@ -267,19 +267,27 @@ impl SimulationStats {
                 .collect();
             100.0 * parts.iter().sum::<f64>() / parts.len().max(1) as f64
         };
+        // A light of colour 0 launches patches that carry nothing (its shares would be
+        // 0 / 0).
+        let fates = if self.launched_flux.iter().any(|&l| l > 0.0) {
+            format!(
+                "of the light launched: {:.1} % left the box, {:.2} % retired torn, {:.2} % \
+                 retired diluted (the rest absorbed, or still travelling)",
+                share(self.left),
+                share(self.torn),
+                share(self.diluted),
+            )
+        } else {
+            "no light launched (its colour is 0)".to_string()
+        };
         format!(
             "{} cycles, {} patches launched, list peak {}, worst kept patch {:.2} voxels; \
-             of the light launched: {:.1} % left the box, {:.2} % retired torn, {:.2} % \
-             retired diluted (the rest absorbed, or still travelling); {} patches still \
-             travelling at the end; {} patch-cycles, {:.1} % of them straight in clear \
-             space; {:.0} ms",
+             {fates}; {} patches still travelling at the end; {} patch-cycles, {:.1} % of \
+             them straight in clear space; {:.0} ms",
             self.cycles,
             self.launched,
             self.peak_patches,
             self.worst_span,
-            share(self.left),
-            share(self.torn),
-            share(self.diluted),
             self.live_at_end,
             self.patch_cycles,
             100.0 * self.straight_cycles as f64 / self.patch_cycles.max(1) as f64,
@@ -1056,6 +1064,26 @@ fn read_words(ctx: &vk::Context, buffer: &Buffer, bytes: u64) -> Result<Vec<u32>
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The summary's shares are of the light launched: half of it left the box; a light of
+    /// colour 0 launched none, which the line says instead of shares of nothing (Rust's
+    /// empty float sum is -0.0: "-0.0 %" was printed).
+    #[test]
+    fn the_summary_says_where_the_launched_light_went() {
+        let lit = SimulationStats {
+            launched_flux: [2.0, 2.0, 2.0],
+            left: [1.0, 1.0, 1.0],
+            ..Default::default()
+        };
+        let line = lit.summary();
+        assert!(line.contains("50.0 % left the box"), "{line}");
+        let dark = SimulationStats::default().summary();
+        assert!(dark.contains("no light launched"), "{dark}");
+        assert!(
+            !dark.contains("-0.0") && !dark.contains("left the box"),
+            "{dark}"
+        );
+    }
 
     #[test]
     fn push_matches_the_shaders_block() {

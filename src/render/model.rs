@@ -196,9 +196,9 @@ pub(crate) struct OpticalModel {
     /// with the device bytes it will take for a volume of this extent (checked against
     /// the budget first); None: it has none.
     pub state: Option<ModelStateDecl>,
-    /// Why the model is left out of `bench models` and of the viewer's model key (too
-    /// slow or too fragile yet to run unasked on every row), if it is; `render --model`
-    /// and the viewer's list still offer it.
+    /// Why the model is left out of `bench models` (unless `--models` names it) and of
+    /// the viewer's model key (too slow or too fragile yet to run unasked on every row),
+    /// if it is; `render --model` and the viewer's list still offer it.
     pub experimental: Option<&'static str>,
 }
 

@@ -93,8 +93,8 @@ impl Model {
         Model::ALL.into_iter().find(|m| m.name() == name)
     }
 
-    /// The models `bench models` times and the viewer's `m` key cycles through: all but
-    /// the experimental ones ([`Model::experimental`]), in [`Model::ALL`]'s order.
+    /// The models `bench models` times by default and the viewer's `m` key cycles
+    /// through: all but the experimental ones ([`Model::experimental`]), in [`Model::ALL`]'s order.
     pub fn benched() -> Vec<Model> {
         Model::ALL
             .into_iter()
