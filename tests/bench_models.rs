@@ -257,13 +257,14 @@ fn every_model_is_timed_with_its_ratio_to_ea_and_its_change_costs() {
     );
 }
 
-#[test]
-fn the_supernova_row_carries_the_papers_figures() {
+/// `bench models` at scale 0.05, one frame, no warm-up, on `rows`, with the `extra`
+/// arguments and an empty data folder: the report and stdout (the run must succeed).
+fn one_frame_run(rows: &str, extra: &[&str]) -> (ModelsReport, String) {
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("data");
     std::fs::create_dir(&data).unwrap();
     let json = dir.path().join("m.json");
-    let o = refrakt(&[
+    let mut args = vec![
         "bench",
         "models",
         "--scale",
@@ -273,18 +274,24 @@ fn the_supernova_row_carries_the_papers_figures() {
         "--warmup",
         "0",
         "--rows",
-        "supernova",
+        rows,
         "--data-dir",
         data.to_str().unwrap(),
         "--quiet",
-        "--ambient-table",
-        &small_ambient_table(),
         "--json",
         json.to_str().unwrap(),
-    ]);
+    ];
+    args.extend_from_slice(extra);
+    let o = refrakt(&args);
     let (stdout, stderr) = text(&o);
     assert!(o.status.success(), "{stdout}\n{stderr}");
-    let r = read(&json);
+    (read(&json), stdout)
+}
+
+#[test]
+fn the_supernova_row_carries_the_papers_figures() {
+    let table = small_ambient_table();
+    let (r, stdout) = one_frame_run("supernova", &["--ambient-table", &table]);
     assert!(r.skipped.is_empty(), "{:?}", r.skipped);
     let row = &r.rows[0];
     assert_eq!(row.dataset, "supernova");
@@ -394,34 +401,8 @@ fn help_explains_the_protocol() {
 /// errors that list the models.
 #[test]
 fn the_eikonal_model_is_timed_when_named_with_its_light_update() {
-    let dir = tempfile::tempdir().unwrap();
-    let data = dir.path().join("data");
-    std::fs::create_dir(&data).unwrap();
-    let json = dir.path().join("m.json");
-    let o = refrakt(&[
-        "bench",
-        "models",
-        "--models",
-        "eikonal",
-        "--scale",
-        "0.05",
-        "--frames",
-        "1",
-        "--warmup",
-        "0",
-        "--rows",
-        "kiwi",
-        "--data-dir",
-        data.to_str().unwrap(),
-        "--quiet",
-        "--ambient-table",
-        &small_ambient_table(),
-        "--json",
-        json.to_str().unwrap(),
-    ]);
-    let (stdout, stderr) = text(&o);
-    assert!(o.status.success(), "{stdout}\n{stderr}");
-    let r = read(&json);
+    // No --ambient-table: the ambient model is not timed, so none is loaded or built.
+    let (r, stdout) = one_frame_run("kiwi", &["--models", "eikonal"]);
     assert_eq!(r.settings.models, ["ea", "eikonal"]);
     let row = &r.rows[0];
     let names: Vec<&str> = row.models.iter().map(|m| m.model.as_str()).collect();
