@@ -1,6 +1,6 @@
 //! `bench models`: every optical model of [`Model::benched`] (or those `--models` names)
-//! on the same rows, after the protocol of Table 1 of Ament et al., "Ambient Volume Scattering" (512² viewport, early
-//! ray termination at α = 0.98): per row and model the rendering time, its ratio to EA's,
+//! on the same rows, after the protocol of Table 1 of Ament et al., "Ambient Volume
+//! Scattering" (512² viewport, early ray termination at α = 0.98): per row and model the rendering time, its ratio to EA's,
 //! and what a change of the transfer function (TF), the light source (LS) and the phase
 //! function (PF) costs: the GPU time of everything the renderer rebuilds for it
 //! ([`rebuild_scopes`]) in the first frame after the change, measured per model on a
