@@ -1,12 +1,12 @@
 //! `bench models`: every optical model of [`Model::benched`] (or those `--models` names)
 //! on the same rows, after the protocol of Table 1 of Ament et al., "Ambient Volume
-//! Scattering" (512² viewport, early ray termination at α = 0.98): per row and model the rendering time, its ratio to EA's,
-//! and what a change of the transfer function (TF), the light source (LS) and the phase
-//! function (PF) costs: the GPU time of everything the renderer rebuilds for it
-//! ([`rebuild_scopes`]) in the first frame after the change, measured per model on a
-//! renderer of its own. The models are rendered
-//! interleaved frame by frame (frame k of every model before frame k+1 of any), as `bench
-//! variants` does, so a change in machine load hits them alike.
+//! Scattering" (512² viewport, early ray termination at α = 0.98): per row and model the
+//! rendering time, its ratio to EA's, and what a change of the transfer function (TF),
+//! the light source (LS) and the phase function (PF) costs: the GPU time of everything
+//! the renderer rebuilds for it ([`rebuild_scopes`]) in the first frame after the change,
+//! measured per model on a renderer of its own. The models are rendered interleaved frame
+//! by frame (frame k of every model before frame k+1 of any), as `bench variants` does,
+//! so a change in machine load hits them alike.
 
 use glam::{Quat, Vec3};
 
