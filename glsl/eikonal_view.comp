@@ -40,7 +40,21 @@
 // background). Beyond the critical angle nothing splits: the ray equation turns the ray
 // itself back. Films (eta rising and falling back within the probes) are not faces.
 // P.steps.z: 1 with reflections (`--reflections`, the sweep's flag), 0 without.
-// Not yet here: an ambient term.
+//
+// The ambient level (`--ambient-level`, `--light env`; the sweep's SweepOptions::ambient,
+// the map's mean radiance): every sample is lit by it besides the light volume,
+// unoccluded and from no direction. A phase function normalised over the sphere turns a
+// uniform radiance L into L, so it adds albedo * L to the shade above (a white medium of
+// albedo 1 in a uniform map of radiance L shows L everywhere: the furnace test).
+//
+// What a ray sees where it leaves the box is averaged over the pixel's footprint (the
+// sweep's composite, glsl/sweep_composite.comp, thesis Fig. 4.5): the directions in which
+// the neighbouring pixels' rays leave span it, and the summed-area table averages the map
+// over it. The neighbours are the workgroup's (the next invocation along x and along y,
+// the previous one at the tile's edge), exchanged through shared memory once every ray of
+// the tile is traced. A ray that no gradient bent reads the map at its point, as before;
+// so do the reflections of faces after the first. The first face's reflected ray is
+// filtered the same way, from the neighbours' reflected rays.
 #extension GL_GOOGLE_include_directive : require
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -60,7 +74,10 @@ layout(set = 0, binding = 0) uniform Params {
     vec4 scatter;      // x: g; y: albedo; z: environment rotation (rad); w: 1 = environment map
     vec4 eta_scales;   // xyz: the eta scale k per colour channel (all P.field.w without dispersion)
     uvec4 steps;       // x: steps at most per ray; y: colour channels traced apart (1 or 3);
-                       // z: 1 = Fresnel reflections at faces
+                       // z: 1 = Fresnel reflections at faces; w: 1 = lookups filtered
+                       // over the pixel's footprint (SweepOptions::env_footprint)
+    vec4 ambient;      // rgb: the ambient level (mean radiance, unoccluded)
+    vec4 env_mean;     // rgb: the summed-area table's mean offset (environment.glsl)
 } P;
 layout(set = 0, binding = 1) uniform sampler3D volume;
 layout(set = 0, binding = 2) uniform sampler1DArray tf;
@@ -72,6 +89,8 @@ layout(set = 0, binding = 5) uniform sampler2D environment;
 layout(std430, set = 0, binding = 6) readonly buffer Light {
     vec4 light[];
 };
+// The environment's summed-area table (render/sat.rs; texelFetch only).
+layout(set = 0, binding = 7) uniform sampler2D environment_sat;
 
 #define RAY_VOLUME volume
 #define RAY_TF tf
@@ -94,11 +113,25 @@ void light_at(vec3 w, out vec3 fluence, out vec3 direction) {
     light_volume_at(ray_tex(w), P.field.xyz, fluence, direction);
 }
 
+// A world direction in the map's frame (rotated by P.scatter.z about the up axis).
+vec3 env_frame(vec3 dir) {
+    float r = P.scatter.z;
+    return vec3(cos(r) * dir.x - sin(r) * dir.z, dir.y, sin(r) * dir.x + cos(r) * dir.z);
+}
+
 vec3 background_seen(vec3 dir) {
     if (P.scatter.w < 0.5) return P.background.rgb;
-    float r = P.scatter.z;
-    vec3 w = vec3(cos(r) * dir.x - sin(r) * dir.z, dir.y, sin(r) * dir.x + cos(r) * dir.z);
-    return env_bilinear(environment, env_texel(env_angles(w), textureSize(environment, 0)));
+    return env_bilinear(environment, env_texel(env_angles(env_frame(dir)), textureSize(environment, 0)));
+}
+
+// What the rays leaving in directions d +- dx / 2 +- dy / 2 see: the map averaged over
+// that footprint (environment.glsl's env_footprint; a footprint of a texel or less is
+// read bilinearly there).
+vec3 background_over(vec3 d, vec3 dx, vec3 dy) {
+    if (P.scatter.w < 0.5) return P.background.rgb;
+    vec3 ds[4] = vec3[4](env_frame(d - 0.5 * dx - 0.5 * dy), env_frame(d + 0.5 * dx - 0.5 * dy),
+                         env_frame(d - 0.5 * dx + 0.5 * dy), env_frame(d + 0.5 * dx + 0.5 * dy));
+    return env_footprint(environment, environment_sat, P.env_mean.rgb, ds);
 }
 
 // The part of the chord from a to b (unit direction u, length len) inside the box.
@@ -148,15 +181,26 @@ float face_split(vec3 a, vec3 b, float eta_a, float eta_b, vec3 va, out vec3 mir
     return face_fresnel(vt_len, lo, hi);
 }
 
-// The ray from `origin` along `dir` with eta scale k: its colour and opacity, composited
-// front to back, with what it sees behind; `bent` whether any gradient of eta turned it.
-// With `split`, the first face it meets hands its reflected ray back (from `r_origin`
-// along `r_dir`, to be traced with its colour weighted by `r_weight`, (1 - A) M F there;
-// r_weight stays 0 where it met none); the other faces' reflections see what lies behind.
-vec4 trace_ray(vec3 origin, vec3 dir, float k, bool split, out bool bent, out vec3 r_origin,
-               out vec3 r_dir, out vec3 r_weight) {
+// A traced ray: its colour C and opacity A composited front to back, its medium M, the
+// direction it leaves in (unit) and whether any gradient of eta turned it.
+struct Trace {
+    vec3 C;
+    float A;
+    vec3 M;
+    vec3 exit_dir;
+    bool bent;
+};
+
+// The ray from `origin` along `dir` with eta scale k (what lies behind it is the caller's:
+// (1 - A) M times the background in exit_dir). With `split`, the first face it meets
+// hands its reflected ray back (from `r_origin` along `r_dir`, to be traced with its
+// colour weighted by `r_weight`, (1 - A) M F there; r_weight stays 0 where it met none);
+// the other faces' reflections see what lies behind them at once.
+Trace trace_ray(vec3 origin, vec3 dir, float k, bool split, out vec3 r_origin, out vec3 r_dir,
+                out vec3 r_weight) {
     ray_k = k;
-    bent = false;
+    Trace t;
+    t.bent = false;
     r_origin = vec3(0.0);
     r_dir = vec3(0.0, 0.0, 1.0);
     r_weight = vec3(0.0);
@@ -198,7 +242,9 @@ vec4 trace_ray(vec3 origin, vec3 dir, float k, bool split, out bool bent, out ve
                 vec3 u = normalize(v);
                 float phase = r > 0.0 ? r * hg4pi(dot(d / length(d), -u), P.scatter.x) : 0.0;
                 phase += 1.0 - r;
-                vec3 shade = P.scatter.y * phase * fluence;
+                // The light volume's light through the phase function, and the ambient
+                // level (uniform radiance: the phase function integrates it to itself).
+                vec3 shade = P.scatter.y * (phase * fluence + P.ambient.rgb);
                 C += (1.0 - A) * M * ca.rgb * a * shade;
                 A += (1.0 - A) * a;
                 M *= correct_medium(m, ratio);
@@ -225,41 +271,139 @@ vec4 trace_ray(vec3 origin, vec3 dir, float k, bool split, out bool bent, out ve
             if (any(bvec3(beyond.x && away.x, beyond.y && away.y, beyond.z && away.z))) break;
         }
         // Unchanged only where every RK4 stage met a zero gradient.
-        bent = any(notEqual(v, v_start));
+        t.bent = any(notEqual(v, v_start));
         dir = normalize(v);
     }
-    vec3 rgb = C + (1.0 - A) * M * background_seen(dir);
-    float alpha = A + (1.0 - A) * (P.scatter.w < 0.5 ? P.background.a : 1.0);
-    return vec4(rgb, alpha);
+    t.C = C;
+    t.A = A;
+    t.M = M;
+    t.exit_dir = dir;
+    return t;
 }
 
+// A pixel's view along one channel's path: the colour so far (the ray's and its first
+// reflection's, everything but what they see leaving the box), the opacity with what
+// lies behind, and per lookup still to make (0: the ray, 1: its first face's reflected
+// ray) its weight, direction, and whether it is filtered over the footprint (the ray:
+// where bent; the reflected ray: always) or read at its point. A weight of 0 marks no
+// lookup (no reflection).
+struct View {
+    vec3 rgb;
+    float alpha;
+    vec3 weight[2];
+    vec3 dir[2];
+    bool filtered[2];
+};
+
 // The viewing ray from the eye along `dir` with eta scale k, and the reflected ray of the
-// first face it meets (trace_ray), traced through the volume.
-vec4 view_ray(vec3 dir, float k, out bool bent) {
+// first face it meets, traced through the volume.
+View view_ray(vec3 dir, float k) {
     vec3 r_origin, r_dir, r_weight;
-    vec4 seen = trace_ray(P.cam_pos.xyz, dir, k, true, bent, r_origin, r_dir, r_weight);
+    Trace t = trace_ray(P.cam_pos.xyz, dir, k, true, r_origin, r_dir, r_weight);
+    View v;
+    v.rgb = t.C;
+    v.alpha = t.A + (1.0 - t.A) * (P.scatter.w < 0.5 ? P.background.a : 1.0);
+    v.weight[0] = (1.0 - t.A) * t.M;
+    v.dir[0] = t.exit_dir;
+    v.filtered[0] = t.bent;
+    v.weight[1] = vec3(0.0);
+    v.dir[1] = vec3(0.0, 0.0, 1.0);
+    v.filtered[1] = true;
     if (r_weight != vec3(0.0)) {
-        bool unused;
         vec3 o2, d2, w2;
-        vec4 reflected = trace_ray(r_origin, r_dir, k, false, unused, o2, d2, w2);
-        seen.rgb += r_weight * reflected.rgb;
+        Trace r = trace_ray(r_origin, r_dir, k, false, o2, d2, w2);
+        v.rgb += r_weight * r.C;
+        v.weight[1] = r_weight * (1.0 - r.A) * r.M;
+        v.dir[1] = r.exit_dir;
     }
-    return seen;
+    return v;
+}
+
+// Per invocation of the tile, one lookup's direction (xyz; w 1 where it has one), for the
+// neighbours' footprints.
+shared vec4 lookup_dirs[64];
+
+// The change of the lookup direction d towards the tile's next invocation along `axis` (0:
+// x, 1: y), or from its previous one at the tile's edge or where the next has none; 0 where
+// neither has one.
+vec3 neighbour_delta(uvec2 l, int axis, vec3 d) {
+    uvec2 next = l, prev = l;
+    next[axis] += 1u;
+    prev[axis] -= 1u;
+    if (l[axis] < 7u) {
+        vec4 n = lookup_dirs[next.y * 8u + next.x];
+        if (n.w > 0.5) return n.xyz - d;
+    }
+    if (l[axis] > 0u) {
+        vec4 p = lookup_dirs[prev.y * 8u + prev.x];
+        if (p.w > 0.5) return d - p.xyz;
+    }
+    return vec3(0.0);
 }
 
 void main() {
     uvec2 id = gl_GlobalInvocationID.xy;
-    if (any(greaterThanEqual(id, P.size.xy))) return;
-    vec3 dir = camera_ray(id, P.size.xy, P.cam_pos, P.cam_forward, P.cam_right.xyz, P.cam_up.xyz);
-    bool bent;
-    vec4 seen = view_ray(dir, P.eta_scales.x, bent);
-    if (P.steps.y == 3u && bent) {
-        // Dispersion: green and blue along their own paths; the opacity is the mean of
-        // the three (each channel's path met its own matter).
-        bool unused;
-        vec4 green = view_ray(dir, P.eta_scales.y, unused);
-        vec4 blue = view_ray(dir, P.eta_scales.z, unused);
-        seen = vec4(seen.r, green.g, blue.b, (seen.a + green.a + blue.a) / 3.0);
+    uvec2 l = gl_LocalInvocationID.xy;
+    uint lane = gl_LocalInvocationIndex;
+    // Invocations beyond the image trace nothing but take part in the tile's exchanges.
+    bool live = all(lessThan(id, P.size.xy));
+    View views[3];
+    uint channels = live && P.steps.y == 3u ? 3u : 1u;
+    if (live) {
+        vec3 dir = camera_ray(id, P.size.xy, P.cam_pos, P.cam_forward, P.cam_right.xyz,
+                              P.cam_up.xyz);
+        views[0] = view_ray(dir, P.eta_scales.x);
+        views[1] = views[0];
+        views[2] = views[0];
+        if (P.steps.y == 3u && views[0].filtered[0]) {
+            // Dispersion: green and blue along their own paths (where red's was bent);
+            // the opacity is the mean of the three (each channel's path met its own
+            // matter).
+            views[1] = view_ray(dir, P.eta_scales.y);
+            views[2] = view_ray(dir, P.eta_scales.z);
+        } else {
+            channels = 1u;
+        }
     }
-    imageStore(frame, ivec2(id), seen);
+    vec3 rgb = vec3(0.0);
+    float alpha = 0.0;
+    for (uint c = 0u; c < 3u; ++c) {
+        if (live) {
+            rgb[c] = views[c].rgb[c];
+            alpha += views[c].alpha / 3.0;
+        }
+    }
+    // The lookups, per channel path and per ray (the ray, its reflected ray), each after
+    // the tile has shared its directions. Loops of fixed length: every invocation meets
+    // every barrier.
+    bool footprint = P.steps.w != 0u && P.scatter.w > 0.5;
+    for (uint c = 0u; c < 3u; ++c) {
+        // Without dispersion the three channels share red's path: one round (a uniform
+        // condition: the whole tile leaves together).
+        if (c > 0u && P.steps.y != 3u) break;
+        for (uint j = 0u; j < 2u; ++j) {
+            // A pixel whose path was not split into channels offers red's to its
+            // neighbours (views[c] is views[0] there) and adds it once, in round 0.
+            bool has = live && views[c].weight[j] != vec3(0.0);
+            vec3 d = has ? views[c].dir[j] : vec3(0.0);
+            lookup_dirs[lane] = vec4(d, has ? 1.0 : 0.0);
+            barrier();
+            if (has && c < channels) {
+                vec3 seen;
+                if (footprint && views[c].filtered[j]) {
+                    seen = background_over(d, neighbour_delta(l, 0, d), neighbour_delta(l, 1, d));
+                } else {
+                    seen = background_seen(d);
+                }
+                vec3 add = views[c].weight[j] * seen;
+                if (channels == 1u) {
+                    rgb += add;
+                } else {
+                    rgb[c] += add[c];
+                }
+            }
+            barrier();
+        }
+    }
+    if (live) imageStore(frame, ivec2(id), vec4(rgb, channels == 3u ? alpha : views[0].alpha));
 }

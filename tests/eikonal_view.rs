@@ -185,8 +185,11 @@ fn viewing_rays_refract_as_the_photon_tracer_traces_them() {
                 ..Default::default()
             };
             // The paths alone: the ball's face would add its reflection to the colour
-            // that codes the exit direction (faces_reflect_as_fresnel_says tests that).
+            // that codes the exit direction (faces_reflect_as_fresnel_says tests that),
+            // and the footprint would average the directions of neighbouring pixels
+            // (the_environment_behind_glass_is_averaged_over_the_pixel).
             opts.sweep.reflections = false;
+            opts.sweep.env_footprint = false;
             let frame = renderer.render(Model::Eikonal, &camera, &opts).unwrap();
             let mut errors: Vec<f32> = frame
                 .pixels
@@ -449,5 +452,205 @@ fn a_reflection_sees_the_volume_not_the_sky() {
         assert!((seen[1][0] - (1.0 - r) * r).abs() < 0.01 * r, "{seen:?}");
         assert!(seen[1][2] > 0.005, "the block is not seen: {seen:?}");
         assert!((seen[1][1] - seen[0][1]).abs() < 1e-4, "{seen:?}");
+    });
+}
+
+/// A light of colour 0 (nothing to simulate: the frame shows the ambient level and the
+/// environment alone).
+fn dark_light() -> Light {
+    Light {
+        source: LightSource::Directional {
+            towards: Vec3::new(0.3, 1.0, 0.5).normalize(),
+        },
+        colour: [0.0; 3],
+        softness: 0.0,
+    }
+}
+
+/// The ambient level lights every sample, unoccluded (glsl/eikonal_view.comp; the
+/// sweep's `SweepOptions::ambient`, the map's mean radiance with `--light env`). A
+/// furnace: white matter of albedo 1 in milky glass (η 1.5, with Fresnel reflections and
+/// refraction), in a uniform map of radiance L equal to the ambient level, shows L at
+/// every pixel (a phase function normalised over the sphere in-scatters a uniform
+/// radiance as itself, and what the matter hides it gives back). Then a non-refracting
+/// block of albedo 1/2 seen through its centre: L (albedo (1 − T) + T), T = (1 − α)^n
+/// its transmittance. Breaks it: the ambient term left out (the block: T L), taken as the
+/// map's irradiance (π L) or not weighted by the albedo (the block: L, run: 0.300 against
+/// 0.189).
+#[test]
+fn the_ambient_level_lights_every_sample_as_the_furnace_says() {
+    use refrakt::transfer::Piecewise;
+    with_context(|ctx| {
+        let level = [0.3f32, 0.5, 0.7];
+        let map = refrakt::environment::EnvironmentMap::constant(64, level).unwrap();
+        let n = 33u32;
+        let mut opts = RenderOptions {
+            width: 24,
+            height: 24,
+            lights: vec![dark_light()],
+            ..Default::default()
+        };
+        opts.sweep.ambient = level;
+        // Milky glass: a ball of radius 0.35 (one-voxel ramp), opacity 0.05 per step.
+        let ball = f32_volume(n, |p| {
+            let r = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+            (0.5 + (0.35 - r) * n as f32).clamp(0.0, 1.0)
+        });
+        let milky = TransferFunctions {
+            opacity: Piecewise::new(vec![(0.0, [0.0]), (1.0, [0.05])]),
+            eta: Piecewise::new(vec![(0.0, [1.0]), (1.0, [1.5])]),
+            ..Default::default()
+        };
+        let mut renderer = Renderer::new(ctx, &ball, &milky).unwrap();
+        renderer.set_environment(Some(&map)).unwrap();
+        ScatterOptions {
+            g: 0.3,
+            albedo: 1.0,
+        }
+        .set_in(&mut opts)
+        .unwrap();
+        let camera = refrakt::render::Camera {
+            elevation: 20.0,
+            ..face_on(2.4, 30.0)
+        };
+        let frame = renderer.render(Model::Eikonal, &camera, &opts).unwrap();
+        let centre = frame.pixels[12 * 24 + 12];
+        let worst = frame
+            .pixels
+            .iter()
+            .map(|p| {
+                (0..3)
+                    .map(|c| (p[c] / level[c] - 1.0).abs())
+                    .fold(0.0f32, f32::max)
+            })
+            .fold(0.0f32, f32::max);
+        eprintln!("furnace: centre {centre:?}, worst relative error {worst:.2e}");
+        assert!(worst < 1e-3, "the furnace is not uniform: worst {worst}");
+
+        // The block, face on, no refraction: albedo 1/2.
+        let alpha = 0.04f32;
+        let mut renderer = Renderer::new(ctx, &f32_volume(n, |_| 1.0), &block_tf(alpha)).unwrap();
+        renderer.set_environment(Some(&map)).unwrap();
+        ScatterOptions {
+            g: 0.0,
+            albedo: 0.5,
+        }
+        .set_in(&mut opts)
+        .unwrap();
+        opts.width = 9;
+        opts.height = 9;
+        let frame = renderer
+            .render(Model::Eikonal, &face_on(3.0, 10.0), &opts)
+            .unwrap();
+        let got = frame.pixels[4 * 9 + 4];
+        let t = (1.0 - alpha as f64).powi(n as i32);
+        for c in 0..3 {
+            let want = level[c] as f64 * (0.5 * (1.0 - t) + t);
+            eprintln!("block channel {c}: {:.5}, want {want:.5}", got[c]);
+            assert!(
+                (got[c] as f64 / want - 1.0).abs() < 0.005,
+                "channel {c}: {} against {want}",
+                got[c]
+            );
+        }
+    });
+}
+
+/// What a ray sees where it leaves the box is the map averaged over the pixel's
+/// footprint (the neighbours' exit directions, the summed-area table), as the sweep's
+/// composite takes it. Behind a glass ball (η 1.6) in a checkered sky the rays of
+/// neighbouring pixels leave in very different directions, so one lookup per pixel
+/// aliases; the pixel's true value is the mean over its area, here 16 rays per pixel (a
+/// 4 × 4 grid: the frame at 4 × the size, averaged in blocks). Over the ball's inside the
+/// footprint's error against that mean is at most 0.7 × one lookup's (measured: see the
+/// printout); pixels whose rays were not bent are the same either way. Breaks it: the
+/// footprint turned off, or spanned by the pixel's own direction alone. (Not caught: the
+/// tile's x and y swapped when the neighbours are read, which still spans a footprint of
+/// neighbouring rays.)
+#[test]
+fn the_environment_behind_glass_is_averaged_over_the_pixel() {
+    use refrakt::transfer::Piecewise;
+    with_context(|ctx| {
+        let n = 48u32;
+        let vox = 1.0 / n as f32;
+        let ball = f32_volume(n, |p| {
+            let r = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+            0.5 + (0.3 - r) / vox
+        });
+        let tf = TransferFunctions {
+            eta: Piecewise::new(vec![(0.0, [1.0]), (1.0, [1.6])]),
+            ..Default::default()
+        };
+        let map = refrakt::environment::EnvironmentMap::procedural(512).unwrap();
+        let camera = refrakt::render::Camera {
+            azimuth: 20.0,
+            elevation: 10.0,
+            distance: 2.2,
+            fov_y: 35.0,
+            ..Default::default()
+        };
+        let mut renderer = Renderer::new(ctx, &ball, &tf).unwrap();
+        renderer.set_environment(Some(&map)).unwrap();
+        let render = |r: &mut Renderer, size: u32, footprint: bool| {
+            let mut opts = RenderOptions {
+                width: size,
+                height: size,
+                lights: vec![dark_light()],
+                ..Default::default()
+            };
+            opts.sweep.env_footprint = footprint;
+            r.render(Model::Eikonal, &camera, &opts).unwrap()
+        };
+        let s = 64usize;
+        let filtered = render(&mut renderer, s as u32, true);
+        let point = render(&mut renderer, s as u32, false);
+        let fine = render(&mut renderer, 4 * s as u32, false);
+        let lum = |p: [f32; 4]| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
+        let mean = |x: usize, y: usize| {
+            let mut acc = 0.0f64;
+            for j in 0..4 {
+                for i in 0..4 {
+                    acc += lum(fine.pixels[(4 * y + j) * 4 * s + 4 * x + i]) as f64;
+                }
+            }
+            acc / 16.0
+        };
+        // The ball's inside: pixels within 0.8 of its projected radius (0.3 at 2.2 with
+        // a 35° field: 13.8 pixels of 64) of the centre.
+        let (mut e_filtered, mut e_point, mut count) = (0.0f64, 0.0f64, 0usize);
+        for y in 0..s {
+            for x in 0..s {
+                let (dx, dy) = (x as f32 + 0.5 - 32.0, y as f32 + 0.5 - 32.0);
+                if (dx * dx + dy * dy).sqrt() > 0.8 * 13.8 {
+                    continue;
+                }
+                let m = mean(x, y);
+                e_filtered += (lum(filtered.pixels[y * s + x]) as f64 - m).powi(2);
+                e_point += (lum(point.pixels[y * s + x]) as f64 - m).powi(2);
+                count += 1;
+            }
+        }
+        let (e_filtered, e_point) = (
+            (e_filtered / count as f64).sqrt(),
+            (e_point / count as f64).sqrt(),
+        );
+        eprintln!(
+            "over {count} pixels inside the ball, RMS against 16 rays per pixel: footprint \
+             {e_filtered:.4}, one lookup {e_point:.4} ({:.2} x)",
+            e_filtered / e_point
+        );
+        assert!(
+            e_filtered < 0.7 * e_point,
+            "footprint {e_filtered} against one lookup {e_point}"
+        );
+        for y in 0..8 {
+            for x in 0..8 {
+                assert_eq!(
+                    filtered.pixels[y * s + x],
+                    point.pixels[y * s + x],
+                    "unbent pixel ({x}, {y}) differs"
+                );
+            }
+        }
     });
 }

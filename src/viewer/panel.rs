@@ -388,9 +388,9 @@ fn controls(
                 }
             }
             ui.separator();
-            // The environment and the ambient level are the refractive model's (the
-            // others draw the background colour and take no ambient light).
-            if v.model == Model::Refract {
+            // The environment and the ambient level are the refractive and eikonal
+            // models' (the others draw the background colour and take no ambient light).
+            if matches!(v.model, Model::Refract | Model::Eikonal) {
                 env.show(ui, v, actions);
                 let s = &mut v.opts.sweep;
                 let mut level = s.ambient.into_iter().fold(0.0f32, f32::max);

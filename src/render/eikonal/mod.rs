@@ -261,8 +261,13 @@ struct Params {
     /// The refractive-index scale per colour channel (all three the same without
     /// dispersion).
     eta_scales: [f32; 4],
-    /// Steps at most per ray, colour channels traced apart, 1 with Fresnel reflections.
+    /// Steps at most per ray, colour channels traced apart, 1 with Fresnel reflections,
+    /// 1 with the environment filtered over each pixel's footprint.
     steps: [u32; 4],
+    /// The ambient level (rgb; [`super::SweepOptions::ambient`]).
+    ambient: [f32; 4],
+    /// The environment's summed-area table's mean offset.
+    env_mean: [f32; 4],
 }
 
 pub(super) struct EikonalPass {
@@ -280,6 +285,7 @@ impl EikonalPass {
                 &[
                     Binding::Texture(inputs.env.map, inputs.linear),
                     Binding::Storage(&light.buffer),
+                    Binding::Texture(inputs.env.sat, inputs.linear),
                 ],
             )?,
         })
@@ -295,9 +301,15 @@ pub(crate) static EIKONAL: OpticalModel = OpticalModel {
         point: true,
     },
     phase_function: true,
-    // The refractive-index scale, the Fresnel reflections at faces and the environment
-    // behind, as the sweep's.
-    flags: &["--eta-scale", "--reflections", "--env", "--env-rotation"],
+    // The refractive-index scale, the Fresnel reflections at faces, the environment behind
+    // (filtered over the pixel's footprint) and the ambient level, as the sweep's.
+    flags: &[
+        "--eta-scale",
+        "--reflections",
+        "--env",
+        "--env-rotation",
+        "--ambient-level",
+    ],
     make_pass: |inputs| Ok(Box::new(EikonalPass::new(inputs)?)),
     options: &[&SCATTER_G, &SCATTER_ALBEDO, &dispersion::ABBE],
     rebuild_scopes: &[SIMULATION_SCOPE],
@@ -345,7 +357,19 @@ impl ModelPass for EikonalPass {
                 if inputs.env.enabled { 1.0 } else { 0.0 },
             ],
             eta_scales,
-            steps: [max_steps, channels, opts.sweep.reflections as u32, 0],
+            steps: [
+                max_steps,
+                channels,
+                opts.sweep.reflections as u32,
+                opts.sweep.env_footprint as u32,
+            ],
+            ambient: [
+                opts.sweep.ambient[0],
+                opts.sweep.ambient[1],
+                opts.sweep.ambient[2],
+                0.0,
+            ],
+            env_mean: inputs.env.mean,
         })?;
         recorded.max_steps = max_steps;
         Ok(recorded)
@@ -353,5 +377,5 @@ impl ModelPass for EikonalPass {
 }
 
 crate::render::march::test_blocks_match_the_shaders!(
-    params: shaders::EIKONAL_VIEW_COMP, Params { field, scatter, eta_scales, steps }
+    params: shaders::EIKONAL_VIEW_COMP, Params { field, scatter, eta_scales, steps, ambient, env_mean }
 );

@@ -95,7 +95,8 @@ pub struct SweepOptions {
     /// Rotation of the environment map about the world's up axis, degrees.
     pub env_rotation: f32,
     /// Average the environment over each pixel's refracted footprint with the summed-area
-    /// table (thesis Fig. 4.5); false = one bilinear lookup per pixel (for comparison).
+    /// table (thesis Fig. 4.5); false = one bilinear lookup per pixel (for comparison). The
+    /// eikonal model's view reads it too.
     pub env_footprint: bool,
     /// Refractive-index scale k: the sweep uses η' = 1 + k (η_tf − 1), so 0 turns refraction
     /// off and 1 (default) is the transfer function's η.
@@ -105,7 +106,8 @@ pub struct SweepOptions {
     /// × irradiance` of the light, the thesis' model). A uniform environment of radiance L
     /// in-scatters L into a white medium, so that is the level it gives. `--light env`
     /// sets it to the environment's mean radiance outside the key light's region
-    /// ([`crate::environment::KeyLight::ambient`]); 0 (default) is the thesis' model.
+    /// ([`crate::environment::KeyLight::ambient`]); 0 (default) is the thesis' model. The
+    /// eikonal model's view takes it too, as `albedo × colour × ambient`.
     pub ambient: [f32; 3],
     /// How light travels between planes.
     pub light_transport: LightTransport,
