@@ -654,3 +654,60 @@ fn the_environment_behind_glass_is_averaged_over_the_pixel() {
         }
     });
 }
+
+/// The light simulation, which runs before the frame's recording and can take minutes on
+/// lavapipe, reports how far it is after each submission of cycles
+/// (`Renderer::set_build_progress`; `render` shows the lines on its spinner): lines for
+/// light 1 with rising cycle counts ending at the simulation's own, then nothing for a
+/// frame that simulates nothing (the camera moved). Breaks it: the report left unplumbed
+/// (no lines), or sent before the cycles' count is read back (the last line one
+/// submission short).
+#[test]
+fn the_light_simulation_reports_its_progress() {
+    with_context(|ctx| {
+        let (volume, tf) = glass_slab(32, true);
+        let mut renderer = Renderer::new(ctx, &volume, &tf).unwrap();
+        let lines = std::sync::Arc::new(std::sync::Mutex::new(Vec::<String>::new()));
+        let sink = lines.clone();
+        renderer.set_build_progress(Some(std::sync::Arc::new(move |line: &str| {
+            sink.lock().unwrap().push(line.to_owned())
+        })));
+        let opts = slab_options(1.0);
+        renderer
+            .render(Model::Eikonal, &face_on(2.2, 35.0), &opts)
+            .unwrap();
+        let seen = std::mem::take(&mut *lines.lock().unwrap());
+        let cycles = renderer.light_simulation_stats(Model::Eikonal)[0].cycles;
+        eprintln!(
+            "{} lines, the last {:?}; {cycles} cycles",
+            seen.len(),
+            seen.last()
+        );
+        assert!(!seen.is_empty(), "no progress reported");
+        let counts: Vec<u32> = seen
+            .iter()
+            .map(|l| {
+                let rest = l
+                    .strip_prefix("light simulation, light 1: cycle ")
+                    .unwrap_or_else(|| panic!("unexpected line {l:?}"));
+                rest.split(' ').next().unwrap().parse().unwrap()
+            })
+            .collect();
+        assert!(
+            counts.windows(2).all(|w| w[0] < w[1]),
+            "cycles do not rise: {counts:?}"
+        );
+        assert_eq!(*counts.last().unwrap(), cycles, "{seen:?}");
+        assert!(seen.last().unwrap().ends_with(" patches live"), "{seen:?}");
+        let moved = refrakt::render::Camera {
+            azimuth: 10.0,
+            ..face_on(2.2, 35.0)
+        };
+        renderer.render(Model::Eikonal, &moved, &opts).unwrap();
+        assert!(
+            lines.lock().unwrap().is_empty(),
+            "a camera move simulated again: {:?}",
+            lines.lock().unwrap()
+        );
+    });
+}

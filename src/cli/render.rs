@@ -177,6 +177,12 @@ pub fn render(desc: &ContextDesc, args: &RenderArgs) -> Result<ExitCode> {
         volume.dims[0], volume.dims[1], volume.dims[2]
     ));
     let mut renderer = Renderer::new(&ctx, &volume, &tf)?;
+    // Long one-off work (the eikonal light simulation, minutes on a CPU device) says how
+    // far it is on the spinner's line.
+    let bar = progress.clone();
+    renderer.set_build_progress(Some(std::sync::Arc::new(move |line: &str| {
+        bar.set_message(line.to_owned())
+    })));
     if model == Model::Ambient {
         progress.set_message("the ambient-scattering table");
         let (table, line) = progress.suspend(|| {

@@ -418,14 +418,14 @@ impl Renderer {
     /// Simulate `light` through the volume (the transfer functions' η with `opts`'
     /// refractive-index scale; no clipping plane): count its flux on `receivers`, and
     /// fill the fluence volume when `settings.fluence`. `progress` hears (cycles done,
-    /// cycles at most) after each submission.
+    /// cycles at most, patches live) after each submission.
     pub fn simulate_light(
         &self,
         opts: &RenderOptions,
         light: &Light,
         settings: &WavefrontSettings,
         receivers: &[Receiver],
-        progress: Option<&dyn Fn(u32, u32)>,
+        progress: Option<&dyn Fn(u32, u32, u32)>,
     ) -> Result<LightSimulation> {
         let field = FieldInputs {
             ctx: &self.ctx,
@@ -446,7 +446,7 @@ pub(crate) fn simulate(
     light: &Light,
     settings: &WavefrontSettings,
     receivers: &[Receiver],
-    progress: Option<&dyn Fn(u32, u32)>,
+    progress: Option<&dyn Fn(u32, u32, u32)>,
 ) -> Result<LightSimulation> {
     settings.validate()?;
     ensure!(
@@ -767,7 +767,7 @@ pub(crate) fn simulate(
             .list_sizes
             .push((cycle, words[CTRL_COUNT + (cycle % 2) as usize]));
         if let Some(p) = progress {
-            p(cycle, max_cycles);
+            p(cycle, max_cycles, words[CTRL_COUNT + (cycle % 2) as usize]);
         }
         if words[CTRL_NEEDED] > 0 {
             // The default budget is what the device binds: only a smaller volume helps.

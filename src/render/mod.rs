@@ -124,7 +124,14 @@ pub struct Renderer {
     /// changes.
     passes: HashMap<(Model, Slot), Box<dyn ModelPass>>,
     env: Environment,
+    /// Hears how far long work outside a frame's recording is ([`Self::set_build_progress`]).
+    build_progress: Option<std::sync::Arc<BuildProgress>>,
 }
+
+/// A listener for long work a frame waits for outside its recording (the eikonal light
+/// simulation: one line per submission of cycles, e.g. "light simulation, light 1: cycle
+/// 48 of at most 400, 20035 patches live").
+pub type BuildProgress = dyn Fn(&str) + Send + Sync;
 
 /// Which of a model's two passes a recording uses. A pass owns its images and pipelines
 /// for one frame size; the viewer alternates reduced-size previews with full frames, and
@@ -192,6 +199,7 @@ impl Renderer {
             tf_image,
             tf_dirty: true,
             tf_changes: 0,
+            build_progress: None,
             linear,
             volume_sampler,
             preint,
@@ -348,6 +356,13 @@ impl Renderer {
             );
         }
         model::check(model, self.volume_info, camera, opts)
+    }
+
+    /// Where long work outside a frame's recording reports how far it is (the eikonal light
+    /// simulation, which can take minutes on a CPU device: a line after each submission of
+    /// its cycles); None: nowhere.
+    pub fn set_build_progress(&mut self, progress: Option<std::sync::Arc<BuildProgress>>) {
+        self.build_progress = progress;
     }
 
     /// Render one frame with `model` and read it back.
@@ -522,6 +537,7 @@ impl Renderer {
                 volume_sampler: &self.volume_sampler,
                 tf: &self.tf_image,
                 tf_changes: self.tf_changes,
+                progress: self.build_progress.as_deref(),
             };
             state.record_update(rec, &shared, opts)?;
         }

@@ -82,6 +82,9 @@ pub(crate) struct Shared<'a> {
     pub volume_sampler: &'a Sampler,
     pub tf: &'a Image,
     pub tf_changes: u64,
+    /// Where work that runs outside a frame's recording and can take long (the eikonal
+    /// light simulation) reports how far it is ([`super::Renderer::set_build_progress`]).
+    pub progress: Option<&'a super::BuildProgress>,
 }
 
 /// A model's own persistent data, kept across frames and shared by the viewer's slots

@@ -138,6 +138,7 @@ impl Renderer {
                 volume_sampler: &self.volume_sampler,
                 tf: &self.tf_image,
                 tf_changes: self.tf_changes,
+                progress: self.build_progress.as_deref(),
             };
             let state = (decl.make)(&shared)?;
             self.states.insert(model, state);
@@ -166,6 +167,7 @@ impl Renderer {
             volume_sampler: &self.volume_sampler,
             tf: &self.tf_image,
             tf_changes: self.tf_changes,
+            progress: self.build_progress.as_deref(),
         };
         let state = self.states.get_mut(&model).expect("made above");
         if state.prepare(&shared, opts)? {

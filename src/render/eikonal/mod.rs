@@ -155,8 +155,28 @@ impl LightVolume {
         };
         for (index, light) in opts.lights.iter().enumerate() {
             for (run_opts, only) in &runs {
-                let sim =
-                    light_simulator::simulate(&inputs, run_opts, light, &settings, &[], None)?;
+                let label = SimulationStats {
+                    light: index,
+                    channel: *only,
+                    ..Default::default()
+                }
+                .label();
+                let report = |cycle: u32, most: u32, live: u32| {
+                    if let Some(p) = shared.progress {
+                        p(&format!(
+                            "light simulation, {label}: cycle {cycle} of at most {most}, \
+                             {live} patches live"
+                        ));
+                    }
+                };
+                let sim = light_simulator::simulate(
+                    &inputs,
+                    run_opts,
+                    light,
+                    &settings,
+                    &[],
+                    Some(&report),
+                )?;
                 let volume = sim.fluence.as_ref().expect("asked for the fluence volume");
                 let channels = match only {
                     Some(c) => *c..*c + 1,
