@@ -41,6 +41,10 @@
 // itself back. Films (eta rising and falling back within the probes) are not faces.
 // P.steps.z: 1 with reflections (`--reflections`, the sweep's flag), 0 without.
 //
+// Emission is optional (`--emission E`, the image formation model's emission term): each
+// sample also emits E times its colour per unit opacity (C += (1 - A) M c a_h E), as the
+// emission-absorption model's samples do.
+//
 // The ambient level (`--ambient-level`, `--light env`; the sweep's SweepOptions::ambient,
 // the map's mean radiance): every sample is lit by it besides the light volume,
 // unoccluded and from no direction. A phase function normalised over the sphere turns a
@@ -76,7 +80,7 @@ layout(set = 0, binding = 0) uniform Params {
     uvec4 steps;       // x: steps at most per ray; y: colour channels traced apart (1 or 3);
                        // z: 1 = Fresnel reflections at faces; w: 1 = lookups filtered
                        // over the pixel's footprint (SweepOptions::env_footprint)
-    vec4 ambient;      // rgb: the ambient level (mean radiance, unoccluded)
+    vec4 ambient;      // rgb: the ambient level (mean radiance, unoccluded); w: the emission
     vec4 env_mean;     // rgb: the summed-area table's mean offset (environment.glsl)
 } P;
 layout(set = 0, binding = 1) uniform sampler3D volume;
@@ -244,7 +248,9 @@ Trace trace_ray(vec3 origin, vec3 dir, float k, bool split, out vec3 r_origin, o
                 phase += 1.0 - r;
                 // The light volume's light through the phase function, and the ambient
                 // level (uniform radiance: the phase function integrates it to itself).
-                vec3 shade = P.scatter.y * (phase * fluence + P.ambient.rgb);
+                // With the optional emission (P.ambient.w; seed 001 sect. 4.1) the sample
+                // also emits its colour, as the emission-absorption model's do.
+                vec3 shade = P.scatter.y * (phase * fluence + P.ambient.rgb) + P.ambient.w;
                 C += (1.0 - A) * M * ca.rgb * a * shade;
                 A += (1.0 - A) * a;
                 M *= correct_medium(m, ratio);

@@ -711,3 +711,66 @@ fn the_light_simulation_reports_its_progress() {
         );
     });
 }
+
+/// The optional emission (`--emission E`; seed 001 sect. 4.1's image formation model):
+/// every sample also emits its colour times E per unit opacity. Dark light, no ambient
+/// level: a uniform block of colour c and opacity α per step, seen through its centre
+/// against a black background, shows E c (1 − (1 − α)^n), the emission–absorption
+/// integral, and the EA model's own frame times E there. Breaks it: the emission
+/// weighted by the albedo (0.5 of it), or added outside the opacity (the block's n steps
+/// of E c: 20× too bright).
+#[test]
+fn emission_adds_the_emission_absorption_image() {
+    with_context(|ctx| {
+        let n = 33u32;
+        let alpha = 0.04f32;
+        let text = format!(
+            "colour = [[0.0, 0.2, 0.5, 1.0]]\nopacity = [[0.0, 0.0], [0.9, 0.0], [1.0, {alpha}]]\n"
+        );
+        let tf = TransferFunctions::parse(&text, "emitting block").unwrap();
+        let mut renderer = Renderer::new(ctx, &f32_volume(n, |_| 1.0), &tf).unwrap();
+        let camera = face_on(3.0, 10.0);
+        let mut opts = RenderOptions {
+            width: 9,
+            height: 9,
+            background: [0.0, 0.0, 0.0, 1.0],
+            lights: vec![dark_light()],
+            ..Default::default()
+        };
+        ScatterOptions {
+            g: 0.0,
+            albedo: 0.5,
+        }
+        .set_in(&mut opts)
+        .unwrap();
+        let emission = 1.5f32;
+        opts.models
+            .set(&refrakt::render::eikonal::EMISSION, emission as f64)
+            .unwrap();
+        let got = renderer
+            .render(Model::Eikonal, &camera, &opts)
+            .unwrap()
+            .pixels[4 * 9 + 4];
+        let ea = renderer.render(Model::Ea, &camera, &opts).unwrap().pixels[4 * 9 + 4];
+        let t = (1.0 - alpha as f64).powi(n as i32);
+        for (c, colour) in [0.2f64, 0.5, 1.0].into_iter().enumerate() {
+            let want = emission as f64 * colour * (1.0 - t);
+            eprintln!(
+                "channel {c}: {:.5}, closed form {want:.5}, EA x E {:.5}",
+                got[c],
+                emission * ea[c]
+            );
+            assert!(
+                (got[c] as f64 / want - 1.0).abs() < 0.005,
+                "channel {c}: {} against {want}",
+                got[c]
+            );
+            assert!(
+                (got[c] / (emission * ea[c]) - 1.0).abs() < 0.005,
+                "channel {c}: {} against EA's {}",
+                got[c],
+                ea[c]
+            );
+        }
+    });
+}

@@ -25,11 +25,32 @@ use super::light_simulator::{self, FieldInputs, SimulationStats, WavefrontSettin
 use super::march::{delegate_to_march, RayMarchPass, RAY_MARCHER};
 use super::model::{Inputs, ModelPass, ModelState, ModelStateDecl, OpticalModel, Recorded, Shared};
 use super::LightSupport;
+use super::ModelOption;
 use super::{RenderOptions, ScatterOptions, SCATTER_ALBEDO, SCATTER_G};
 use crate::shaders;
 use crate::vk::{self, Binding, Buffer, Memory, Recorder, Timings};
 
 pub mod dispersion;
+
+/// `--emission` (scene key `emission`): the image formation model's optional emission
+/// (seed 001 sect. 4.1): every sample also emits its transfer-function colour times this,
+/// per unit opacity, as the emission–absorption model's samples do (1: the EA image added
+/// to the scattered light).
+pub static EMISSION: ModelOption = ModelOption {
+    flag: "--emission",
+    value_name: "E",
+    help: "Emission: every sample also emits its transfer-function colour times E (0 to \
+           1000; 1 adds the emission-absorption image to the scattered light, 0 none)",
+    default: 0.0,
+    integer: false,
+    check: |v| {
+        ensure!(
+            (0.0..=1000.0).contains(&v),
+            "the emission must be from 0 to 1000"
+        );
+        Ok(())
+    },
+};
 
 /// The timings scope of the light simulation (all lights).
 pub const SIMULATION_SCOPE: &str = "light simulation";
@@ -284,7 +305,7 @@ struct Params {
     /// Steps at most per ray, colour channels traced apart, 1 with Fresnel reflections,
     /// 1 with the environment filtered over each pixel's footprint.
     steps: [u32; 4],
-    /// The ambient level (rgb; [`super::SweepOptions::ambient`]).
+    /// The ambient level (rgb; [`super::SweepOptions::ambient`]); w: the emission.
     ambient: [f32; 4],
     /// The environment's summed-area table's mean offset.
     env_mean: [f32; 4],
@@ -331,7 +352,7 @@ pub(crate) static EIKONAL: OpticalModel = OpticalModel {
         "--ambient-level",
     ],
     make_pass: |inputs| Ok(Box::new(EikonalPass::new(inputs)?)),
-    options: &[&SCATTER_G, &SCATTER_ALBEDO, &dispersion::ABBE],
+    options: &[&SCATTER_G, &SCATTER_ALBEDO, &dispersion::ABBE, &EMISSION],
     rebuild_scopes: &[SIMULATION_SCOPE],
     state: Some(ModelStateDecl {
         what: "the light volume",
@@ -387,7 +408,7 @@ impl ModelPass for EikonalPass {
                 opts.sweep.ambient[0],
                 opts.sweep.ambient[1],
                 opts.sweep.ambient[2],
-                0.0,
+                opts.model_option(&EMISSION) as f32,
             ],
             env_mean: inputs.env.mean,
         })?;
