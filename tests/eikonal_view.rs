@@ -562,8 +562,9 @@ fn the_ambient_level_lights_every_sample_as_the_furnace_says() {
 /// neighbouring pixels leave in very different directions, so one lookup per pixel
 /// aliases; the pixel's true value is the mean over its area, here 16 rays per pixel (a
 /// 4 × 4 grid: the frame at 4 × the size, averaged in blocks). Over the ball's inside the
-/// footprint's error against that mean is at most 0.7 × one lookup's (measured: see the
-/// printout); pixels whose rays were not bent are the same either way. Breaks it: the
+/// footprint's error against that mean is at most 0.7 × one lookup's (measured: RMS
+/// 0.0458 against 0.0909, 0.50 ×; the ball and camera of the sweep's test in
+/// tests/environment.rs); pixels whose rays were not bent are the same either way. Breaks it: the
 /// footprint turned off, or spanned by the pixel's own direction alone. (Not caught: the
 /// tile's x and y swapped when the neighbours are read, which still spans a footprint of
 /// neighbouring rays.)
