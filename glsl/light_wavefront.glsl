@@ -44,9 +44,15 @@ struct Patch {
     vec4 flux;
 };
 
-// The list: two halves of `capacity` patches; a cycle reads half `parity`, writes the other.
+// The list: two halves of `capacity` patches, each a buffer of its own (so each may take
+// the device's whole storage-buffer range); a cycle reads and updates this cycle's half
+// (`patches`, binding 2) and writes the next list into the other (`patches_next`, binding
+// 12): the host binds them the other way round on odd cycles.
 layout(std430, set = 0, binding = 2) buffer Patches {
     Patch patches[];
+};
+layout(std430, set = 0, binding = 12) buffer PatchesNext {
+    Patch patches_next[];
 };
 
 // Each patch's count of patches in the next list (step), turned into its offset within
@@ -154,7 +160,5 @@ layout(push_constant) uniform Push {
 #define RAY_FIELD field
 #define RAY_USE_FIELD WAVEFRONT_FIELD
 #include "ray_equation.glsl"
-
-uint list_index(uint half_, uint i) { return half_ * pc.capacity + i; }
 
 #endif

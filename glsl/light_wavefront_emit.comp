@@ -31,12 +31,11 @@ void main() {
     uint i = gl_GlobalInvocationID.x;
     uint count = control[CTRL_COUNT + pc.parity];
     if (i >= count) return;
-    Patch p = patches[list_index(pc.parity, i)];
+    Patch p = patches[i];
     uint code = uint(p.x[3].w);
     if (code == 0u) return;
     uint ku = code & 7u, kv = code >> 3u;
     uint offset = counts[i] + block_sums[i / WAVEFRONT_GROUP];
-    uint other = 1u - pc.parity;
     vec2 inv = 1.0 / vec2(ku, kv);
     // The parent's irradiance is uniform over it (the patch is the wavefront's
     // discretisation): each child takes the flux of the area it covers, not an equal
@@ -77,7 +76,7 @@ void main() {
                 q.x[0].w = p.x[0].w * part;
                 q.x[1].w = p.x[1].w + 1.0;
             }
-            patches[list_index(other, o)] = q;
+            patches_next[o] = q;
         }
     }
 }

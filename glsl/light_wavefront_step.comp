@@ -244,8 +244,7 @@ void main() {
     uint i = gl_GlobalInvocationID.x;
     uint count = control[CTRL_COUNT + pc.parity];
     if (i >= count) return;
-    uint at = list_index(pc.parity, i);
-    Patch p = patches[at];
+    Patch p = patches[i];
     float ref = pc.half_extent.w;
     // Launched patches (x[3].w < 0) carry unit directions: v = eta dx/ds starts at the
     // local eta (the ray equation keeps |v| = eta from there).
@@ -378,5 +377,5 @@ void main() {
     // Children per side for the emit: ku + 8 kv (0: retired).
     p.x[3].w = keep ? float(ku + 8u * kv) : 0.0;
     counts[i] = keep ? ku * kv : 0u;
-    patches[at] = p;
+    patches[i] = p;
 }

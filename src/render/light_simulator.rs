@@ -101,9 +101,10 @@ pub struct WavefrontSettings {
     /// Splits per patch at most (a patch longer than a voxel at this level is kept whole
     /// and counted, [`SimulationStats::unsplit`]).
     pub max_level: u32,
-    /// Patches the list holds at most (each half; 144 bytes each, twice): a simulation
-    /// that needs more is refused, naming how many it needed. `None`: as many as the
-    /// device binds at once (maxStorageBufferRange; 466 033 on lavapipe), at most 2^20.
+    /// Patches the list holds at most (each of its two halves, a buffer of 144 bytes a
+    /// patch): a simulation that needs more is refused, naming how many it needed.
+    /// `None`: as many as the device binds as one buffer (maxStorageBufferRange; 932 032
+    /// on lavapipe), at most 2^20.
     pub max_patches: Option<u32>,
     pub at_foci: FocusPolicy,
     /// Deposit into the fluence volume ([`LightSimulation::fluence`]).
@@ -464,17 +465,18 @@ pub(crate) fn simulate(
     let reference = info.ref_step;
     let limit = ctx.info().limits.max_storage_buffer_range as u64;
     let wave = launch(light, settings, half, reference)?;
+    // Each half of the list is a buffer of its own: it may take the whole binding range.
     let capacity = settings
         .max_patches
-        .unwrap_or(((limit / (2 * PATCH_BYTES)).min(1 << 20) as u32 / GROUP) * GROUP);
-    let list_bytes = 2 * capacity as u64 * PATCH_BYTES;
+        .unwrap_or(((limit / PATCH_BYTES).min(1 << 20) as u32 / GROUP) * GROUP);
+    let list_bytes = capacity as u64 * PATCH_BYTES;
     ensure!(
         list_bytes <= limit,
-        "a patch list of {capacity} patches (twice {PATCH_BYTES} bytes each: {list_bytes} \
-             bytes) is more than device '{}' binds at once ({limit} bytes); lower the patch \
+        "a patch list of {capacity} patches ({PATCH_BYTES} bytes each: {list_bytes} bytes a \
+             half) is more than device '{}' binds at once ({limit} bytes); lower the patch \
              budget to at most {}",
         ctx.info().name,
-        limit / (2 * PATCH_BYTES)
+        limit / PATCH_BYTES
     );
     let patches = wave.patches;
     let launched = patches.len() as u64;
@@ -490,13 +492,19 @@ pub(crate) fn simulate(
 
     // Buffers.
     let storage = vk::usage::STORAGE_BUFFER;
-    let list = Buffer::new(
-        ctx,
-        list_bytes,
-        storage | vk::usage::BUFFER_TRANSFER_DST,
-        Memory::Gpu,
-        "wavefront patches",
-    )?;
+    let list_half = |name: &str| {
+        Buffer::new(
+            ctx,
+            list_bytes,
+            storage | vk::usage::BUFFER_TRANSFER_DST,
+            Memory::Gpu,
+            name,
+        )
+    };
+    let list = [
+        list_half("wavefront patches (even cycles)")?,
+        list_half("wavefront patches (odd cycles)")?,
+    ];
     let counts = Buffer::new(
         ctx,
         capacity as u64 * 4,
@@ -636,24 +644,30 @@ pub(crate) fn simulate(
     };
     let clear_cells = cell_image("wavefront clear cells")?;
     let clear_scratch = cell_image("wavefront clear scratch")?;
-    let set = DescriptorSet::new(
-        ctx,
-        &[
-            Binding::Texture(inputs.volume, inputs.volume_sampler),
-            Binding::Texture(inputs.tf, inputs.linear),
-            Binding::Storage(&list),
-            Binding::Storage(&counts),
-            Binding::Storage(&block_sums),
-            Binding::Storage(&control),
-            Binding::Storage(&receiver_sums),
-            Binding::Storage(&receiver_geometry),
-            Binding::Storage(&fluence_sums),
-            Binding::Texture(field.image(), inputs.linear),
-            Binding::StorageImage(&clear_cells),
-            Binding::StorageImage(&clear_scratch),
-        ],
-        "light simulator",
-    )?;
+    // One set per parity: binding 2 the half the cycle reads, 12 the half it writes.
+    let set_for = |parity: usize| {
+        DescriptorSet::new(
+            ctx,
+            &[
+                Binding::Texture(inputs.volume, inputs.volume_sampler),
+                Binding::Texture(inputs.tf, inputs.linear),
+                Binding::Storage(&list[parity]),
+                Binding::Storage(&counts),
+                Binding::Storage(&block_sums),
+                Binding::Storage(&control),
+                Binding::Storage(&receiver_sums),
+                Binding::Storage(&receiver_geometry),
+                Binding::Storage(&fluence_sums),
+                Binding::Texture(field.image(), inputs.linear),
+                Binding::StorageImage(&clear_cells),
+                Binding::StorageImage(&clear_scratch),
+                Binding::Storage(&list[1 - parity]),
+            ],
+            &format!("light simulator ({})", ["even", "odd"][parity]),
+        )
+    };
+    let sets = [set_for(0)?, set_for(1)?];
+    let set = &sets[0];
     let push_size = std::mem::size_of::<WavefrontPush>() as u32;
     // Specialization constants 0 to 3: the field texture, clear space, the clear-space
     // pass (light_wavefront_clear.comp only), the fluence deposits.
@@ -664,7 +678,7 @@ pub(crate) fn simulate(
         settings.fluence as u32,
     ];
     let pipeline = |spirv: &[u8], name: &str| {
-        ComputePipeline::with_constants(ctx, spirv, &set, push_size, &constants, name)
+        ComputePipeline::with_constants(ctx, spirv, set, push_size, &constants, name)
     };
     let step = pipeline(shaders::LIGHT_WAVEFRONT_STEP_COMP, "wavefront step")?;
     let scan_blocks = pipeline(
@@ -683,7 +697,7 @@ pub(crate) fn simulate(
             ComputePipeline::with_constants(
                 ctx,
                 shaders::LIGHT_WAVEFRONT_CLEAR_COMP,
-                &set,
+                set,
                 push_size,
                 &constants,
                 &format!("wavefront clear space (pass {pass})"),
@@ -734,14 +748,14 @@ pub(crate) fn simulate(
                     if settings.clear_space {
                         let groups = info.dims.map(|d| d.div_ceil(4));
                         for pass in &clear_passes {
-                            rec.dispatch(pass, &set, bytemuck::bytes_of(&push), groups)?;
+                            rec.dispatch(pass, set, bytemuck::bytes_of(&push), groups)?;
                         }
                     }
                     rec.upload_to_storage(&staging, 0, &control, 0, CTRL_WORDS as u64 * 4)?;
                     rec.upload_to_storage(
                         &staging,
                         CTRL_WORDS as u64 * 4,
-                        &list,
+                        &list[0],
                         0,
                         patches.len() as u64 * PATCH_BYTES,
                     )?;
@@ -750,10 +764,11 @@ pub(crate) fn simulate(
                     push.parity = (cycle + c) % 2;
                     let bytes = bytemuck::bytes_of(&push);
                     let args = (CTRL_DISPATCH as u64 + 4 * push.parity as u64) * 4;
-                    rec.dispatch_indirect(&step, &set, bytes, &control, args)?;
-                    rec.dispatch_indirect(&scan_blocks, &set, bytes, &control, args)?;
-                    rec.dispatch(&scan_sums, &set, bytes, [1, 1, 1])?;
-                    rec.dispatch_indirect(&emit, &set, bytes, &control, args)?;
+                    let set = &sets[push.parity as usize];
+                    rec.dispatch_indirect(&step, set, bytes, &control, args)?;
+                    rec.dispatch_indirect(&scan_blocks, set, bytes, &control, args)?;
+                    rec.dispatch(&scan_sums, set, bytes, [1, 1, 1])?;
+                    rec.dispatch_indirect(&emit, set, bytes, &control, args)?;
                 }
                 Ok(())
             })?;
@@ -783,7 +798,8 @@ pub(crate) fn simulate(
             };
             bail!(
                 "the light simulation needed {} patches at once, more than its budget of \
-                 {capacity} ({list_bytes} bytes of patch list, after {cycle} cycles); {remedy}",
+                 {capacity} ({list_bytes} bytes each half of the patch list, after {cycle} cycles); \
+                 {remedy}",
                 words[CTRL_NEEDED],
             );
         }

@@ -360,8 +360,8 @@ pub(crate) static EIKONAL: OpticalModel = OpticalModel {
         make: |shared| Ok(Box::new(LightVolume::new(shared)?)),
     }),
     experimental: Some(
-        "its light simulation takes minutes on lavapipe at 64³ and can outgrow its patch \
-         budget at 128³ (issue 35)",
+        "its light simulation takes minutes on lavapipe (the default 128³ scene about five \
+         and a half) and a list near the device's patch budget (issue 35)",
     ),
     ..RAY_MARCHER
 };
