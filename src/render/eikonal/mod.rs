@@ -16,7 +16,11 @@
 //! [`dispersion`]) each colour channel's light is a wavefront of its own and viewing rays
 //! through glass are traced once per channel. Faces reflect by Fresnel (`--reflections`,
 //! on by default as for the sweep): the first face's reflected ray is traced through the
-//! volume, the others look up the environment.
+//! volume, the others look up the environment. What a ray sees where it leaves the box is
+//! averaged over the pixel's footprint (the neighbouring pixels' exit directions, the
+//! summed-area table), as the sweep's composite does; the ambient level
+//! (`SweepOptions::ambient`) and an optional emission ([`EMISSION`]) complete the image
+//! formation model.
 
 use anyhow::{ensure, Result};
 use bytemuck::{Pod, Zeroable};
