@@ -563,33 +563,15 @@ fn the_ambient_level_lights_every_sample_as_the_furnace_says() {
 /// aliases; the pixel's true value is the mean over its area, here 16 rays per pixel (a
 /// 4 × 4 grid: the frame at 4 × the size, averaged in blocks). Over the ball's inside the
 /// footprint's error against that mean is at most 0.7 × one lookup's (measured: RMS
-/// 0.0458 against 0.0909, 0.50 ×; the ball and camera of the sweep's test in
-/// tests/environment.rs); pixels whose rays were not bent are the same either way. Breaks it: the
+/// 0.0458 against 0.0909, 0.50 ×; `common::glass_ball_in_the_sky`, the sweep's test's
+/// scene); pixels whose rays were not bent are the same either way. Breaks it: the
 /// footprint turned off, or spanned by the pixel's own direction alone. (Not caught: the
 /// tile's x and y swapped when the neighbours are read, which still spans a footprint of
 /// neighbouring rays.)
 #[test]
 fn the_environment_behind_glass_is_averaged_over_the_pixel() {
-    use refrakt::transfer::Piecewise;
     with_context(|ctx| {
-        let n = 48u32;
-        let vox = 1.0 / n as f32;
-        let ball = f32_volume(n, |p| {
-            let r = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
-            0.5 + (0.3 - r) / vox
-        });
-        let tf = TransferFunctions {
-            eta: Piecewise::new(vec![(0.0, [1.0]), (1.0, [1.6])]),
-            ..Default::default()
-        };
-        let map = refrakt::environment::EnvironmentMap::procedural(512).unwrap();
-        let camera = refrakt::render::Camera {
-            azimuth: 20.0,
-            elevation: 10.0,
-            distance: 2.2,
-            fov_y: 35.0,
-            ..Default::default()
-        };
+        let (ball, tf, map, camera) = common::glass_ball_in_the_sky();
         let mut renderer = Renderer::new(ctx, &ball, &tf).unwrap();
         renderer.set_environment(Some(&map)).unwrap();
         let render = |r: &mut Renderer, size: u32, footprint: bool| {

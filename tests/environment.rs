@@ -149,7 +149,7 @@ mod composite {
     use super::common::{face_on, with_context};
     use glam::Vec3;
     use refrakt::environment::EnvironmentMap;
-    use refrakt::render::{Camera, Model, RenderOptions, Renderer, SweepOptions};
+    use refrakt::render::{Model, RenderOptions, Renderer, SweepOptions};
     use refrakt::transfer::{Piecewise, TransferFunctions};
     use refrakt::volume::{Volume, Voxels};
 
@@ -252,21 +252,7 @@ mod composite {
     #[test]
     fn footprint_filtering_smooths_refracted_environment() {
         with_context(|ctx| {
-            let n = 48u32;
-            let vox = 1.0 / n as f32;
-            let vol = f32_volume(n, |p| 0.5 + (0.3 - p.length()) / vox);
-            let tf = TransferFunctions {
-                eta: Piecewise::new(vec![(0.0, [1.0]), (1.0, [1.6])]),
-                ..Default::default()
-            };
-            let map = EnvironmentMap::procedural(512).unwrap();
-            let cam = Camera {
-                azimuth: 20.0,
-                elevation: 10.0,
-                distance: 2.2,
-                fov_y: 35.0,
-                ..Default::default()
-            };
+            let (vol, tf, map, cam) = super::common::glass_ball_in_the_sky();
             let (w, h) = (64u32, 64u32);
             let mut r = Renderer::new(ctx, &vol, &tf).unwrap();
             r.set_environment(Some(&map)).unwrap();

@@ -184,6 +184,31 @@ pub fn ball(n: u32, r: f32) -> Volume {
     ball_at(n, r, [0.0; 3])
 }
 
+/// A glass ball (η 1.6, radius 0.3 of the box, a one-voxel ramp; 48³) in the procedural
+/// checkered sky, seen from 20° round and 10° up through a 35° field: behind it the rays
+/// of neighbouring pixels leave in very different directions, so one environment lookup
+/// per pixel aliases (the environment-footprint tests of the sweep and the eikonal view).
+pub fn glass_ball_in_the_sky() -> (
+    Volume,
+    TransferFunctions,
+    refrakt::environment::EnvironmentMap,
+    Camera,
+) {
+    let tf = TransferFunctions {
+        eta: refrakt::transfer::Piecewise::new(vec![(0.0, [1.0]), (1.0, [1.6])]),
+        ..Default::default()
+    };
+    let camera = Camera {
+        azimuth: 20.0,
+        elevation: 10.0,
+        distance: 2.2,
+        fov_y: 35.0,
+        ..Default::default()
+    };
+    let map = refrakt::environment::EnvironmentMap::procedural(512).unwrap();
+    (ball(48, 0.3), tf, map, camera)
+}
+
 /// One frame of the refractive plane sweep.
 pub fn sweep(
     ctx: &Context,
