@@ -10,7 +10,13 @@
 #include "environment.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
-layout(push_constant) uniform Push { uint layer; } pc;
+// Mirrored by render::refract::CompositePush.
+layout(push_constant) uniform Push {
+    uint layer;                // the layer the last plane wrote
+    uint volume_reflections;   // 1: the first face's reflection sees the volume
+    uint record_stride;        // the light record keeps every record_stride-th plane
+    uint have_gradient;        // 1: the smoothed gradient volume is bound (binding 15)
+} pc;
 layout(set = 0, binding = 10, rgba32f) uniform writeonly image2D frame;
 layout(set = 0, binding = 11) uniform sampler2D env_map;
 layout(set = 0, binding = 12) uniform sampler2D env_sat;
@@ -19,6 +25,18 @@ layout(set = 0, binding = 13) uniform EnvParams {
                  // z = 1 for the SAT footprint, 0 for a single bilinear lookup
     vec4 mean;   // the SAT's mean offset
 } E;
+
+#include "sweep_reflect.glsl"
+
+// What lies outside the volume in view-space direction d, read at a point: the map
+// (rotated about world up) or the background (the sweep's environment_radiance).
+vec3 environment_at(vec3 d) {
+    if (E.info.x < 0.5) return P.background.rgb;
+    vec3 w = mat3(P.view_to_world) * d;
+    float r = E.info.y;
+    w = vec3(cos(r) * w.x - sin(r) * w.z, w.y, sin(r) * w.x + cos(r) * w.z);
+    return env_bilinear(env_map, env_texel(env_angles(w), textureSize(env_map, 0)));
+}
 
 vec3 world_dir(ivec2 p) {
     ivec2 c = clamp(p, ivec2(0), ivec2(P.camera.zw) - 1);
@@ -54,6 +72,18 @@ void main() {
         env_a = 1.0;
     }
     vec3 rgb = CA.rgb + (1.0 - CA.a) * M * env;
+    // The first face's reflection sees the volume (sweep_reflect.glsl). Off, the loops'
+    // trip counts are zero (llvmpipe runs both sides of a branch, but leaves a loop once
+    // every lane is done).
+    int max_steps = pc.volume_reflections != 0u ? int(4.0 * P.planes.z) : 0;
+    vec3 face, mirrored, weight;
+    float f = first_face((vec2(id) + 0.5) / P.camera.zw, max_steps, face, mirrored, weight);
+    if (f > 0.0) {
+        vec3 env_seen = environment_at(mirrored);
+        vec3 seen = trace_reflected(face, mirrored, env_seen, max(pc.record_stride, 1u),
+                                    max_steps);
+        rgb += weight * f * (seen - env_seen);
+    }
     float a = CA.a + (1.0 - CA.a) * env_a;
     imageStore(frame, id, vec4(rgb, a));
 }

@@ -184,7 +184,19 @@ pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Resu
             Some(refrakt::render::LightTransport::parse(t).context("--light-transport")?);
     }
     if let Some(r) = &args.reflections {
-        o.reflections = Some(refrakt::scene::parse_on_off(r).context("--reflections")?);
+        // "volume" and "environment" say what the reflected part sees (the refractive
+        // sweep; on = environment); on/off whether there is one.
+        let (on, volume) = match r.to_ascii_lowercase().as_str() {
+            "volume" => (true, true),
+            "environment" => (true, false),
+            _ => (
+                refrakt::scene::parse_on_off(r)
+                    .context("--reflections (on, off, environment or volume)")?,
+                false,
+            ),
+        };
+        o.reflections = Some(on);
+        o.reflections_volume = Some(volume);
     }
     o.env_rotation = args.env_rotation;
     if let Some(e) = args.exposure {

@@ -144,6 +144,9 @@ pub struct Scene {
     pub light_spacing: f32,
     /// Fresnel reflection of viewing rays (false: the thesis' model).
     pub reflections: bool,
+    /// With `reflections`, the refractive sweep's first reflection sees the volume
+    /// (`--reflections volume`); false: the environment only.
+    pub reflections_volume: bool,
     pub clip: Option<(Vec3, f32)>,
     pub exposure: f32,
     pub tonemap: ToneOperator,
@@ -174,6 +177,7 @@ pub struct Overrides {
     pub light_spacing: Option<f32>,
     pub light_transport: Option<LightTransport>,
     pub reflections: Option<bool>,
+    pub reflections_volume: Option<bool>,
     /// `Some(None)` removes the scene's clipping plane.
     pub clip: Option<Option<(Vec3, f32)>>,
     pub exposure: Option<f32>,
@@ -220,6 +224,7 @@ impl Scene {
         set(&mut self.light_spacing, o.light_spacing);
         set(&mut self.light_transport, o.light_transport);
         set(&mut self.reflections, o.reflections);
+        set(&mut self.reflections_volume, o.reflections_volume);
         set(&mut self.clip, o.clip);
         set(&mut self.exposure, o.exposure);
         set(&mut self.tonemap, o.tonemap);
@@ -328,6 +333,7 @@ impl Default for Scene {
             light_rays: 2,
             light_spacing: 1.0,
             reflections: true,
+            reflections_volume: false,
             clip: None,
             exposure: 0.0,
             tonemap: ToneOperator::Aces,
@@ -461,6 +467,7 @@ impl Scene {
                 light_rays: self.light_rays,
                 light_spacing: self.light_spacing,
                 reflections: self.reflections,
+                reflections_volume: self.reflections_volume,
                 clip: self.clip,
                 env_rotation: self.env_rotation,
                 ambient: self.ambient_level.unwrap_or([0.0; 3]),

@@ -56,7 +56,10 @@ impl Access {
     pub(crate) fn stage(self) -> vk::PipelineStageFlags2 {
         match self {
             Access::Undefined => vk::PipelineStageFlags2::NONE,
-            Access::TransferDst | Access::TransferSrc => vk::PipelineStageFlags2::COPY,
+            // Copies and blits (synchronization2 tells them apart).
+            Access::TransferDst | Access::TransferSrc => {
+                vk::PipelineStageFlags2::COPY | vk::PipelineStageFlags2::BLIT
+            }
             Access::Sampled => {
                 vk::PipelineStageFlags2::COMPUTE_SHADER
                     | vk::PipelineStageFlags2::FRAGMENT_SHADER

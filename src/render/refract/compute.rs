@@ -40,6 +40,7 @@
 //!
 //! The backward transport is one dispatch per plane with one barrier before it.
 
+use super::pass::RECORD_LAYERS;
 use super::pipelines::{gather_tiles, ComputeSplat};
 use super::*;
 use crate::render::limits::GATHER_CHUNK;
@@ -60,6 +61,9 @@ pub(crate) struct ComputeFrame<'a> {
     /// The splat's fixed-point unit.
     pub(crate) unit: f32,
     pub(crate) dumps: &'a [(StateBuffer, u32, Buffer)],
+    /// Every how many planes the light is kept for the reflections that see the volume
+    /// (none without them).
+    pub(crate) record_stride: Option<u32>,
     /// The planes to record ([`SweepOptions::batch`]).
     pub(crate) batch: std::ops::Range<u32>,
 }
@@ -74,6 +78,24 @@ fn groups(area: Area) -> [u32; 3] {
 }
 
 impl SweepPass {
+    /// Keep plane `plane`'s light (the layer it wrote) in the light record if it is one
+    /// of every `stride` planes; returns whether it was.
+    pub(crate) fn record_light(
+        &self,
+        rec: &mut Recorder,
+        forward: bool,
+        plane: u32,
+        stride: u32,
+    ) -> bool {
+        if !Self::records(plane, stride) {
+            return false;
+        }
+        let light = self.dump_image(forward, StateBuffer::LightColour);
+        let r = &self.light_record;
+        rec.blit_layer(light, plane % 2, &r.image, plane / stride, r.linear);
+        true
+    }
+
     fn push(&self, plane: u32, depth: f32, unit: f32, area: Area) -> ComputePush {
         ComputePush {
             plane,
@@ -107,6 +129,17 @@ impl SweepPass {
             rec.copy_image_to_buffer(image, write, buf);
             rec.transition(image, 0..2, Access::ComputeStorage);
         }
+        if let Some(stride) = f.record_stride {
+            if self.record_light(rec, f.forward, plane, stride) {
+                let image = self.dump_image(f.forward, StateBuffer::LightColour);
+                rec.transition(image, 0..2, Access::ComputeStorage);
+            }
+        }
+    }
+
+    /// Whether plane `plane`'s light is kept in the light record (every `stride`-th).
+    fn records(plane: u32, stride: u32) -> bool {
+        plane % stride == 0 && plane / stride < RECORD_LAYERS
     }
 
     /// Record every plane of the frame as dispatches (see the module docs).
@@ -175,7 +208,11 @@ impl SweepPass {
             // Stage A: the viewing rays of plane i - 1 and the light rays of plane i.
             let view_prev = i.checked_sub(1);
             let light_now = i < n;
-            let dumps_prev = view_prev.is_some_and(|p| f.dumps.iter().any(|d| d.1 == p));
+            // (Keeping the light for the reflections copies out as a dump does.)
+            let dumps_prev = view_prev.is_some_and(|p| {
+                f.dumps.iter().any(|d| d.1 == p)
+                    || f.record_stride.is_some_and(|k| Self::records(p, k))
+            });
             let mut batch = Vec::new();
             if let Some(p) = view_prev {
                 if drop_before != Some(p) {

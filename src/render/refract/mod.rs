@@ -198,6 +198,11 @@ pub(super) fn check(
             MIN_FORWARD.acos().to_degrees()
         );
     }
+    ensure!(
+        !(sweep.reflections && sweep.reflections_volume)
+            || sweep.light_transport != LightTransport::Eikonal,
+        "--reflections volume lights the reflected rays with the planes' light, and with          --light-transport eikonal the light is in the light volume: use --reflections          environment with it, or --model eikonal (whose first reflection sees the volume)"
+    );
     let planes = Planes::for_box(
         camera,
         info.half_extent,
@@ -480,6 +485,6 @@ pub(crate) use eikonal_light::SweepLight;
 pub use levers::{Deposit, Gather, Levers, Region, Splat, SweepPath};
 pub use options::*;
 use params::*;
-pub(crate) use pass::{StateImage, SweepPass};
+pub(crate) use pass::{LightRecord, StateImage, SweepPass};
 pub(crate) use pipelines::Features;
 pub(crate) use traffic::TrafficInputs;

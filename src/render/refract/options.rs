@@ -137,6 +137,11 @@ pub struct SweepOptions {
     /// environment (or background) in the mirrored direction, unoccluded; false = the
     /// thesis' model (no reflection, everything transmitted).
     pub reflections: bool,
+    /// With `reflections`: the first face a viewing ray meets reflects what its mirrored
+    /// ray meets in the volume (traced in the composite, lit by the light the sweep
+    /// computed there; glsl/sweep_reflect.glsl), then the environment; false: the
+    /// environment only (`--reflections environment`, the mirrored ray unoccluded).
+    pub reflections_volume: bool,
     /// Benchmark baseline: run every plane with glsl/sweep_floor.frag, which only carries
     /// the state forward (same passes, barriers, attachments and reads). The image is not
     /// a rendering; the time is the floor the sweep's optics add to.
@@ -179,6 +184,7 @@ impl Default for SweepOptions {
             light_spacing: 1.0,
             plane_flux: false,
             reflections: true,
+            reflections_volume: false,
             floor: false,
             skeleton: false,
             levers: Levers::default(),

@@ -63,6 +63,20 @@ pub(crate) struct ComputePush {
     pub(crate) extent: [i32; 2],
 }
 
+/// Push constants of the composite (glsl/sweep_composite.comp).
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+pub(crate) struct CompositePush {
+    /// The layer the last plane wrote.
+    pub(crate) layer: u32,
+    /// 1: the first face's reflection sees the volume (`--reflections volume`).
+    pub(crate) volume_reflections: u32,
+    /// The light record's stride in planes.
+    pub(crate) record_stride: u32,
+    /// 1: the smoothed gradient volume is bound (binding 15).
+    pub(crate) have_gradient: u32,
+}
+
 /// The forward transport's grid of light rays on the launch plane (one spacing before
 /// plane 0): (x, y of the grid's corner, cell width, cell height) in view units, and its
 /// columns and rows. Every point of every plane's view rectangle traced back along the

@@ -132,6 +132,51 @@ pub(crate) struct SweepPass {
     pub(crate) composite: ComputePipeline,
     pub(crate) output: FrameTarget,
     pub(crate) env_params: Buffer,
+    /// The light the sweep computed, kept for the reflections that see the volume
+    /// (`--reflections volume`, glsl/sweep_reflect.glsl): every `k`-th plane's light
+    /// ([`LightRecord::stride`]) scaled onto a layer of this image by a blit.
+    pub(crate) light_record: LightRecord,
+}
+
+/// The planes' light kept for the composite's reflected rays: at most [`RECORD_LAYERS`]
+/// planes, each at most [`RECORD_SIDE`] texels on its longer side (64 MiB at most, half
+/// floats).
+pub(crate) struct LightRecord {
+    pub(crate) image: Image,
+    /// Whether the blit may filter the state format linearly (optional for 32-bit floats).
+    pub(crate) linear: bool,
+}
+
+/// Planes the light record holds at most: a frame of more planes keeps every k-th.
+pub(crate) const RECORD_LAYERS: u32 = 128;
+/// The light record's longer side at most (texels).
+pub(crate) const RECORD_SIDE: u32 = 256;
+
+impl LightRecord {
+    fn new(ctx: &Context, width: u32, height: u32) -> Result<Self> {
+        let shrink = width.max(height).div_ceil(RECORD_SIDE).max(1);
+        let image = Image::new(
+            ctx,
+            ImageDesc {
+                kind: ImageKind::D2Array,
+                format: vk::Format::R16G16B16A16_SFLOAT,
+                extent: [width.div_ceil(shrink), height.div_ceil(shrink), 1],
+                layers: RECORD_LAYERS,
+                usage: vk::usage::SAMPLED | vk::usage::TRANSFER_DST,
+            },
+            "sweep light record",
+        )?;
+        let linear = ctx.format_supports(
+            STATE_FORMAT,
+            vk::FormatFeatureFlags::BLIT_SRC | vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR,
+        );
+        Ok(Self { image, linear })
+    }
+
+    /// Every how many planes a plane's light is kept, for a frame of `planes` planes.
+    pub(crate) fn stride(planes: u32) -> u32 {
+        planes.div_ceil(RECORD_LAYERS).max(1)
+    }
 }
 
 impl SweepPass {
@@ -418,11 +463,17 @@ impl SweepPass {
             DescriptorSet::new(ctx, &compute_bindings, "sweep (compute)")?.with_explicit_barriers();
         let output = FrameTarget::new(ctx, width, height, "sweep frame")?;
         let env_params = Buffer::uniform::<EnvParams>(ctx, "environment params")?;
+        let light_record = LightRecord::new(ctx, width, height)?;
         let mut composite_bindings = sampled.clone();
         composite_bindings.push(Binding::StorageImage(&output.image));
         composite_bindings.push(Binding::Texture(env.map, sampler));
         composite_bindings.push(Binding::Texture(env.sat, sampler));
         composite_bindings.push(Binding::Uniform(&env_params));
+        // 14: the planes' light for the reflected rays, 15: the smoothed gradient volume
+        // for their faces' normals, or the volume, then never read
+        // (glsl/sweep_reflect.glsl).
+        composite_bindings.push(Binding::Texture(&light_record.image, sampler));
+        composite_bindings.push(Binding::Texture(gradient.unwrap_or(volume), sampler));
         let composite_set = DescriptorSet::new(ctx, &composite_bindings, "sweep composite")?
             .with_explicit_barriers();
         let mut setup_bindings: Vec<Binding> = common.to_vec();
@@ -481,7 +532,7 @@ impl SweepPass {
             ctx,
             shaders::SWEEP_COMPOSITE_COMP,
             &composite_set,
-            4,
+            std::mem::size_of::<CompositePush>() as u32,
             "sweep composite",
         )?;
         Ok(Self {
@@ -523,6 +574,7 @@ impl SweepPass {
             composite,
             output,
             env_params,
+            light_record,
         })
     }
 

@@ -321,6 +321,11 @@ impl SweepPass {
 
         rec.begin_scope("sweep");
         let baseline = sweep.floor || sweep.skeleton;
+        // The planes' light kept for the reflections that see the volume (every
+        // `stride`-th plane; with the eikonal light transport the light is the light
+        // volume's, not a plane's: that transport is refused with them in `check`).
+        let record_stride = (sweep.reflections && sweep.reflections_volume && !baseline)
+            .then(|| LightRecord::stride(planes.count));
         if compute {
             self.record_compute_planes(
                 rec,
@@ -334,6 +339,7 @@ impl SweepPass {
                     ray_image,
                     unit,
                     dumps: &dump_buffers,
+                    record_stride,
                     batch: batch.clone(),
                 },
                 sweep,
@@ -423,6 +429,9 @@ impl SweepPass {
                     }
                     rec.copy_image_to_buffer(self.dump_image(splat.is_some(), *b), write, buf);
                 }
+                if let Some(stride) = record_stride {
+                    self.record_light(rec, splat.is_some(), i, stride);
+                }
             }
         }
         rec.progress(batch.end, planes.count);
@@ -439,12 +448,19 @@ impl SweepPass {
             })
             .collect();
         uses.push(Use::all(&self.output.image, Access::ComputeStorage));
+        uses.push(Use::all(&self.light_record.image, Access::Sampled));
         if last_batch {
+            let push = CompositePush {
+                layer: last,
+                volume_reflections: record_stride.is_some() as u32,
+                record_stride: record_stride.unwrap_or(1),
+                have_gradient: self.have_gradient as u32,
+            };
             rec.pass("composite", &uses, |rec| {
                 rec.dispatch(
                     &self.composite,
                     &self.composite_set,
-                    &last.to_le_bytes(),
+                    bytemuck::bytes_of(&push),
                     groups,
                 )
             })?;

@@ -294,6 +294,64 @@ impl Recorder<'_> {
         }
     }
 
+    /// Scale one layer of `src` onto one layer of `dst` (each layer whole), filtering
+    /// linearly where `linear` (the caller checks the source format can be filtered) and
+    /// taking the nearest texel otherwise. Both are 2D images or 2D arrays.
+    pub fn blit_layer(
+        &mut self,
+        src: &Image,
+        src_layer: u32,
+        dst: &Image,
+        dst_layer: u32,
+        linear: bool,
+    ) {
+        self.transition_many(&[
+            (src, src_layer..src_layer + 1, Access::TransferSrc),
+            (dst, dst_layer..dst_layer + 1, Access::TransferDst),
+        ]);
+        let corner = |image: &Image| {
+            let [w, h, _] = image.desc.extent;
+            [
+                vk::Offset3D::default(),
+                vk::Offset3D {
+                    x: w as i32,
+                    y: h as i32,
+                    z: 1,
+                },
+            ]
+        };
+        let layer = |l: u32| vk::ImageSubresourceLayers {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            mip_level: 0,
+            base_array_layer: l,
+            layer_count: 1,
+        };
+        let region = vk::ImageBlit {
+            src_subresource: layer(src_layer),
+            src_offsets: corner(src),
+            dst_subresource: layer(dst_layer),
+            dst_offsets: corner(dst),
+        };
+        let filter = if linear {
+            vk::Filter::LINEAR
+        } else {
+            vk::Filter::NEAREST
+        };
+        // SAFETY: the layers are in TRANSFER_SRC / TRANSFER_DST_OPTIMAL after the
+        // transition; the regions lie within both images.
+        unsafe {
+            self.device().cmd_blit_image(
+                self.cmd,
+                src.raw,
+                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                dst.raw,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &[region],
+                filter,
+            )
+        };
+    }
+
     /// Write `bytes` into a uniform buffer (made with [`Buffer::uniform`]) as part of the
     /// command stream, between a barrier after every earlier shader read of it and one
     /// before every later read. Parameters written this way belong to the submission that
