@@ -16,6 +16,7 @@ layout(push_constant) uniform Push {
     uint volume_reflections;   // 1: the first face's reflection sees the volume
     uint record_stride;        // the light record keeps every record_stride-th plane
     uint have_gradient;        // 1: the smoothed gradient volume is bound (binding 15)
+    uint light_from_volume;    // 1: the eikonal transport's light volume (binding 16)
 } pc;
 layout(set = 0, binding = 10, rgba32f) uniform writeonly image2D frame;
 layout(set = 0, binding = 11) uniform sampler2D env_map;
@@ -75,13 +76,12 @@ void main() {
     // The first face's reflection sees the volume (sweep_reflect.glsl). Off, the loops'
     // trip counts are zero (llvmpipe runs both sides of a branch, but leaves a loop once
     // every lane is done).
-    int max_steps = pc.volume_reflections != 0u ? int(4.0 * P.planes.z) : 0;
     vec3 face, mirrored, weight;
-    float f = first_face((vec2(id) + 0.5) / P.camera.zw, max_steps, face, mirrored, weight);
+    float f = first_face((vec2(id) + 0.5) / P.camera.zw, pc.volume_reflections != 0u, face,
+                         mirrored, weight);
     if (f > 0.0) {
         vec3 env_seen = environment_at(mirrored);
-        vec3 seen = trace_reflected(face, mirrored, env_seen, max(pc.record_stride, 1u),
-                                    max_steps);
+        vec3 seen = trace_reflected(face, mirrored, env_seen, max(pc.record_stride, 1u));
         rgb += weight * f * (seen - env_seen);
     }
     float a = CA.a + (1.0 - CA.a) * env_a;

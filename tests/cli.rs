@@ -415,7 +415,7 @@ fn bad_sweep_options_are_clear_errors() {
     assert_clean_failure(&["render", "--clip", "0,0,1", "-o", "x.png"], "--clip");
     assert_clean_failure(
         &["render", "--reflections", "maybe", "-o", "x.png"],
-        "--reflections: \"maybe\" is neither on nor off",
+        "--reflections (on, off, environment or volume): \"maybe\" is neither on nor off",
     );
     // The sweep has no per-step sampling: the flag is refused there, not ignored.
     assert_clean_failure(
@@ -1523,5 +1523,56 @@ fn abbe_splits_the_light_by_colour_and_is_refused_elsewhere() {
     assert_clean_failure(
         &a,
         "[render] abbe only applies to --model eikonal, not refract",
+    );
+}
+
+/// What the reflected part sees, from a flag or a scene file: `--reflections volume` (the
+/// default, also `on`) and `environment`, `reflections = "volume"` / `"environment"` in
+/// `[render]` give the same frames as the flags (to the byte), the two differ where the
+/// glass reflects the floor, and a word that is neither is refused naming the key.
+#[test]
+fn reflections_volume_or_environment_from_flags_and_files() {
+    let dir = tempfile::tempdir().unwrap();
+    // The sphere on its floor seen from 8° above: its lower half mirrors the floor.
+    let scene = |name: &str, key: &str| {
+        let path = dir.path().join(format!("{name}.toml"));
+        std::fs::write(
+            &path,
+            format!(
+                "[volume]\nbuiltin = \"sphere-on-floor\"\nsize = 24\n[camera]\nelevation = 8\n\
+                 [render]\nwidth = 24\nheight = 24\n{key}"
+            ),
+        )
+        .unwrap();
+        path
+    };
+    let plain = scene("plain", "");
+    let render = |file: &Path, flags: &[&str], name: &str| -> Vec<u8> {
+        let out = dir.path().join(name);
+        let mut args = vec!["render", file.to_str().unwrap()];
+        args.extend_from_slice(flags);
+        args.extend_from_slice(&["-o", out.to_str().unwrap()]);
+        let o = refrakt(&args);
+        assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+        std::fs::read(&out).unwrap()
+    };
+    let default = render(&plain, &[], "default.png");
+    let on = render(&plain, &["--reflections", "on"], "on.png");
+    let volume = render(&plain, &["--reflections", "volume"], "volume.png");
+    let environment = render(&plain, &["--reflections", "environment"], "environment.png");
+    assert!(default == volume && on == volume, "the default is volume");
+    assert!(
+        volume != environment,
+        "the glass reflects the floor, not only the sky"
+    );
+    for (value, want) in [("\"volume\"", &volume), ("\"environment\"", &environment)] {
+        let file = scene("keyed", &format!("reflections = {value}\n"));
+        let from_file = render(&file, &[], "file.png");
+        assert!(&from_file == want, "reflections = {value} in a scene file");
+    }
+    let file = scene("bad", "reflections = \"mirror\"\n");
+    assert_clean_failure(
+        &["render", file.to_str().unwrap(), "-o", "x.png"],
+        "[render] reflections = \"mirror\": give true, false, \"volume\" or \"environment\"",
     );
 }

@@ -185,18 +185,19 @@ pub fn scene_with_refract_only(args: &SceneArgs, extra: &[&'static str]) -> Resu
     }
     if let Some(r) = &args.reflections {
         // "volume" and "environment" say what the reflected part sees (the refractive
-        // sweep; on = environment); on/off whether there is one.
+        // sweep); on/off whether there is one (on: what the scene says, volume by
+        // default).
         let (on, volume) = match r.to_ascii_lowercase().as_str() {
-            "volume" => (true, true),
-            "environment" => (true, false),
+            "volume" => (true, Some(true)),
+            "environment" => (true, Some(false)),
             _ => (
                 refrakt::scene::parse_on_off(r)
                     .context("--reflections (on, off, environment or volume)")?,
-                false,
+                None,
             ),
         };
         o.reflections = Some(on);
-        o.reflections_volume = Some(volume);
+        o.reflections_volume = volume;
     }
     o.env_rotation = args.env_rotation;
     if let Some(e) = args.exposure {

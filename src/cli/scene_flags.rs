@@ -237,12 +237,13 @@ pub struct SceneArgs {
     #[arg(help_heading = "Light", long, value_name = "PIXELS")]
     pub light_spacing: Option<f32>,
     /// Fresnel reflection of viewing rays at changes of η (refract, eikonal). refract:
-    /// "environment" (or "on"): the reflected part sees the environment (or background)
-    /// in the mirrored direction, not occluded by the volume; "volume": the first face's
-    /// reflected ray is traced through the volume, lit by the light the sweep computed
-    /// (glass shows the floor it stands on), later faces see the environment. eikonal
-    /// always traces the first face's reflection through the volume. "off" is the
-    /// thesis' model, everything transmitted [default: on].
+    /// "volume" (the default, also "on"): the first face's reflected ray is traced
+    /// through the volume, lit by the light the sweep computed (glass shows the floor it
+    /// stands on), later faces' see the environment; "environment": every reflected
+    /// part sees the environment (or background) in the mirrored direction, not
+    /// occluded by the volume. eikonal always traces the first face's reflection
+    /// through the volume. "off" is the thesis' model, everything transmitted
+    /// [default: on].
     #[arg(help_heading = "Look", long, value_name = "on|off|environment|volume")]
     pub reflections: Option<String>,
     /// Clipping plane "nx,ny,nz,offset" in world space: opacity is zero where

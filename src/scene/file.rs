@@ -101,6 +101,15 @@ struct LightTable {
     softness: Option<f32>,
 }
 
+/// `[render] reflections`: on or off, or what the reflected part sees ("volume",
+/// "environment").
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum Reflections {
+    On(bool),
+    Mode(String),
+}
+
 /// `[light] towards`: a direction, or "env" (the environment map's brightest region).
 #[derive(Deserialize)]
 #[serde(untagged)]
@@ -131,7 +140,7 @@ struct RenderTable {
     light_transport: Option<String>,
     light_rays: Option<u32>,
     light_spacing: Option<f32>,
-    reflections: Option<bool>,
+    reflections: Option<Reflections>,
     clip: Option<[f32; 4]>,
     exposure: Option<f32>,
     tonemap: Option<String>,

@@ -145,7 +145,8 @@ pub struct Scene {
     /// Fresnel reflection of viewing rays (false: the thesis' model).
     pub reflections: bool,
     /// With `reflections`, the refractive sweep's first reflection sees the volume
-    /// (`--reflections volume`); false: the environment only.
+    /// (`--reflections volume`, the default); false: the environment only
+    /// (`--reflections environment`).
     pub reflections_volume: bool,
     pub clip: Option<(Vec3, f32)>,
     pub exposure: f32,
@@ -333,7 +334,7 @@ impl Default for Scene {
             light_rays: 2,
             light_spacing: 1.0,
             reflections: true,
-            reflections_volume: false,
+            reflections_volume: true,
             clip: None,
             exposure: 0.0,
             tonemap: ToneOperator::Aces,

@@ -198,11 +198,6 @@ pub(super) fn check(
             MIN_FORWARD.acos().to_degrees()
         );
     }
-    ensure!(
-        !(sweep.reflections && sweep.reflections_volume)
-            || sweep.light_transport != LightTransport::Eikonal,
-        "--reflections volume lights the reflected rays with the planes' light, and with          --light-transport eikonal the light is in the light volume: use --reflections          environment with it, or --model eikonal (whose first reflection sees the volume)"
-    );
     let planes = Planes::for_box(
         camera,
         info.half_extent,

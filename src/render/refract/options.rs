@@ -134,13 +134,15 @@ pub struct SweepOptions {
     /// the images are the fluence's.
     pub plane_flux: bool,
     /// Fresnel reflection of viewing rays at changes of η: the reflected fraction sees the
-    /// environment (or background) in the mirrored direction, unoccluded; false = the
-    /// thesis' model (no reflection, everything transmitted).
+    /// environment (or background) in the mirrored direction, unoccluded (at the first
+    /// face, the volume, with `reflections_volume`); false = the thesis' model (no
+    /// reflection, everything transmitted).
     pub reflections: bool,
     /// With `reflections`: the first face a viewing ray meets reflects what its mirrored
     /// ray meets in the volume (traced in the composite, lit by the light the sweep
     /// computed there; glsl/sweep_reflect.glsl), then the environment; false: the
     /// environment only (`--reflections environment`, the mirrored ray unoccluded).
+    /// True by default.
     pub reflections_volume: bool,
     /// Benchmark baseline: run every plane with glsl/sweep_floor.frag, which only carries
     /// the state forward (same passes, barriers, attachments and reads). The image is not
@@ -184,7 +186,7 @@ impl Default for SweepOptions {
             light_spacing: 1.0,
             plane_flux: false,
             reflections: true,
-            reflections_volume: false,
+            reflections_volume: true,
             floor: false,
             skeleton: false,
             levers: Levers::default(),

@@ -75,6 +75,8 @@ pub(crate) struct CompositePush {
     pub(crate) record_stride: u32,
     /// 1: the smoothed gradient volume is bound (binding 15).
     pub(crate) have_gradient: u32,
+    /// 1: the light is the eikonal transport's light volume (binding 16), not the planes'.
+    pub(crate) light_from_volume: u32,
 }
 
 /// The forward transport's grid of light rays on the launch plane (one spacing before

@@ -139,8 +139,9 @@ pub(crate) struct SweepPass {
 }
 
 /// The planes' light kept for the composite's reflected rays: at most [`RECORD_LAYERS`]
-/// planes, each at most [`RECORD_SIDE`] texels on its longer side (64 MiB at most, half
-/// floats).
+/// planes, each at most [`RECORD_SIDE`] texels on its longer side (16 MiB at most, half
+/// floats). (At 256 texels a 512² demo frame spent 1 s of its 31 s sweep on the blits on
+/// lavapipe; what a reflection shows of the light needs less.)
 pub(crate) struct LightRecord {
     pub(crate) image: Image,
     /// Whether the blit may filter the state format linearly (optional for 32-bit floats).
@@ -150,7 +151,7 @@ pub(crate) struct LightRecord {
 /// Planes the light record holds at most: a frame of more planes keeps every k-th.
 pub(crate) const RECORD_LAYERS: u32 = 128;
 /// The light record's longer side at most (texels).
-pub(crate) const RECORD_SIDE: u32 = 256;
+pub(crate) const RECORD_SIDE: u32 = 128;
 
 impl LightRecord {
     fn new(ctx: &Context, width: u32, height: u32) -> Result<Self> {
@@ -474,6 +475,11 @@ impl SweepPass {
         // (glsl/sweep_reflect.glsl).
         composite_bindings.push(Binding::Texture(&light_record.image, sampler));
         composite_bindings.push(Binding::Texture(gradient.unwrap_or(volume), sampler));
+        // 16: the eikonal transport's light volume, which lights the reflected rays with
+        // that transport (or a placeholder never read).
+        composite_bindings.push(Binding::Storage(
+            inputs.state::<super::SweepLight>()?.buffer(),
+        ));
         let composite_set = DescriptorSet::new(ctx, &composite_bindings, "sweep composite")?
             .with_explicit_barriers();
         let mut setup_bindings: Vec<Binding> = common.to_vec();

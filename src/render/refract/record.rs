@@ -322,9 +322,11 @@ impl SweepPass {
         rec.begin_scope("sweep");
         let baseline = sweep.floor || sweep.skeleton;
         // The planes' light kept for the reflections that see the volume (every
-        // `stride`-th plane; with the eikonal light transport the light is the light
-        // volume's, not a plane's: that transport is refused with them in `check`).
-        let record_stride = (sweep.reflections && sweep.reflections_volume && !baseline)
+        // `stride`-th plane; with the eikonal light transport the reflected rays read
+        // the light volume, and nothing is kept).
+        let volume_reflections = sweep.reflections && sweep.reflections_volume && !baseline;
+        let record_stride = (volume_reflections
+            && sweep.light_transport != LightTransport::Eikonal)
             .then(|| LightRecord::stride(planes.count));
         if compute {
             self.record_compute_planes(
@@ -452,9 +454,10 @@ impl SweepPass {
         if last_batch {
             let push = CompositePush {
                 layer: last,
-                volume_reflections: record_stride.is_some() as u32,
+                volume_reflections: volume_reflections as u32,
                 record_stride: record_stride.unwrap_or(1),
                 have_gradient: self.have_gradient as u32,
+                light_from_volume: (sweep.light_transport == LightTransport::Eikonal) as u32,
             };
             rec.pass("composite", &uses, |rec| {
                 rec.dispatch(

@@ -386,7 +386,22 @@ impl SceneFile {
                 o.light_transport =
                     Some(LightTransport::parse(t).context("[render] light_transport")?);
             }
-            o.reflections = r.reflections;
+            match &r.reflections {
+                None => {}
+                Some(Reflections::On(on)) => o.reflections = Some(*on),
+                Some(Reflections::Mode(m)) => {
+                    let volume = match m.to_ascii_lowercase().as_str() {
+                        "volume" => true,
+                        "environment" => false,
+                        other => bail!(
+                            "[render] reflections = \"{other}\": give true, false, \"volume\" \
+                             or \"environment\""
+                        ),
+                    };
+                    o.reflections = Some(true);
+                    o.reflections_volume = Some(volume);
+                }
+            }
             o.clip = r.clip.map(|c| Some((Vec3::new(c[0], c[1], c[2]), c[3])));
             o.exposure = r.exposure;
             if let Some(lights) = &r.lights {
