@@ -9,7 +9,10 @@
 
 mod common;
 
-use common::{f32_volume, face_on, single_scattering_block, with_context};
+use common::{
+    f32_volume, face_on, glass_slab, red_towards_camera_green_beyond, single_scattering_block,
+    with_context,
+};
 use glam::Vec3;
 use refrakt::light::{Light, LightSource};
 use refrakt::render::{Model, RenderOptions, Renderer, ScatterOptions};
@@ -319,44 +322,6 @@ fn the_light_is_simulated_again_only_when_it_changes_and_lights_add() {
     });
 }
 
-/// A slab of clear glass (η 1.5) across the box at |z| < 0.25 with one-voxel faces (value
-/// 0.4), and with `block` an opaque blue block in front of it (value 1: y < 0.2, z > 0.35),
-/// below the path of a viewing ray from 45° above through the centre.
-fn glass_slab(n: u32, block: bool) -> (refrakt::volume::Volume, TransferFunctions) {
-    use refrakt::transfer::Piecewise;
-    let nf = n as f32;
-    let volume = f32_volume(n, |p| {
-        if block && p[1] < 0.2 && p[2] > 0.35 {
-            1.0
-        } else {
-            0.4 * ((0.25 - p[2].abs()) * nf + 0.5).clamp(0.0, 1.0)
-        }
-    });
-    let tf = TransferFunctions {
-        colour: Piecewise::new(vec![
-            (0.0, [0.0; 3]),
-            (0.6, [0.0; 3]),
-            (0.7, [0.0, 0.0, 1.0]),
-        ]),
-        opacity: Piecewise::new(vec![(0.0, [0.0]), (0.6, [0.0]), (0.7, [1.0])]),
-        eta: Piecewise::new(vec![(0.0, [1.0]), (0.4, [1.5]), (0.5, [1.5]), (0.6, [1.0])]),
-        ..Default::default()
-    };
-    (volume, tf)
-}
-
-/// An environment red where a direction points to +z (the camera's side of the slab) and
-/// green where it points to -z.
-fn red_towards_camera_green_beyond() -> refrakt::environment::EnvironmentMap {
-    common::environment_from(256, |d| {
-        if d.z > 0.0 {
-            [1.0, 0.0, 0.0, 1.0]
-        } else {
-            [0.0, 1.0, 0.0, 1.0]
-        }
-    })
-}
-
 /// A 9² frame of the slab at sample distance `sd`, lit from behind the slab through the
 /// glass at normal incidence (a wavefront that needs no refinement: the default light's
 /// took the simulator a minute on lavapipe).
@@ -389,7 +354,7 @@ fn slab_options(sd: f32) -> RenderOptions {
 #[test]
 fn faces_reflect_as_fresnel_says() {
     with_context(|ctx| {
-        let (volume, tf) = glass_slab(32, false);
+        let (volume, tf) = glass_slab(32, None);
         let mut renderer = Renderer::new(ctx, &volume, &tf).unwrap();
         let env = red_towards_camera_green_beyond();
         renderer.set_environment(Some(&env)).unwrap();
@@ -440,7 +405,7 @@ fn a_reflection_sees_the_volume_not_the_sky() {
         let r = 0.050245f32;
         let mut seen = Vec::new();
         for block in [false, true] {
-            let (volume, tf) = glass_slab(32, block);
+            let (volume, tf) = glass_slab(32, block.then_some((0.2, 0.35)));
             let mut renderer = Renderer::new(ctx, &volume, &tf).unwrap();
             renderer.set_environment(Some(&env)).unwrap();
             let frame = renderer.render(Model::Eikonal, &camera, &opts).unwrap();
@@ -648,7 +613,7 @@ fn the_environment_behind_glass_is_averaged_over_the_pixel() {
 #[test]
 fn the_light_simulation_reports_its_progress() {
     with_context(|ctx| {
-        let (volume, tf) = glass_slab(32, true);
+        let (volume, tf) = glass_slab(32, Some((0.2, 0.35)));
         let mut renderer = Renderer::new(ctx, &volume, &tf).unwrap();
         let lines = std::sync::Arc::new(std::sync::Mutex::new(Vec::<String>::new()));
         let sink = lines.clone();

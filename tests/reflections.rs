@@ -5,7 +5,7 @@
 
 mod common;
 
-use common::{f32_volume, face_on, with_context};
+use common::{f32_volume, face_on, glass_slab, red_towards_camera_green_beyond, with_context};
 use glam::Vec3;
 use refrakt::light::{Light, LightSource};
 use refrakt::render::{Camera, LightTransport, Model, RenderOptions, Renderer};
@@ -21,48 +21,11 @@ fn fresnel(theta: f64, eta: f64) -> f64 {
     0.5 * (rs + rp)
 }
 
-/// A slab of clear glass (η 1.5) across the box at |z| < 0.25 with one-voxel faces (value
-/// 0.4), and with `block` an opaque blue block in front of it (value 1: y < 0.15, z > 0.4),
-/// below the path of the viewing ray from 45° above through the centre and in the path of
-/// that ray's reflection at the slab's front face, far enough from the face (5.8 voxels)
-/// that the face's smoothed normal does not see it.
-fn glass_slab(n: u32, block: bool) -> (refrakt::volume::Volume, TransferFunctions) {
-    let nf = n as f32;
-    let volume = f32_volume(n, |p| {
-        if block && p[1] < 0.15 && p[2] > 0.4 {
-            1.0
-        } else {
-            0.4 * ((0.25 - p[2].abs()) * nf + 0.5).clamp(0.0, 1.0)
-        }
-    });
-    let tf = TransferFunctions {
-        colour: Piecewise::new(vec![
-            (0.0, [0.0; 3]),
-            (0.6, [0.0; 3]),
-            (0.7, [0.0, 0.0, 1.0]),
-        ]),
-        opacity: Piecewise::new(vec![(0.0, [0.0]), (0.6, [0.0]), (0.7, [1.0])]),
-        eta: Piecewise::new(vec![(0.0, [1.0]), (0.4, [1.5]), (0.5, [1.5]), (0.6, [1.0])]),
-        ..Default::default()
-    };
-    (volume, tf)
-}
-
-/// An environment red where a direction points to +z (the camera's side of the slab) and
-/// green where it points to -z.
-fn red_towards_camera_green_beyond() -> refrakt::environment::EnvironmentMap {
-    common::environment_from(256, |d| {
-        if d.z > 0.0 {
-            [1.0, 0.0, 0.0, 1.0]
-        } else {
-            [0.0, 1.0, 0.0, 1.0]
-        }
-    })
-}
-
 /// The first face reflects the volume, with the Fresnel weight the environment had. Unlit
-/// (every sample's light 1, the diagnostic), the glass slab seen through its centre from
-/// 45° above: the front face mirrors the viewing ray down towards the camera's side. With
+/// (every sample's light 1, the diagnostic), the glass slab (`common::glass_slab`, its
+/// block at y < 0.15, z > 0.4: 5.8 voxels from the face, beyond the reach of the face's
+/// smoothed normal) seen through its centre from 45° above: the front face mirrors the
+/// viewing ray down towards the camera's side. With
 /// the environment only, red is R (2 − R) (the front face's R and the back face's
 /// (1 − R) R, both looking towards +z) and green the (1 − R)² that passes; with the
 /// volume, the front face's mirrored ray meets the opaque blue block, so blue is R times
@@ -87,7 +50,7 @@ fn the_first_face_reflects_the_block_with_the_weight_the_sky_had() {
             let mut seen = Vec::new();
             let mut block_seen = 0.0;
             for block in [false, true] {
-                let (volume, tf) = glass_slab(32, block);
+                let (volume, tf) = glass_slab(32, block.then_some((0.15, 0.4)));
                 let mut renderer = Renderer::new(ctx, &volume, &tf).unwrap();
                 renderer.set_environment(Some(&env)).unwrap();
                 for volume_reflections in [false, true] {

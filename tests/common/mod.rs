@@ -209,6 +209,43 @@ pub fn glass_ball_in_the_sky() -> (
     (ball(48, 0.3), tf, map, camera)
 }
 
+/// A slab of clear glass (η 1.5) across the box at |z| < 0.25 with one-voxel faces (value
+/// 0.4), and with `block` = (top, front) an opaque blue block in front of it (value 1:
+/// y < top, z > front): the Fresnel tests of the eikonal view and the sweep, whose
+/// viewing ray from 45° above through the centre passes above the block and whose
+/// reflection at the slab's front face runs into it.
+pub fn glass_slab(n: u32, block: Option<(f32, f32)>) -> (Volume, TransferFunctions) {
+    use refrakt::transfer::Piecewise;
+    let nf = n as f32;
+    let volume = f32_volume(n, |p| match block {
+        Some((top, front)) if p[1] < top && p[2] > front => 1.0,
+        _ => 0.4 * ((0.25 - p[2].abs()) * nf + 0.5).clamp(0.0, 1.0),
+    });
+    let tf = TransferFunctions {
+        colour: Piecewise::new(vec![
+            (0.0, [0.0; 3]),
+            (0.6, [0.0; 3]),
+            (0.7, [0.0, 0.0, 1.0]),
+        ]),
+        opacity: Piecewise::new(vec![(0.0, [0.0]), (0.6, [0.0]), (0.7, [1.0])]),
+        eta: Piecewise::new(vec![(0.0, [1.0]), (0.4, [1.5]), (0.5, [1.5]), (0.6, [1.0])]),
+        ..Default::default()
+    };
+    (volume, tf)
+}
+
+/// An environment red where a direction points to +z (the camera's side of the slab of
+/// [`glass_slab`]) and green where it points to -z.
+pub fn red_towards_camera_green_beyond() -> refrakt::environment::EnvironmentMap {
+    environment_from(256, |d| {
+        if d.z > 0.0 {
+            [1.0, 0.0, 0.0, 1.0]
+        } else {
+            [0.0, 1.0, 0.0, 1.0]
+        }
+    })
+}
+
 /// One frame of the refractive plane sweep.
 pub fn sweep(
     ctx: &Context,
