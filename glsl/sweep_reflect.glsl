@@ -66,8 +66,11 @@ layout(std430, set = 0, binding = 16) readonly buffer LightVolume {
 // otherwise the recorded planes' either side of p's depth, bilinear within each (the
 // record's sampler), linear between them. (Both read, one chosen: see trace_reflected.)
 vec3 recorded_light(vec3 p, uint stride) {
+    // Without the eikonal transport binding 16 holds a placeholder of two texels: the
+    // lookup is then made on a grid of one voxel, which reads only those.
+    bool from_volume = pc.light_from_volume != 0u;
     vec3 fluence, direction;
-    light_volume_at(to_tex(p), P.volume_dims.xyz, fluence, direction);
+    light_volume_at(to_tex(p), from_volume ? P.volume_dims.xyz : vec3(1.0), fluence, direction);
     float last = P.planes.z - 1.0;
     float f = clamp((p.z - P.planes.x) / P.planes.y, 0.0, last);
     float top = min(floor(last / float(stride)), float(textureSize(light_record, 0).z - 1));
@@ -77,7 +80,7 @@ vec3 recorded_light(vec3 p, uint stride) {
     vec2 uv = project(p);
     vec3 a = textureLod(light_record, vec3(uv, l0), 0.0).rgb;
     vec3 b = textureLod(light_record, vec3(uv, l1), 0.0).rgb;
-    return pc.light_from_volume != 0u ? fluence : mix(a, b, layer - l0);
+    return from_volume ? fluence : mix(a, b, layer - l0);
 }
 
 // Where view-space ray o + t d is inside the volume's box: [t0, t1] (t0 > t1: never).

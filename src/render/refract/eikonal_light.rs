@@ -2,9 +2,11 @@
 //! state: the eikonal model's light volume ([`LightVolume`], simulated by the adaptive
 //! wavefront light simulator for every light), made on the first frame that asks for this
 //! transport and simulated again when the lights, the transfer functions or the η scale
-//! change. The planes read it at binding 26 (glsl/sweep_light.glsl, `volume_light`); the
-//! other transports never read that binding, which a placeholder then fills, so the
-//! volume's memory is spent only where it is used.
+//! change. The planes read it at binding 26 (glsl/sweep_light.glsl, `volume_light`), the
+//! composite's reflected rays at binding 16 (glsl/sweep_reflect.glsl); with the other
+//! transports a placeholder of two texels fills those bindings (the planes never read it,
+//! the composite reads only those two and discards them), so the volume's memory is
+//! spent only where it is used.
 
 use anyhow::Result;
 
