@@ -8,7 +8,7 @@ mod common;
 use common::{f32_volume, face_on, glass_slab, red_towards_camera_green_beyond, with_context};
 use glam::Vec3;
 use refrakt::light::{Light, LightSource};
-use refrakt::render::{Camera, LightTransport, Model, RenderOptions, Renderer};
+use refrakt::render::{Camera, LightTransport, Model, RenderOptions, Renderer, SweepPath};
 use refrakt::transfer::{Piecewise, TransferFunctions};
 
 /// Unpolarised Fresnel reflectance from air into η (eq. 4.12 written with the two
@@ -178,7 +178,8 @@ fn fog_layer(c: f64, sigma: f64, h: f64, sin_e: f64) -> f64 {
 /// `fog_layer`, and they must agree with each other within 3 % (the sweep's light
 /// against Beer–Lambert; measured 0.957–0.970 at sample distance 1, 0.979–0.980 at 0.5).
 /// Every face pixel whose mirrored ray crosses the whole layer is held to 6 % of R L
-/// (measured +1.3 to +3.3 % at sample distance 1, +0.3 to +2.0 % at 0.5). With the
+/// (measured +1.3 to +3.3 % at sample distance 1, +0.3 to +2.0 % at 0.5; the compute
+/// sweep path the same to the digit). The backward transport: −3.0 to +2.0 %. With the
 /// eikonal light transport the mirrored ray reads the light volume instead (the same
 /// bounds; measured −2.2 to +0.8 %). Breaks it: the
 /// mirrored ray lit by the light at the face for its whole length (+29 %).
@@ -197,10 +198,14 @@ fn the_mirrored_ray_is_lit_by_the_sweeps_light() {
         // σ per world unit: opacity α per reference step, a voxel (1/n) in this box.
         let sigma = -(1.0 - alpha).ln() * n as f64;
         let (fog_top, floor, face) = (-0.25f32, -0.5f32, -0.35f32);
-        for (sd, transport) in [
-            (1.0f32, LightTransport::Forward),
-            (0.5, LightTransport::Forward),
-            (1.0, LightTransport::Eikonal),
+        // Both sweep paths keep the light (lavapipe draws the forward transport's planes
+        // and dispatches the backward one's; the forward one dispatched too).
+        for (sd, transport, path) in [
+            (1.0f32, LightTransport::Forward, SweepPath::Auto),
+            (0.5, LightTransport::Forward, SweepPath::Auto),
+            (1.0, LightTransport::Forward, SweepPath::Compute),
+            (1.0, LightTransport::Backward, SweepPath::Auto),
+            (1.0, LightTransport::Eikonal, SweepPath::Auto),
         ] {
             let mut frames = Vec::new();
             for volume_reflections in [false, true] {
@@ -219,6 +224,7 @@ fn the_mirrored_ray_is_lit_by_the_sweeps_light() {
                 opts.sweep.specular = 0.0;
                 opts.sweep.reflections_volume = volume_reflections;
                 opts.sweep.light_transport = transport;
+                opts.sweep.levers.sweep = path;
                 frames.push(
                     renderer
                         .render(Model::Refract, &camera, &opts)
@@ -258,7 +264,7 @@ fn the_mirrored_ray_is_lit_by_the_sweeps_light() {
             }
             let mean = scales.iter().sum::<f64>() / scales.len() as f64;
             eprintln!(
-                "sd {sd}, {transport:?}: fog scale from {} direct pixels: {scales:.4?}",
+                "sd {sd}, {transport:?}, {path:?}: fog scale from {} direct pixels: {scales:.4?}",
                 scales.len()
             );
             assert!(scales.len() >= 3, "{scales:?}");
@@ -268,7 +274,9 @@ fn the_mirrored_ray_is_lit_by_the_sweeps_light() {
             assert!(faces.len() >= 3, "{faces:?}");
             for (y, r, sin_e, added) in &faces {
                 let want = r * fog_layer(mean, sigma, (fog_top - floor) as f64, *sin_e);
-                eprintln!("sd {sd}, {transport:?}: row {y}: added {added:.5}, R L {want:.5}");
+                eprintln!(
+                    "sd {sd}, {transport:?}, {path:?}: row {y}: added {added:.5}, R L {want:.5}"
+                );
                 assert!(
                     (added / want - 1.0).abs() < 0.06,
                     "sd {sd}, row {y}: {added} against {want}"
