@@ -96,6 +96,11 @@ layout(std430, set = 0, binding = 6) readonly buffer Light {
 // The environment's summed-area table (render/sat.rs; texelFetch only).
 layout(set = 0, binding = 7) uniform sampler2D environment_sat;
 
+// Whether eta is the cubic B-spline of the values (`--cubic-eta 1`: smooth glass; the
+// trilinear field's iso-surfaces are corrugated at the voxels' period and scatter the
+// environment seen through glass into speckle), ray_equation.glsl's RAY_CUBIC.
+layout(constant_id = 0) const bool VIEW_CUBIC = false;
+#define RAY_CUBIC VIEW_CUBIC
 #define RAY_VOLUME volume
 #define RAY_TF tf
 #define RAY_HALF P.box_half.xyz

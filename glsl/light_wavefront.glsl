@@ -131,10 +131,14 @@ layout(constant_id = 1) const bool WAVEFRONT_CLEAR = true;
 // branch even where its condition is uniform (the deposits' atomics, masked off, cost as
 // much as when they add).
 layout(constant_id = 3) const bool WAVEFRONT_FLUENCE = false;
+// Whether the corners take eta from the cubic B-spline of the values (RayGradient::Cubic,
+// ray_equation.glsl's RAY_CUBIC) instead of the trilinear field.
+layout(constant_id = 4) const bool WAVEFRONT_CUBIC = false;
 // Cells the dilation reaches along each axis: a corner moving at most 3 voxels per axis
 // in a cycle, with the gradient's differences 0.05 voxels either side and the trilinear
-// cell around each point, reads cells at most 4 from its start's.
-#define CLEAR_REACH 4
+// cell around each point, reads cells at most 4 from its start's; the cubic B-spline
+// reads one voxel more either side of the cell, so one cell more.
+#define CLEAR_REACH (WAVEFRONT_CUBIC ? 5 : 4)
 
 layout(push_constant) uniform Push {
     vec4 half_extent;  // xyz: the box's half extent; w: the reference step (world)
@@ -158,6 +162,7 @@ layout(push_constant) uniform Push {
 #define RAY_REF_STEP pc.half_extent.w
 #define RAY_ETA_SCALE pc.dims.w
 #define RAY_FIELD field
+#define RAY_CUBIC WAVEFRONT_CUBIC
 #define RAY_USE_FIELD WAVEFRONT_FIELD
 #include "ray_equation.glsl"
 

@@ -15,9 +15,13 @@
 //   RAY_DIMS     the volume's size in voxels (vec3),
 //   RAY_REF_STEP the reference step (world units: the smallest voxel side),
 //   RAY_ETA_SCALE the refractive-index scale k: eta' = 1 + k (eta_tf - 1),
-// and optionally RAY_FIELD (below).
+// and optionally RAY_FIELD (below) and RAY_CUBIC (a bool, usually a specialization
+// constant: eta from the cubic B-spline of the values, below; false when not defined).
 #ifndef REFRAKT_RAY_EQUATION_GLSL
 #define REFRAKT_RAY_EQUATION_GLSL
+#ifndef RAY_CUBIC
+#define RAY_CUBIC false
+#endif
 #include "common.glsl"
 
 // Texture coordinates of world point w: t = w / (2 half) + 0.5.
@@ -83,8 +87,85 @@ float ray_scaled_eta(float eta_tf) {
     return RAY_ETA_SCALE == 1.0 ? eta_tf : 1.0 + RAY_ETA_SCALE * (eta_tf - 1.0);
 }
 
+// The cubic B-spline's weights (xyz: per axis) for the four voxels i - 1 .. i + 2 around
+// fraction f (x = t dims - 0.5 = i + f), and their derivatives d/df.
+void ray_bspline(vec3 f, out vec3 w0, out vec3 w1, out vec3 w2, out vec3 w3, out vec3 d0,
+                 out vec3 d1, out vec3 d2, out vec3 d3) {
+    vec3 g = 1.0 - f;
+    w0 = g * g * g / 6.0;
+    w1 = (3.0 * f * f * f - 6.0 * f * f + 4.0) / 6.0;
+    w2 = (-3.0 * f * f * f + 3.0 * f * f + 3.0 * f + 1.0) / 6.0;
+    w3 = f * f * f / 6.0;
+    d0 = -0.5 * g * g;
+    d1 = 1.5 * f * f - 2.0 * f;
+    d2 = -1.5 * f * f + f + 0.5;
+    d3 = 0.5 * f * f;
+}
+
+// The value at world point w as the cubic B-spline of the voxels (clamp to edge; zero
+// outside the box, with a zero gradient) and its gradient per world unit: the CPU
+// field's value_grad_cubic (src/photons/field.rs), which the reference renderer and the
+// photon tracer take with `use_cubic_eta`. C2, so the refractive index's iso-surfaces
+// are smooth where the trilinear field's are corrugated at the voxels' period (each cell
+// its own normal: micro-foci that fragment a wavefront and speckle the view through
+// glass; docs/NOTES.md, "Cubic eta"). 64 texel fetches, written out per row of four
+// along x (no indexed arrays: llvmpipe spills those).
+float ray_value_grad_cubic(vec3 w, out vec3 grad) {
+    vec3 t = ray_tex(w);
+    grad = vec3(0.0);
+    if (any(lessThan(t, vec3(0.0))) || any(greaterThan(t, vec3(1.0)))) return 0.0;
+    vec3 xc = t * RAY_DIMS - 0.5;
+    ivec3 i = ivec3(floor(xc));
+    vec3 f = xc - vec3(i);
+    vec3 w0, w1, w2, w3, d0, d1, d2, d3;
+    ray_bspline(f, w0, w1, w2, w3, d0, d1, d2, d3);
+    vec4 wx = vec4(w0.x, w1.x, w2.x, w3.x), dx = vec4(d0.x, d1.x, d2.x, d3.x);
+    ivec3 hi = ivec3(RAY_DIMS) - 1;
+    int x0 = clamp(i.x - 1, 0, hi.x), x1 = clamp(i.x, 0, hi.x);
+    int x2 = clamp(i.x + 1, 0, hi.x), x3 = clamp(i.x + 2, 0, hi.x);
+    float s = 0.0;
+    vec3 g = vec3(0.0);
+#define RAY_CUBIC_ROW(yy, zz, wy, dy, wz, dz)                                            \
+    {                                                                                    \
+        int y = clamp(i.y + yy, 0, hi.y), z = clamp(i.z + zz, 0, hi.z);                  \
+        vec4 row = vec4(texelFetch(RAY_VOLUME, ivec3(x0, y, z), 0).r,                     \
+                        texelFetch(RAY_VOLUME, ivec3(x1, y, z), 0).r,                     \
+                        texelFetch(RAY_VOLUME, ivec3(x2, y, z), 0).r,                     \
+                        texelFetch(RAY_VOLUME, ivec3(x3, y, z), 0).r);                    \
+        float v = dot(wx, row), vx = dot(dx, row);                                       \
+        s += wz * wy * v;                                                                \
+        g += vec3(wz * wy * vx, wz * dy * v, dz * wy * v);                               \
+    }
+#define RAY_CUBIC_PLANE(zz, wz, dz)                                                      \
+    RAY_CUBIC_ROW(-1, zz, w0.y, d0.y, wz, dz)                                            \
+    RAY_CUBIC_ROW(0, zz, w1.y, d1.y, wz, dz)                                             \
+    RAY_CUBIC_ROW(1, zz, w2.y, d2.y, wz, dz)                                             \
+    RAY_CUBIC_ROW(2, zz, w3.y, d3.y, wz, dz)
+    RAY_CUBIC_PLANE(-1, w0.z, d0.z)
+    RAY_CUBIC_PLANE(0, w1.z, d1.z)
+    RAY_CUBIC_PLANE(1, w2.z, d2.z)
+    RAY_CUBIC_PLANE(2, w3.z, d3.z)
+#undef RAY_CUBIC_PLANE
+#undef RAY_CUBIC_ROW
+    grad = g * RAY_DIMS / (2.0 * RAY_HALF);
+    return s;
+}
+
+// d eta_tf / ds of the transfer function's eta layer at s: its segment's slope, zero
+// outside [0, 1] (the CPU's lut_slope).
+float ray_tf_eta_slope(float s) {
+    if (s < 0.0 || s > 1.0) return 0.0;
+    float n = float(TF_SAMPLES - 1u);
+    int j = min(int(s * n), int(TF_SAMPLES) - 2);
+    return (texelFetch(RAY_TF, ivec2(j + 1, 1), 0).a - texelFetch(RAY_TF, ivec2(j, 1), 0).a) * n;
+}
+
 // eta' at world point w.
 float ray_eta(vec3 w) {
+    if (RAY_CUBIC) {
+        vec3 g;
+        return ray_scaled_eta(ray_tf(ray_value_grad_cubic(w, g), 1).a);
+    }
     return ray_scaled_eta(ray_tf(ray_value(w), 1).a);
 }
 
@@ -123,6 +204,15 @@ void ray_shift_lines(vec4 lo, vec4 up, vec4 beyond, int shift, out vec4 a, out v
 // with no indexed arrays: llvmpipe spills an array indexed by a loop it does not unroll
 // to memory, which made a first, looped version slower than the seven lookups.
 void ray_eta_grad(vec3 w, out float eta, out vec3 grad) {
+    if (RAY_CUBIC) {
+        // The spline's own gradient through the transfer function's slope (C2 value,
+        // so no differences are needed): grad eta' = k eta_tf'(s) grad s.
+        vec3 gs;
+        float s = ray_value_grad_cubic(w, gs);
+        eta = ray_scaled_eta(ray_tf(s, 1).a);
+        grad = RAY_ETA_SCALE * ray_tf_eta_slope(s) * gs;
+        return;
+    }
 #ifdef RAY_FIELD
     if (RAY_USE_FIELD) {
         eta = ray_eta(w);

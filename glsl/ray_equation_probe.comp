@@ -25,6 +25,10 @@ layout(push_constant) uniform Push {
                        //    equi-temporal steps (eqs. 14-15), the plane unused
 } pc;
 
+// Whether eta is the cubic B-spline of the values (the eikonal model's `--cubic-eta`),
+// ray_equation.glsl's RAY_CUBIC.
+layout(constant_id = 0) const bool PROBE_CUBIC = false;
+#define RAY_CUBIC PROBE_CUBIC
 #define RAY_VOLUME volume
 #define RAY_TF tf
 #define RAY_HALF pc.half_extent.xyz

@@ -1526,6 +1526,59 @@ fn abbe_splits_the_light_by_colour_and_is_refused_elsewhere() {
     );
 }
 
+/// `--cubic-eta` (scene key `cubic_eta`): the eikonal model takes η from the cubic
+/// B-spline (a glass ball then looks different: its view through the glass is no longer
+/// scattered by the trilinear field's corrugation), refuses any value but 0 and 1, and
+/// other models refuse the flag.
+#[test]
+fn cubic_eta_from_a_flag_or_a_scene_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let small = ["--volume-size", "16", "--width", "24", "--height", "24"];
+    let render_with = |extra: &[&str], out: &str| {
+        let mut a = vec!["render", "--model", "eikonal"];
+        a.extend_from_slice(&small);
+        a.extend_from_slice(extra);
+        a.extend_from_slice(&["-o", out]);
+        let o = refrakt(&a);
+        assert!(o.status.success(), "{a:?}: {}", stderr(&o));
+        image::open(out).unwrap().to_rgb8()
+    };
+    let trilinear = render_with(&[], &png("t.png"));
+    let cubic = render_with(&["--cubic-eta", "1"], &png("c.png"));
+    let differ = trilinear
+        .pixels()
+        .zip(cubic.pixels())
+        .filter(|(a, b)| a.0.iter().zip(b.0).any(|(x, y)| x.abs_diff(y) > 3))
+        .count();
+    assert!(differ > 10, "cubic eta changed only {differ} pixels");
+    let scene = dir.path().join("s.toml");
+    std::fs::write(
+        &scene,
+        "[volume]\nbuiltin = \"sphere-on-floor\"\nsize = 16\n[render]\nmodel = \"eikonal\"\n\
+         cubic_eta = 1\nwidth = 24\nheight = 24\n",
+    )
+    .unwrap();
+    let from_scene = png("s.png");
+    let o = refrakt(&["render", scene.to_str().unwrap(), "-o", &from_scene]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(
+        image::open(&from_scene).unwrap().to_rgb8().as_raw(),
+        cubic.as_raw(),
+        "the scene key gave another image than the flag"
+    );
+    let out = png("x.png");
+    for (model, value, needle) in [
+        ("eikonal", "2", "--cubic-eta: 0 (trilinear) or 1 (cubic B-spline) only"),
+        ("refract", "1", "--cubic-eta only applies to --model eikonal"),
+    ] {
+        let mut a = vec!["render", "--model", model, "--cubic-eta", value];
+        a.extend_from_slice(&small);
+        a.extend_from_slice(&["-o", &out]);
+        assert_clean_failure(&a, needle);
+    }
+}
+
 /// What the reflected part sees, from a flag or a scene file: `--reflections volume` (the
 /// default, also `on`) and `environment`, `reflections = "volume"` / `"environment"` in
 /// `[render]` give the same frames as the flags (to the byte), the two differ where the

@@ -84,6 +84,11 @@ pub enum RayGradient {
     /// the paper's stored volumes (sect. 5.1); about a fifteenth of the fetches, a
     /// smoother wavefront, surfaces sharper than a voxel or two blurred.
     FieldTexture,
+    /// η from the cubic B-spline of the values and its own gradient (C², as the photon
+    /// tracer and the reference renderer take it with cubic η,
+    /// `photons::Field::use_cubic_eta`): smooth iso-surfaces where the trilinear field's
+    /// are corrugated at the voxels' period, whose micro-foci fragment the wavefront.
+    Cubic,
 }
 
 /// The simulator's settings.
@@ -669,13 +674,14 @@ pub(crate) fn simulate(
     let sets = [set_for(0)?, set_for(1)?];
     let set = &sets[0];
     let push_size = std::mem::size_of::<WavefrontPush>() as u32;
-    // Specialization constants 0 to 3: the field texture, clear space, the clear-space
-    // pass (light_wavefront_clear.comp only), the fluence deposits.
+    // Specialization constants 0 to 4: the field texture, clear space, the clear-space
+    // pass (light_wavefront_clear.comp only), the fluence deposits, cubic η.
     let constants = [
         (settings.gradient == RayGradient::FieldTexture) as u32,
         settings.clear_space as u32,
         0,
         settings.fluence as u32,
+        (settings.gradient == RayGradient::Cubic) as u32,
     ];
     let pipeline = |spirv: &[u8], name: &str| {
         ComputePipeline::with_constants(ctx, spirv, set, push_size, &constants, name)
@@ -693,7 +699,7 @@ pub(crate) fn simulate(
     // Its four passes (CLEAR_PASS, specialization constant 2).
     let clear_passes = (0..4u32)
         .map(|pass| {
-            let constants = [constants[0], constants[1], pass, constants[3]];
+            let constants = [constants[0], constants[1], pass, constants[3], constants[4]];
             ComputePipeline::with_constants(
                 ctx,
                 shaders::LIGHT_WAVEFRONT_CLEAR_COMP,

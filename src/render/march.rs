@@ -184,6 +184,17 @@ impl RayMarchPass {
         name: &str,
         extra: &[Binding<'_>],
     ) -> Result<Self> {
+        Self::with_constants::<P>(inputs, spirv, name, extra, &[])
+    }
+
+    /// [`RayMarchPass::new`] with the pipeline's specialization constants 0, 1, ...
+    pub(crate) fn with_constants<P: Pod>(
+        inputs: &Inputs,
+        spirv: &[u8],
+        name: &str,
+        extra: &[Binding<'_>],
+        constants: &[u32],
+    ) -> Result<Self> {
         let (ctx, sampler) = (inputs.ctx, inputs.linear);
         let (width, height) = (inputs.opts.width, inputs.opts.height);
         let params = Buffer::uniform::<P>(ctx, &format!("{name} params"))?;
@@ -198,7 +209,7 @@ impl RayMarchPass {
         bindings.extend_from_slice(extra);
         let set = DescriptorSet::new(ctx, &bindings, name)?;
         let scope = format!("{name} raymarch");
-        let pipeline = ComputePipeline::new(ctx, spirv, &set, 0, &scope)?;
+        let pipeline = ComputePipeline::with_constants(ctx, spirv, &set, 0, constants, &scope)?;
         Ok(Self {
             params,
             output,

@@ -166,11 +166,13 @@ impl Renderer {
             ],
             "ray equation",
         )?;
-        let pipeline = ComputePipeline::new(
+        // Specialization constant 0: cubic η (the eikonal model's `--cubic-eta`).
+        let pipeline = ComputePipeline::with_constants(
             ctx,
             shaders::RAY_EQUATION_PROBE_COMP,
             &set,
             std::mem::size_of::<ProbePush>() as u32,
+            &[super::eikonal::cubic_eta(opts) as u32],
             "ray equation",
         )?;
         let info = &self.volume_info;
