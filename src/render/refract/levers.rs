@@ -48,11 +48,11 @@ pub enum Splat {
 
 /// What a forward light ray deposits on a plane (glsl/light_splat_ray.glsl). Not a speed
 /// lever like the others: the two render different images. `Boxes` is still the default
-/// (and [`Levers::REFERENCE`]'s): `Cells` leaves a flat floor lit at 80° from the sweep
-/// axis striped 1.4 % row to row where the thin surface's light is interpolated across
-/// cells coarser than 8 pixels (tests/image_quality.rs bounds it at 1 %; docs/NOTES.md,
-/// "Light as a wavefront"). Both stay selectable so that they can be timed and compared
-/// in one process (`bench variants --variant deposit=cells`).
+/// (and [`Levers::REFERENCE`]'s) for its cost: on lavapipe `Cells` took 4.2-4.5 x the
+/// frame on the default fragment path and 1.34-1.38 x on the compute path, on an H100
+/// 1.7-2.4 x (docs/NOTES.md, "Light as a wavefront", remeasured 2026-11-29). Both stay
+/// selectable so that they can be timed and compared in one process
+/// (`bench variants --variant deposit=cells`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Deposit {
