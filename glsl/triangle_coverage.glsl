@@ -12,8 +12,12 @@
 // the polygon's part inside the pixel (Green's theorem: with P(x, y) = C(y), the integral
 // of P dx around the outline is minus the integral of dC/dy over the area, and
 // clamping y and x keeps exactly the part inside the pixel). c is 0, y or 1 on at most
-// three pieces of the edge, split where y crosses 0 and 1; on each piece the integrands
-// are polynomials of degree at most 2 in x, which Simpson's rule integrates exactly.
+// three pieces of the edge, split where y crosses 0 and 1; on each piece c and x are
+// linear, so the integrals are closed forms in the piece's end values (for linear u, w
+// over a piece of length L: the integral of u is L (u0 + u1) / 2, of u w is
+// L (2 u0 w0 + u0 w1 + u1 w0 + 2 u1 w1) / 6), which the pieces' four ends share. (Simpson's
+// rule, exact too, took three points a piece: nine evaluations where these take four;
+// docs/NOTES.md, "Light as a wavefront".)
 vec3 edge_moments(vec2 a, vec2 b, vec2 lo) {
     a.y -= lo.y;
     b.y -= lo.y;
@@ -25,21 +29,16 @@ vec3 edge_moments(vec2 a, vec2 b, vec2 lo) {
     float ex = xb - xa, ey = yb - ya;
     float iy = ey != 0.0 ? 1.0 / ey : 0.0;
     float t0 = clamp(-ya * iy, 0.0, 1.0), t1 = clamp((1.0 - ya) * iy, 0.0, 1.0);
-    float cuts[4] = float[4](0.0, min(t0, t1), max(t0, t1), 1.0);
-    vec3 sum = vec3(0.0);
-    for (int k = 0; k < 3; ++k) {
-        float s = cuts[k], e = cuts[k + 1];
-        vec3 acc = vec3(0.0);
-        for (int q = 0; q < 3; ++q) {
-            float t = q == 0 ? s : (q == 1 ? 0.5 * (s + e) : e);
-            float wq = q == 1 ? 4.0 : 1.0;
-            float x = xa + t * ex;
-            float c = clamp(ya + t * ey, 0.0, 1.0);
-            acc += wq * vec3(c, x * c, 0.5 * c * c);
-        }
-        sum += (e - s) / 6.0 * acc;
-    }
-    return sum * ex;
+    // The pieces' ends: 0, the two crossings in order, 1.
+    vec4 t = vec4(0.0, min(t0, t1), max(t0, t1), 1.0);
+    vec4 x = xa + t * ex;
+    vec4 c = clamp(ya + t * ey, 0.0, 1.0);
+    vec3 piece_len = t.yzw - t.xyz;
+    vec3 c0 = c.xyz, c1 = c.yzw, x0 = x.xyz, x1 = x.yzw;
+    float area = dot(piece_len, c0 + c1) * 0.5;
+    float mx = dot(piece_len, 2.0 * x0 * c0 + x0 * c1 + x1 * c0 + 2.0 * x1 * c1) / 6.0;
+    float my = dot(piece_len, c0 * c0 + c0 * c1 + c1 * c1) / 6.0;
+    return vec3(area, mx, my) * ex;
 }
 
 float cross2(vec2 u, vec2 v) { return u.x * v.y - u.y * v.x; }
