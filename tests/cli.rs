@@ -1569,8 +1569,16 @@ fn cubic_eta_from_a_flag_or_a_scene_file() {
     );
     let out = png("x.png");
     for (model, value, needle) in [
-        ("eikonal", "2", "--cubic-eta: 0 (trilinear) or 1 (cubic B-spline) only"),
-        ("refract", "1", "--cubic-eta only applies to --model eikonal"),
+        (
+            "eikonal",
+            "2",
+            "--cubic-eta: 0 (trilinear) or 1 (cubic B-spline) only",
+        ),
+        (
+            "refract",
+            "1",
+            "--cubic-eta only applies to --model eikonal",
+        ),
     ] {
         let mut a = vec!["render", "--model", model, "--cubic-eta", value];
         a.extend_from_slice(&small);

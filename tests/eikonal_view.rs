@@ -91,6 +91,28 @@ fn a_homogeneous_block_matches_the_single_scattering_integral() {
     });
 }
 
+/// A renderer of `volume` as clear glass (η from 1 at value 0 to `eta` at 1, no opacity)
+/// under an environment whose radiance is linear in the direction, (1 + d) / 2, so each
+/// pixel reads the direction its ray leaves the box with; and the transfer functions.
+fn clear_glass_in_a_sky_of_directions(
+    ctx: &refrakt::vk::Context,
+    volume: &refrakt::volume::Volume,
+    eta: f32,
+) -> (Renderer, TransferFunctions) {
+    use refrakt::transfer::Piecewise;
+    let tf = TransferFunctions {
+        eta: Piecewise::new(vec![(0.0, [1.0]), (1.0, [eta])]),
+        opacity: Piecewise::new(vec![(0.0, [0.0])]),
+        ..Default::default()
+    };
+    let mut renderer = Renderer::new(ctx, volume, &tf).unwrap();
+    let env = common::environment_from(1024, |d| {
+        [0.5 * (1.0 + d.x), 0.5 * (1.0 + d.y), 0.5 * (1.0 + d.z), 1.0]
+    });
+    renderer.set_environment(Some(&env)).unwrap();
+    (renderer, tf)
+}
+
 /// Viewing rays bend as the CPU photon tracer's do: a clear glass ball lens (η 1.5, a
 /// two-voxel ramp) seen face on against an environment whose radiance is linear in the
 /// direction, (1 + d) / 2, so each pixel reads the direction its ray leaves the box with.
@@ -117,21 +139,11 @@ fn with_cubic_eta_viewing_rays_refract_as_the_photon_tracer_traces_them() {
 }
 
 fn refract_as_the_photon_tracer(cubic: bool) {
-    use refrakt::transfer::Piecewise;
     with_context(|ctx| {
         let n = 48u32;
         let r = 0.3f32;
         let volume = f32_volume(n, |p| 0.5 + (r - Vec3::from(p).length()) * n as f32 / 2.0);
-        let tf = TransferFunctions {
-            eta: Piecewise::new(vec![(0.0, [1.0]), (1.0, [1.5])]),
-            opacity: Piecewise::new(vec![(0.0, [0.0])]),
-            ..Default::default()
-        };
-        let mut renderer = Renderer::new(ctx, &volume, &tf).unwrap();
-        let env = common::environment_from(1024, |d| {
-            [0.5 * (1.0 + d.x), 0.5 * (1.0 + d.y), 0.5 * (1.0 + d.z), 1.0]
-        });
-        renderer.set_environment(Some(&env)).unwrap();
+        let (mut renderer, tf) = clear_glass_in_a_sky_of_directions(ctx, &volume, 1.5);
         let camera = face_on(2.0, 24.0);
         let (w, h) = (24u32, 24u32);
         let (eye, forward, right, up) = camera.frame();
@@ -248,22 +260,12 @@ fn refract_as_the_photon_tracer(cubic: bool) {
 /// 2 (asin(b/R) − asin(b/(n R))) at impact parameter b, over the pixels with b < 0.8 R.
 /// Returns the RMS and the worst error, degrees.
 fn ball_deviation_errors(ctx: &refrakt::vk::Context, cubic: bool) -> (f64, f64) {
-    use refrakt::transfer::Piecewise;
     let n = 48u32;
     let (radius, eta) = (0.35f32, 1.5f64);
     let volume = f32_volume(n, |p| {
         ((radius - Vec3::from(p).length()) * n as f32 + 0.5).clamp(0.0, 1.0)
     });
-    let tf = TransferFunctions {
-        eta: Piecewise::new(vec![(0.0, [1.0]), (1.0, [eta as f32])]),
-        opacity: Piecewise::new(vec![(0.0, [0.0])]),
-        ..Default::default()
-    };
-    let mut renderer = Renderer::new(ctx, &volume, &tf).unwrap();
-    let env = common::environment_from(1024, |d| {
-        [0.5 * (1.0 + d.x), 0.5 * (1.0 + d.y), 0.5 * (1.0 + d.z), 1.0]
-    });
-    renderer.set_environment(Some(&env)).unwrap();
+    let (mut renderer, _) = clear_glass_in_a_sky_of_directions(ctx, &volume, eta as f32);
     let camera = face_on(2.0, 24.0);
     let size = 41u32;
     let mut opts = RenderOptions {
