@@ -108,7 +108,7 @@ void ray_bspline(vec3 f, out vec3 w0, out vec3 w1, out vec3 w2, out vec3 w3, out
 // photon tracer take with `use_cubic_eta`. C2, so the refractive index's iso-surfaces
 // are smooth where the trilinear field's are corrugated at the voxels' period (each cell
 // its own normal: micro-foci that fragment a wavefront and speckle the view through
-// glass; docs/NOTES.md, "Cubic eta"). 64 texel fetches, written out per row of four
+// glass; docs/NOTES.md, "Cubic η for the eikonal model"). 64 texel fetches, written out per row of four
 // along x (no indexed arrays: llvmpipe spills those).
 float ray_value_grad_cubic(vec3 w, out vec3 grad) {
     vec3 t = ray_tex(w);
