@@ -1,5 +1,6 @@
 // The six state buffers of the plane sweep, each a 2-layer image array sampled through one
-// view of both layers; the read layer comes as a push constant. Both layers are always
+// view of both layers; the read layer comes as a push constant. What each holds (the
+// backward transport uses five, the forward one's viewing rays four): sweep_plane_io.glsl. Both layers are always
 // valid to the validation layer (GENERAL layout), so nothing is rebound between planes.
 #ifndef REFRAKT_SWEEP_BUFFERS_GLSL
 #define REFRAKT_SWEEP_BUFFERS_GLSL

@@ -37,6 +37,11 @@ layout(set = 0, binding = 0) uniform SweepParams {
                          //   the light (--light env: the map's mean radiance); 0 = the thesis
 } P;
 
+// medium.w of a viewing ray the setup left on plane 0 (its depth is then the first
+// plane's, not the plane's it is read on): catch_up_to_plane moves it on and clears the
+// mark. Above -1, so never a finished ray's mark (-(k + 1)), below 0, so never a chain.
+const float VIEW_RAY_AT_SETUP = -0.5;
+
 layout(set = 0, binding = 1) uniform sampler3D volume;
 layout(set = 0, binding = 2) uniform sampler1DArray tf;       // layer 1 .a = eta
 layout(set = 0, binding = 3) uniform sampler2DArray preint;   // preintegration table

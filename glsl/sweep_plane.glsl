@@ -46,8 +46,8 @@
 #include "sweep_plane_io.glsl"
 
 #if PASS == 0
-SIX_STATE_OUTPUTS;
-#define STORE_OUTPUTS(at) STORE_SIX_STATES(at)
+BACKWARD_STATE_OUTPUTS;
+#define STORE_OUTPUTS(at) STORE_BACKWARD_STATE(at)
 #elif PASS == 1
 // The light rays' images (the ray texel is the invocation's pixel).
 PLANE_OUTPUT(0, out_light_colour);
@@ -272,7 +272,9 @@ void light_ray_plane(ivec2 pixel, uint R) {
 // write its state.
 void viewing_ray_plane(ivec2 pixel, uint R) {
     float ds = P.planes.y;
-    vec4 vp4 = READ_PIXEL(view_position, R, pixel);
+    // The compact state (sweep_plane_io.glsl): the point's x, y; v and the value at the
+    // point; colour and opacity; medium and the skin chain (or a mark).
+    vec2 vp_xy = READ_VIEW_XY(R, pixel);
     vec4 vd4 = READ_PIXEL(view_direction, R, pixel);
     vec4 CA = READ_PIXEL(colour_opacity, R, pixel);
     vec4 M4 = READ_PIXEL(medium, R, pixel);
@@ -286,18 +288,19 @@ void viewing_ray_plane(ivec2 pixel, uint R) {
     // volume through the remaining 1 - A <= 1 - termination_alpha (the composite's
     // C + (1 - A) M env): looked up in the direction the ray had when it finished, where
     // the planes past it could still have turned it.
-    if (M4.w < 0.0) {
+    if (M4.w <= -1.0) {
         if (float(pc.plane) + M4.w >= 1.0) SKIP_PLANE;
-        out_view_position = vp4;
+        WRITE_VIEW_XY(vp_xy);
         out_view_direction = vd4;
         out_colour_opacity = CA;
         out_medium = M4;
         return;
     }
 #endif
-    vec3 vp = vp4.xyz;
+    // On this plane (every step ends on the next one), unless the setup left it on plane
+    // 0: then catch_up_to_plane moves it on (a pixel's first plane in the drawn region).
+    vec3 vp = vec3(vp_xy, pc.depth);
     vec3 vd = vd4.xyz;
-    // A pixel's first plane in the drawn region: on to this plane (catch_up_to_plane).
     catch_up_to_plane(vp, vd, M4.w);
     vec3 C = CA.rgb;
     float A = CA.a;
@@ -317,8 +320,8 @@ void viewing_ray_plane(ivec2 pixel, uint R) {
     vec3 n_box = normal_at_box(vp, in_box);
     vec3 n_here = in_box ? n_box : vec3(0.0);
     if (A < P.termination_alpha) {
-        chain_code = composite_segment(vp, vd, dir, seg_len, vp4.w, vd4.w, f_v, eta_here,
-                                       n_here, M4.w, R, C, A, M);
+        chain_code = composite_segment(vp, vd, dir, seg_len, vd4.w, f_v, eta_here, n_here,
+                                       M4.w, R, C, A, M);
     }
     // Advance to the next plane, turning on the way (eq. 4.3; advance_viewing_ray).
     vec3 turned_back;
@@ -334,8 +337,8 @@ void viewing_ray_plane(ivec2 pixel, uint R) {
 #if PASS == 2
     if (A >= P.termination_alpha) chain_code = -(float(pc.plane) + 1.0);   // finished
 #endif
-    out_view_position = vec4(vp_next, f_v);
-    out_view_direction = vec4(vd, eta_here);
+    WRITE_VIEW_XY(vp_next.xy);
+    out_view_direction = vec4(vd, f_v);
     out_colour_opacity = vec4(C, A);
     out_medium = vec4(M, chain_code);
 }

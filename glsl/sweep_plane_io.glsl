@@ -46,23 +46,44 @@ layout(push_constant) uniform Push {
 #define PLANE_MAIN main
 #endif
 
-// The six state outputs of a shader that writes all of them (the backward sweep, the
-// floor, the skeleton), and their stores: `SIX_STATE_OUTPUTS;` declares them, and such a
-// shader defines STORE_OUTPUTS(at) as STORE_SIX_STATES(at).
-#define SIX_STATE_OUTPUTS \
+// The backward transport's state: five images, 20 scalars for Algorithm 1's 19 and the
+// skin chain (issue 31's compact state; it was six images, 24 slots, until 2026-12-07):
+//   light_colour     light colour (rgb), the viewing ray's point x on its plane (w)
+//   light_direction  light direction v = eta dx/ds (xyz), the viewing ray's point y (w)
+//   view_direction   the viewing ray's v (xyz), the value at its point (w)
+//   colour_opacity   composited colour and opacity (eq. 4.13)
+//   medium           medium colour product (rgb), the skin chain or a mark (w)
+// The viewing ray's depth is its plane's (pc.depth: every step ends on the next plane),
+// and eta at its point is eta_of(the value there), so neither is stored. The forward
+// transport keeps the point's x, y in view_position (its light is in the rays' images).
+// A shader that writes the whole backward state (the backward sweep, the floor, the
+// skeleton) declares `BACKWARD_STATE_OUTPUTS;` and defines STORE_OUTPUTS(at) as
+// STORE_BACKWARD_STATE(at); the fragment path's render pass has these five attachments
+// in this order. (medium.w's mark of a ray still on plane 0: VIEW_RAY_AT_SETUP,
+// sweep_common.glsl.)
+#define BACKWARD_STATE_OUTPUTS \
     PLANE_OUTPUT(0, out_light_colour); \
     PLANE_OUTPUT(1, out_light_direction); \
-    PLANE_OUTPUT(2, out_view_position); \
-    PLANE_OUTPUT(3, out_view_direction); \
-    PLANE_OUTPUT(4, out_colour_opacity); \
-    PLANE_OUTPUT(5, out_medium)
-#define STORE_SIX_STATES(at) \
+    PLANE_OUTPUT(2, out_view_direction); \
+    PLANE_OUTPUT(3, out_colour_opacity); \
+    PLANE_OUTPUT(4, out_medium)
+#define STORE_BACKWARD_STATE(at) \
     imageStore(light_colour, at, out_light_colour); \
     imageStore(light_direction, at, out_light_direction); \
-    imageStore(view_position, at, out_view_position); \
     imageStore(view_direction, at, out_view_direction); \
     imageStore(colour_opacity, at, out_colour_opacity); \
     imageStore(medium, at, out_medium);
+
+// The viewing ray's point x, y on its plane: read from texel `px` of layer R, and
+// written into this plane's outputs (their other components set first).
+#if FORWARD_LIGHT
+#define READ_VIEW_XY(R, px) READ_PIXEL(view_position, R, px).xy
+#define WRITE_VIEW_XY(xy) out_view_position = vec4((xy), 0.0, 0.0)
+#else
+#define READ_VIEW_XY(R, px) \
+    vec2(READ_PIXEL(light_colour, R, px).w, READ_PIXEL(light_direction, R, px).w)
+#define WRITE_VIEW_XY(xy) { out_light_colour.w = (xy).x; out_light_direction.w = (xy).y; }
+#endif
 
 // The compute entry point: the invocation's pixel, the plane's work, its stores
 // (STORE_OUTPUTS, which the including shader defines from its outputs).

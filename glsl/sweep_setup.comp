@@ -1,5 +1,6 @@
 #version 460
-// Setup pass (thesis ch. 5, Fig. 5.1): initialises both layers of the six state buffers.
+// Setup pass (thesis ch. 5, Fig. 5.1): initialises both layers of the state images (the
+// backward transport's five and the forward one's view_position: sweep_plane_io.glsl).
 // Light: uniform colour and direction on "plane -1". Viewing rays: start on plane 0
 // along each pixel's camera ray, carrying the scalar value one plane earlier (plane -1)
 // so the first segment is integrated like every other. Colour/opacity 0, medium white.
@@ -53,11 +54,11 @@ void main() {
     vec3 ray = plane_point(uv, 1.0);            // z = 1
     vec3 vp = ray * d0;                          // on plane 0
     float s_prev = value_at_tex(to_tex(ray * (d0 - ds)));
-    float eta = eta_of(s_prev);
-    vec3 vd = normalize(ray) * eta;              // v = eta dx/ds (eq. 4.2)
-    // Backward transport: the light colour and direction on "plane -1" per pixel.
-    vec4 lc = vec4(P.light_colour.rgb, 0.0);
-    vec4 ld = vec4(P.light_dir.xyz, 0.0);
+    vec3 vd = normalize(ray) * eta_of(s_prev);   // v = eta dx/ds (eq. 4.2)
+    // Backward transport: the light colour and direction on "plane -1" per pixel, with
+    // the viewing ray's x and y in w (the compact state: sweep_plane_io.glsl).
+    vec4 lc = vec4(P.light_colour.rgb, vp.x);
+    vec4 ld = vec4(P.light_dir.xyz, vp.y);
     for (int layer = 0; layer < 2; ++layer) {
         ivec3 at = ivec3(id, layer);
         // The forward transport's irradiance of plane -1 (and a defined other layer).
@@ -65,9 +66,9 @@ void main() {
         imageStore(irradiance_direction, at, vec4(P.light_dir.xyz, 1.0));
         imageStore(light_colour, at, lc);
         imageStore(light_direction, at, ld);
-        imageStore(view_position, at, vec4(vp, s_prev));
-        imageStore(view_direction, at, vec4(vd, eta));
+        imageStore(view_position, at, vec4(vp.xy, 0.0, 0.0));   // forward: x, y
+        imageStore(view_direction, at, vec4(vd, s_prev));
         imageStore(colour_opacity, at, vec4(0.0));
-        imageStore(medium, at, vec4(1.0, 1.0, 1.0, 0.0));
+        imageStore(medium, at, vec4(1.0, 1.0, 1.0, VIEW_RAY_AT_SETUP));
     }
 }

@@ -19,8 +19,8 @@
 
 #include "sweep_plane_io.glsl"
 
-SIX_STATE_OUTPUTS;
-#define STORE_OUTPUTS(at) STORE_SIX_STATES(at)
+BACKWARD_STATE_OUTPUTS;
+#define STORE_OUTPUTS(at) STORE_BACKWARD_STATE(at)
 
 void PLANE_MAIN() {
     vec2 uv = FRAG_XY / P.camera.zw;
@@ -47,18 +47,18 @@ void PLANE_MAIN() {
     vec3 light_dir = limit_direction(dir_prev + length(p - lp) * grad_p);
 
     // ---- viewing ray (eqs. 4.3, 4.13) ----
-    vec4 vp4 = READ_PIXEL(view_position, R, pixel);
-    vec4 vd4 = READ_PIXEL(view_direction, R, pixel);
+    vec2 vp_xy = READ_VIEW_XY(R, pixel);
+    vec4 vd4 = READ_PIXEL(view_direction, R, pixel);   // v, the value at the point
     vec4 CA = READ_PIXEL(colour_opacity, R, pixel);
     vec4 M4 = READ_PIXEL(medium, R, pixel);
-    vec3 vp = vp4.xyz;
+    vec3 vp = vec3(vp_xy, pc.depth);
     float f_v;
     vec3 grad_v;
     sample_field(vp, f_v, grad_v);
     vec3 d = normalize(vd4.xyz);
     vec3 c, m;
     float a;
-    segment(vp4.w, f_v, ds / (d.z * ref_step), false, c, a, m);
+    segment(vd4.w, f_v, ds / (d.z * ref_step), false, c, a, m);
     vec3 i_d = READ_BUFFER(light_colour, R, project(vp)).rgb;
     vec3 C = CA.rgb + (1.0 - CA.a) * M4.rgb * c * i_d;   // eq. 4.13
     float A = CA.a + (1.0 - CA.a) * a;
@@ -67,8 +67,8 @@ void PLANE_MAIN() {
 
     out_light_colour = vec4(light, 0.0);
     out_light_direction = vec4(light_dir, 0.0);
-    out_view_position = vec4(vp + dn * (ds / dn.z), f_v);
-    out_view_direction = vec4(vd, eta_of(f_v));
+    WRITE_VIEW_XY((vp + dn * (ds / dn.z)).xy);
+    out_view_direction = vec4(vd, f_v);
     out_colour_opacity = vec4(C, A);
     out_medium = vec4(M4.rgb * m, M4.w);
 }

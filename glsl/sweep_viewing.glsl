@@ -28,11 +28,16 @@ vec2 light_line_uv(vec3 q, float dz) {
 // Its skin chain (below) starts as the full-screen sweep's would have, at the light
 // before any matter: the light of the previous plane where the ray is now.
 //
+// A ray the setup left there carries the mark VIEW_RAY_AT_SETUP in `chain` (its stored
+// point is x, y only: sweep_plane_io.glsl); every other ray is on this plane already.
 // Moves vp (the ray's point, direction vd) on to this plane where it is a plane or more
-// behind, and starts its skin chain there.
+// behind, clears the mark and starts its skin chain there.
 void catch_up_to_plane(inout vec3 vp, vec3 vd, inout float chain) {
     uint R = pc.read_layer;
     float ds = P.planes.y;
+    if (chain != VIEW_RAY_AT_SETUP) return;
+    chain = 0.0;
+    vp.z = P.planes.x;   // plane 0, where the setup put it
     if (vp.z < pc.depth - 0.5 * ds) {   // a whole plane or more behind
         // Plane by plane, as the full-screen sweep steps it (the same arithmetic, so the
         // same rounding: in a noisy medium a ray that lands a rounding error elsewhere
@@ -519,15 +524,15 @@ vec3 normal_at_box(vec3 vp, out bool in_box) {
     return surface_gradient_tex(clamp(t_here, vec3(0.0), vec3(1.0)));
 }
 
-// One segment of a viewing ray (sect. 4.3; from its previous point, value v_prev and eta
-// eta_prev, to vp on this plane, value f_v and eta eta_here; v = vd, dir its unit
+// One segment of a viewing ray (sect. 4.3; from its previous point, value v_prev, to vp
+// on this plane, value f_v and eta eta_here; v = vd, dir its unit
 // direction, seg_len long, n_here the smoothed normal at vp) composited into its colour
 // C, opacity A and medium M (Oddy-Willis, eq. 4.13): the segment's own colour and
 // opacity (viewing_segment) lit by this plane's light (segment_light), the reflection
 // and highlight of a face it meets (face_met, face_highlight). Returns the ray's new
 // skin chain code (segment_light; 0 unlit), from chain_in, the code it carried.
 float composite_segment(vec3 vp, vec3 vd, vec3 dir, float seg_len, float v_prev,
-                        float eta_prev, float f_v, float eta_here, vec3 n_here,
+                        float f_v, float eta_here, vec3 n_here,
                         float chain_in, uint R, inout vec3 C, inout float A, inout vec3 M) {
     float chain_code = 0.0;
     vec2 uv_v = project(vp);
@@ -592,7 +597,8 @@ float composite_segment(vec3 vp, vec3 vd, vec3 dir, float seg_len, float v_prev,
     if (reflections || specular) {
         float reflected, highlight_ratio;
         vec3 reflected_dir, highlight_n;
-        face_met(vp, vd, dir, seg_len, n_here, v_prev, eta_prev, f_v, eta_here, reflections,
+        // (eta at the previous point is not kept in the state: sweep_plane_io.glsl.)
+        face_met(vp, vd, dir, seg_len, n_here, v_prev, eta_of(v_prev), f_v, eta_here, reflections,
                  reflected, reflected_dir, highlight_n, highlight_ratio);
         if (reflected > 0.0) {
             C += (1.0 - A) * M * reflected * environment_radiance(reflected_dir);

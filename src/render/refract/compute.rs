@@ -60,7 +60,7 @@ pub(crate) struct ComputeFrame<'a> {
     pub(crate) ray_image: [u32; 2],
     /// The splat's fixed-point unit.
     pub(crate) unit: f32,
-    pub(crate) dumps: &'a [(StateBuffer, u32, Buffer)],
+    pub(crate) dumps: &'a [DumpCopy],
     /// Every how many planes the light is kept for the reflections that see the volume
     /// (none without them).
     pub(crate) record_stride: Option<u32>,
@@ -121,13 +121,15 @@ impl SweepPass {
     /// copied layer is in TRANSFER_SRC, and every dispatch names both layers).
     fn compute_dumps(&self, rec: &mut Recorder, f: &ComputeFrame, plane: u32) {
         let write = plane % 2;
-        for (b, at, buf) in f.dumps {
-            if *at != plane {
-                continue;
+        for d in f.dumps.iter().filter(|d| d.plane == plane) {
+            for (image, buf) in self
+                .dump_parts(f.forward, d.buffer)
+                .into_iter()
+                .zip(&d.parts)
+            {
+                rec.copy_image_to_buffer(image, write, buf);
+                rec.transition(image, 0..2, Access::ComputeStorage);
             }
-            let image = self.dump_image(f.forward, *b);
-            rec.copy_image_to_buffer(image, write, buf);
-            rec.transition(image, 0..2, Access::ComputeStorage);
         }
         if let Some(stride) = f.record_stride {
             if self.record_light(rec, f.forward, plane, stride) {
@@ -210,7 +212,7 @@ impl SweepPass {
             let light_now = i < n;
             // (Keeping the light for the reflections copies out as a dump does.)
             let dumps_prev = view_prev.is_some_and(|p| {
-                f.dumps.iter().any(|d| d.1 == p)
+                f.dumps.iter().any(|d| d.plane == p)
                     || f.record_stride.is_some_and(|k| Self::records(p, k))
             });
             let mut batch = Vec::new();

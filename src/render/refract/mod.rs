@@ -1,9 +1,11 @@
 //! The refractive plane sweep (thesis ch. 4, ch. 5, Algorithm 1) on Vulkan.
 //!
-//! Per frame, in ONE command buffer: a compute setup pass initialises six state buffers
-//! (light colour, light direction, viewing-ray position, viewing-ray direction, colour +
-//! opacity, medium) and, for the forward light transport, the light rays and the
-//! irradiance; then the view-aligned planes; then a compute pass composites the
+//! Per frame, in ONE command buffer: a compute setup pass initialises the state images
+//! (the backward transport's five: light colour, light direction, viewing-ray direction,
+//! colour + opacity, medium, with the viewing ray's point x, y in the light images' w and
+//! its depth its plane's, [`StateBuffer::BACKWARD`]; the forward transport's viewing rays
+//! keep x, y in a viewing-ray position image) and, for the forward light transport, the
+//! light rays and the irradiance; then the view-aligned planes; then a compute pass composites the
 //! background. Each buffer is ONE 2D image with 2 array layers; plane i renders layer
 //! i % 2 through a framebuffer of per-layer views and samples layer 1 - i % 2 through
 //! per-layer sampled views. The read layer arrives as a push constant: nothing is rebound
@@ -40,7 +42,9 @@ use crate::vk::{
     RenderPass,
 };
 
-/// The six state buffers, in attachment order, and what else a plane can be dumped as.
+/// The six state images (the backward transport uses five of them: [`StateBuffer::BACKWARD`];
+/// a dump of `ViewPosition` is put together from the compact state), and what else a plane
+/// can be dumped as.
 ///
 /// With the forward light transport `LightColour` and `LightDirection` dump the plane's
 /// light as the viewing rays see it (the splatted irradiance, and the luminance-weighted
@@ -67,6 +71,19 @@ impl StateBuffer {
         let d = Self::DUMPABLE;
         [d[0], d[1], d[2], d[3], d[4], d[5]]
     };
+
+    /// The backward transport's compact state, in attachment order (the fragment path's
+    /// render pass; glsl/sweep_plane_io.glsl): light colour and direction with the viewing
+    /// ray's x and y in their w, its direction with the value at its point in w, colour
+    /// and opacity, medium. `ViewPosition` holds the forward transport's x and y only; a
+    /// ray's depth is its plane's.
+    pub const BACKWARD: [StateBuffer; 5] = [
+        StateBuffer::LightColour,
+        StateBuffer::LightDirection,
+        StateBuffer::ViewDirection,
+        StateBuffer::ColourOpacity,
+        StateBuffer::Medium,
+    ];
 
     /// Everything `--dump` accepts.
     pub const DUMPABLE: [StateBuffer; 8] = [
@@ -314,11 +331,19 @@ impl ModelPass for SweepPass {
     }
 }
 
+/// One requested dump: the state buffer, the plane after which it is copied, and one
+/// readback buffer per image it is made from ([`SweepPass::dump_parts`]).
+pub(crate) struct DumpCopy {
+    pub buffer: StateBuffer,
+    pub plane: u32,
+    pub parts: Vec<Buffer>,
+}
+
 /// What recording a sweep leaves for after the submission: the plane stats and the
 /// buffers the requested dumps are copied into (alive until the submission completes).
 pub(crate) struct SweepRecording {
     pub stats: SweepStats,
-    pub dumps: Vec<(StateBuffer, u32, Buffer)>,
+    pub dumps: Vec<DumpCopy>,
     /// Where the clamp counters are copied to; `None` for frames that are not read back
     /// (the viewer's): the copy would outlive this recording's buffer.
     clamp_readback: Option<Buffer>,
@@ -358,29 +383,77 @@ impl SweepRecording {
 
     /// The dumps, once the submission has completed.
     pub fn read_dumps(&self, width: u32, height: u32) -> Result<Vec<Dump>> {
+        let forward = self.stats.light_transport == LightTransport::Forward;
         self.dumps
             .iter()
-            .map(|(b, plane, buf)| {
+            .map(|d| {
                 // The forward transport's rays live in images of their own size.
-                let (width, height) = match (self.stats.light_transport, b) {
-                    (
-                        LightTransport::Forward,
-                        StateBuffer::LightRays | StateBuffer::LightRayDirections,
-                    ) => (self.stats.light_rays[2], self.stats.light_rays[3]),
+                let (width, height) = match (forward, d.buffer) {
+                    (true, StateBuffer::LightRays | StateBuffer::LightRayDirections) => {
+                        (self.stats.light_rays[2], self.stats.light_rays[3])
+                    }
                     _ => (width, height),
                 };
+                let texels = width as usize * height as usize;
+                let parts = d
+                    .parts
+                    .iter()
+                    .map(|b| b.read_values::<[f32; 4]>(texels))
+                    .collect::<Result<Vec<_>>>()?;
+                let pixels = if d.buffer == StateBuffer::ViewPosition {
+                    view_positions(&parts, forward, self.stats.planes, d.plane)
+                } else {
+                    parts.into_iter().next().expect("a dump has an image")
+                };
                 Ok(Dump {
-                    buffer: *b,
-                    plane: *plane,
-                    depth: self.stats.planes.depth(*plane),
+                    buffer: d.buffer,
+                    plane: d.plane,
+                    depth: self.stats.planes.depth(d.plane),
                     width,
                     height,
-                    pixels: buf.read_values(width as usize * height as usize)?,
+                    pixels,
                 })
             })
             .collect()
     }
 }
+
+/// The viewing rays' points after plane `plane` (x, y, z, and the value there in w) from
+/// the compact state's images as [`SweepPass::dump_parts`] lists them: x and y from the
+/// light images' w (backward) or `view_position` (forward), the value from
+/// `view_direction`'s w, and the depth from `medium`'s mark (glsl/sweep_plane_io.glsl):
+/// a ray the setup left on plane 0 is there, a ray finished at plane k stays on plane
+/// k + 1, every other one is on the next plane.
+fn view_positions(
+    parts: &[Vec<[f32; 4]>],
+    forward: bool,
+    planes: Planes,
+    plane: u32,
+) -> Vec<[f32; 4]> {
+    let n = parts.len();
+    (0..parts[0].len())
+        .map(|i| {
+            let (x, y) = if forward {
+                (parts[0][i][0], parts[0][i][1])
+            } else {
+                (parts[0][i][3], parts[1][i][3])
+            };
+            let value = parts[n - 2][i][3];
+            let mark = parts[n - 1][i][3];
+            let z = if mark == VIEW_RAY_AT_SETUP {
+                planes.depth(0)
+            } else if mark <= -1.0 {
+                planes.depth((-mark) as u32)
+            } else {
+                planes.depth(plane + 1)
+            };
+            [x, y, z, value]
+        })
+        .collect()
+}
+
+/// `medium.w` of a viewing ray the setup left on plane 0 (glsl/sweep_common.glsl).
+const VIEW_RAY_AT_SETUP: f32 = -0.5;
 
 /// A state buffer copied out after a plane.
 #[derive(Clone, Debug)]

@@ -11,7 +11,7 @@ use super::pipelines::{
 use super::*;
 
 /// An image of two layers (the ping-pong of the plane sweep) with a view of each layer:
-/// the six state buffers; the forward transport's irradiance (rgb) and light direction
+/// the state images ([`StateBuffer`]); the forward transport's irradiance (rgb) and light direction
 /// (luminance-weighted sum of unit directions, weight in w) of the last two planes, plane
 /// i in layer i % 2; and its light rays.
 pub(crate) struct StateImage {
@@ -225,9 +225,11 @@ impl SweepPass {
         );
         let cells_fit = cells_bytes <= range;
         let max_attachments = ctx.info().limits.max_color_attachments;
-        if max_attachments < 6 {
+        let backward_attachments = StateBuffer::BACKWARD.len();
+        if (max_attachments as usize) < backward_attachments {
             bail!(
-                "the plane sweep writes 6 colour attachments per plane; device '{}' allows {}",
+                "the plane sweep writes {backward_attachments} colour attachments per plane; \
+                 device '{}' allows {}",
                 ctx.info().name,
                 max_attachments
             );
@@ -239,12 +241,15 @@ impl SweepPass {
             .collect::<Result<Vec<_>>>()?;
         let render_pass = RenderPass::new(
             ctx,
-            &[STATE_FORMAT; 6],
+            &[STATE_FORMAT; StateBuffer::BACKWARD.len()],
             Access::AttachmentGeneral,
             "sweep plane",
         )?;
         let fb = |layer: usize| {
-            let views: Vec<&LayerView> = states.iter().map(|s| &s.layers[layer]).collect();
+            let views: Vec<&LayerView> = StateBuffer::BACKWARD
+                .iter()
+                .map(|b| &states[b.index()].layers[layer])
+                .collect();
             Framebuffer::new(
                 ctx,
                 &render_pass,
@@ -636,6 +641,37 @@ impl SweepPass {
             (true, StateBuffer::LightRayDirections) => &self.rays[1].image,
             _ => &self.states[b.index()].image,
         }
+    }
+
+    /// The images a dump of `b` is made from: the one [`SweepPass::dump_image`] names,
+    /// but for the viewing rays' points, which the compact state keeps in parts (x, y
+    /// beside other values, the value at the point, the mark that says the depth:
+    /// `view_positions` in mod.rs puts them together).
+    pub(crate) fn dump_parts(&self, forward: bool, b: StateBuffer) -> Vec<&Image> {
+        let image = |b: StateBuffer| &self.states[b.index()].image;
+        match (forward, b) {
+            (false, StateBuffer::ViewPosition) => vec![
+                image(StateBuffer::LightColour),
+                image(StateBuffer::LightDirection),
+                image(StateBuffer::ViewDirection),
+                image(StateBuffer::Medium),
+            ],
+            (true, StateBuffer::ViewPosition) => vec![
+                image(StateBuffer::ViewPosition),
+                image(StateBuffer::ViewDirection),
+                image(StateBuffer::Medium),
+            ],
+            _ => vec![self.dump_image(forward, b)],
+        }
+    }
+
+    /// The backward transport's five state images ([`StateBuffer::BACKWARD`]), in its
+    /// render pass's attachment order.
+    pub(crate) fn backward_states(&self) -> Vec<&StateImage> {
+        StateBuffer::BACKWARD
+            .iter()
+            .map(|b| &self.states[b.index()])
+            .collect()
     }
 
     /// The same layers of all six state images, bound for the same use.

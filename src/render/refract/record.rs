@@ -192,21 +192,27 @@ impl SweepPass {
         } else {
             None
         };
-        let dump_buffers: Vec<(StateBuffer, u32, Buffer)> = sweep
+        let dump_buffers: Vec<DumpCopy> = sweep
             .dumps
             .iter()
             .map(|&(b, plane)| {
-                let image = match (forward_on, b) {
-                    (true, StateBuffer::LightRays) => &self.rays[0].image,
-                    (true, StateBuffer::LightRayDirections) => &self.rays[1].image,
-                    _ => &self.states[b.index()].image,
-                };
-                let buf = Buffer::readback(
-                    ctx,
-                    image.layer_bytes()?,
-                    &format!("dump {}@{plane}", b.name()),
-                )?;
-                Ok((b, plane, buf))
+                let parts = self
+                    .dump_parts(forward_on, b)
+                    .into_iter()
+                    .enumerate()
+                    .map(|(k, image)| {
+                        Buffer::readback(
+                            ctx,
+                            image.layer_bytes()?,
+                            &format!("dump {}@{plane} part {k}", b.name()),
+                        )
+                    })
+                    .collect::<Result<_>>()?;
+                Ok(DumpCopy {
+                    buffer: b,
+                    plane,
+                    parts,
+                })
             })
             .collect::<Result<_>>()?;
 
@@ -400,7 +406,7 @@ impl SweepPass {
                     None => self.draw_plane_region(
                         rec,
                         (&self.render_pass, &self.framebuffers[write as usize]),
-                        &self.states,
+                        &self.backward_states(),
                         regions[i as usize],
                         plane_pipeline,
                         &push,
@@ -425,11 +431,14 @@ impl SweepPass {
                     )?,
                 }
                 let splat = forward;
-                for (b, plane, buf) in &dump_buffers {
-                    if *plane != i {
-                        continue;
+                for d in dump_buffers.iter().filter(|d| d.plane == i) {
+                    for (image, buf) in self
+                        .dump_parts(splat.is_some(), d.buffer)
+                        .iter()
+                        .zip(&d.parts)
+                    {
+                        rec.copy_image_to_buffer(image, write, buf);
                     }
-                    rec.copy_image_to_buffer(self.dump_image(splat.is_some(), *b), write, buf);
                 }
                 if let Some(stride) = record_stride {
                     self.record_light(rec, splat.is_some(), i, stride);

@@ -41,7 +41,7 @@ impl SweepPass {
         &self,
         rec: &mut Recorder,
         (pass, framebuffer): (&RenderPass, &Framebuffer),
-        images: &[StateImage],
+        images: &[&StateImage],
         area: Area,
         pipeline: &GraphicsPipeline,
         push: &PlanePush,
@@ -275,7 +275,7 @@ impl SweepPass {
         self.draw_plane_region(
             rec,
             (&self.view_pass, &self.view_framebuffers[write as usize]),
-            &self.states[2..],
+            &self.states[2..].iter().collect::<Vec<_>>(),
             regions[i as usize],
             &fp.view,
             &push,

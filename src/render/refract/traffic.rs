@@ -23,10 +23,13 @@ impl SweepPass {
             // Render-pass load and store of the four viewing-ray attachments.
             8 + fetch * view_reads
         } else {
-            // Load and store of the six attachments; the light direction here; per
-            // soft-kernel tap the four texels of light colour and of direction.
+            // Load and store of the five attachments (the compact state,
+            // glsl/sweep_plane_io.glsl); the light direction here; per soft-kernel tap
+            // the four texels of light colour and of direction. (The viewing ray's four
+            // reads: its x in the light colour's texel, its y in the light direction's,
+            // already read, and its three images.)
             let taps = if f.features.soft_light { 3 } else { 1 };
-            12 + fetch * (pixel + taps * 2 * bilinear + view_reads)
+            10 + fetch * (pixel + taps * 2 * bilinear + view_reads)
         };
         let mut texels = f.shaded_pixels * texels_per_pixel;
         if f.forward {
@@ -49,14 +52,15 @@ impl SweepPass {
     /// The compulsory part of a plane's state traffic (see
     /// [`SweepStats::compulsory_bytes_per_plane`]): each state texel the plane needs, read
     /// once and written once, in the state's present layout (RGBA32F texels). Backward:
-    /// the six state images per shaded pixel. Forward: the four viewing-ray images and
+    /// the five images of the compact state per shaded pixel (160 B; Algorithm 1's 19
+    /// scalars and the skin chain fill them). Forward: the four viewing-ray images and
     /// the irradiance's two per shaded pixel (read), the irradiance written over the
     /// viewport by the splat, and each light ray's two texels.
     pub fn compulsory_bytes_per_plane(&self, f: TrafficInputs) -> u64 {
         let texels = if f.forward {
             f.shaded_pixels * (4 * 2 + 2) + f.viewport_pixels * 2 + f.light_rays * 2 * 2
         } else {
-            f.shaded_pixels * 6 * 2
+            f.shaded_pixels * StateBuffer::BACKWARD.len() as u64 * 2
         };
         texels * STATE_BYTES_PER_PIXEL
     }
