@@ -6,4 +6,5 @@
 #define FORWARD_LIGHT 0
 #define SOFT_LIGHT 0
 #define PASS 0
+#define LIGHT_TILE_READS 1   // the `tile` lever (sweep_plane_io.glsl)
 #include "sweep_plane.glsl"

@@ -57,6 +57,22 @@ Bilinear bilinear_taps(ivec2 size, vec2 uv) {
     return b;
 }
 
+// The backward plane's light reads: light colour and direction of the read layer, texel
+// by texel (FETCH_LIGHT, READ_LIGHT_PIXEL) or bilinearly (READ_BUFFER). A shader that
+// defines LIGHT_TILE_READS 1 (the compute sweep's backward plane, sweep.comp) may serve
+// them from a workgroup tile (the `tile` lever, issue 31: light_tile_texel,
+// sweep_plane_io.glsl); every other shader fetches them from the images.
+#ifndef LIGHT_TILE_READS
+#define LIGHT_TILE_READS 0
+#endif
+#if LIGHT_TILE_READS
+vec4 light_tile_texel(uint which, ivec2 texel, uint layer);   // 0: colour, 1: direction
+#define FETCH_LIGHT(name, which, pixel, layer) light_tile_texel((which), (pixel), (layer))
+#else
+#define FETCH_LIGHT(name, which, pixel, layer) FETCH_LAYER(name, pixel, layer)
+#endif
+#define READ_LIGHT_PIXEL(name, which, layer, pixel) FETCH_LIGHT(name, which, pixel, layer)
+
 #if SWEEP_COMPUTE
 // Storage images cannot be passed to a function of any image (their format is part of
 // the type), so each binding the sweep reads bilinearly gets its own function,
@@ -72,8 +88,17 @@ Bilinear bilinear_taps(ivec2 size, vec2 uv) {
         return sum; \
     }
 #define READ_BUFFER(name, layer, uv) bilinear_##name((layer), (uv))
-DEFINE_BILINEAR(light_colour)
-DEFINE_BILINEAR(light_direction)
+// The light's two images through FETCH_LIGHT (the same taps, weights and order).
+#define DEFINE_LIGHT_BILINEAR(name, which) \
+    vec4 bilinear_##name(uint layer, vec2 uv) { \
+        Bilinear b = bilinear_taps(STATE_SIZE(name), uv); \
+        vec4 sum = vec4(0.0); \
+        for (int k = 0; k < 4; ++k) \
+            sum += b.weight[k] * FETCH_LIGHT(name, which, b.texel[k], layer); \
+        return sum; \
+    }
+DEFINE_LIGHT_BILINEAR(light_colour, 0u)
+DEFINE_LIGHT_BILINEAR(light_direction, 1u)
 #else
 #define STATE_SIZE(tex) textureSize(tex, 0).xy
 #define DEFINE_BILINEAR(name)

@@ -152,7 +152,7 @@ void advance_light_ray(vec4 lc, vec4 lv, inout vec3 flux, out vec3 v_new, out ve
 // so a neighbour's value is bit for bit what that neighbour's invocation holds).
 vec3 light_origin(ivec2 px, uint R, float ds) {
     vec3 p = plane_point((vec2(px) + 0.5) / P.camera.zw, pc.depth);
-    vec3 ld = READ_PIXEL(light_direction, R, px).xyz;
+    vec3 ld = READ_LIGHT_PIXEL(light_direction, 1u, R, px).xyz;
     return p - ld * (ds / ld.z);
 }
 #endif
@@ -200,7 +200,7 @@ void backward_light_step(vec2 uv, ivec2 pixel, out vec3 light, out vec3 light_di
     float ds = P.planes.y;
     float ref_step = P.planes.w;
     vec3 p = plane_point(uv, pc.depth);
-    vec3 ld_here = READ_PIXEL(light_direction, R, pixel).xyz;
+    vec3 ld_here = READ_LIGHT_PIXEL(light_direction, 1u, R, pixel).xyz;
     // Backward (semi-Lagrangian) step: follow the light direction back to plane i-1.
     vec3 lp = p - ld_here * (ds / ld_here.z);
     vec2 uv_lp = project(lp);

@@ -88,8 +88,8 @@ void light_at(vec2 uv, uint layer, out vec3 light, out vec3 dir) {
         ivec2 o = ivec2(k & 1, k >> 1);
         ivec2 c = clamp(i + o, ivec2(0), hi);
         float w = (o.x == 1 ? t.x : 1.0 - t.x) * (o.y == 1 ? t.y : 1.0 - t.y);
-        vec3 l = READ_PIXEL(light_colour, layer, c).rgb;
-        vec3 d = READ_PIXEL(light_direction, layer, c).xyz;
+        vec3 l = READ_LIGHT_PIXEL(light_colour, 0u, layer, c).rgb;
+        vec3 d = READ_LIGHT_PIXEL(light_direction, 1u, layer, c).xyz;
         float lum = dot(l, vec3(0.2126, 0.7152, 0.0722));
         light += w * l;
         d_plain += w * d;

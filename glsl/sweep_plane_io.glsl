@@ -81,8 +81,62 @@ layout(push_constant) uniform Push {
 #define WRITE_VIEW_XY(xy) out_view_position = vec4((xy), 0.0, 0.0)
 #else
 #define READ_VIEW_XY(R, px) \
-    vec2(READ_PIXEL(light_colour, R, px).w, READ_PIXEL(light_direction, R, px).w)
+    vec2(READ_LIGHT_PIXEL(light_colour, 0u, R, px).w, \
+         READ_LIGHT_PIXEL(light_direction, 1u, R, px).w)
 #define WRITE_VIEW_XY(xy) { out_light_colour.w = (xy).x; out_light_direction.w = (xy).y; }
+#endif
+
+#if SWEEP_COMPUTE && LIGHT_TILE_READS
+// The `tile` lever (issue 31, specialization constants 12 and 13): the backward plane's
+// light reads served from a workgroup tile. A pixel's reads of the previous plane's
+// light fall near it: the backward step's origin (a plane spacing along the light), the
+// soft kernel's three taps around it, the neighbours' origins for the intensity law, the
+// viewing ray's light where it is. So each workgroup first loads the light colour and
+// direction of its 8 x 8 pixels and LIGHT_TILE_HALO pixels around them into shared
+// memory, (8 + 2 halo)^2 texels of each, a few per invocation, and every read that falls
+// inside is served from there; one that falls outside (light turned far, an image edge
+// clamped away from the tile) is fetched as before. The tile holds the very texels the
+// fetches would return, and the bilinear arithmetic is the same, so the image is the
+// same bit for bit (tests/compute_sweep.rs, halo 4 and halo 0, where every read beyond
+// the workgroup's own pixels is a fetch). For GPUs: on llvmpipe fetches and shared
+// reads cost much the same (docs/NOTES.md, "The light's tile").
+layout(constant_id = 12) const bool LIGHT_TILE = false;
+layout(constant_id = 13) const int LIGHT_TILE_HALO = 4;
+const int LIGHT_TILE_SIDE = 8 + 2 * LIGHT_TILE_HALO;
+shared vec4 tile_light_colour[LIGHT_TILE_SIDE * LIGHT_TILE_SIDE];
+shared vec4 tile_light_direction[LIGHT_TILE_SIDE * LIGHT_TILE_SIDE];
+ivec2 g_tile_origin;   // the image texel of the tile's first entry
+
+// Every invocation of the workgroup, in uniform control flow (before any returns).
+// Texels past the image's edge are loaded clamped onto it; a read never asks for one
+// there (its taps are clamped first), so they are never served.
+void load_light_tile() {
+    g_tile_origin = pc.origin + ivec2(gl_WorkGroupID.xy) * 8 - LIGHT_TILE_HALO;
+    ivec2 hi = imageSize(light_colour).xy - 1;
+    const int n = LIGHT_TILE_SIDE * LIGHT_TILE_SIDE;
+    for (int k = int(gl_LocalInvocationIndex); k < n; k += 64) {
+        ivec2 t = g_tile_origin + ivec2(k % LIGHT_TILE_SIDE, k / LIGHT_TILE_SIDE);
+        ivec3 at = ivec3(clamp(t, ivec2(0), hi), pc.read_layer);
+        tile_light_colour[k] = imageLoad(light_colour, at);
+        tile_light_direction[k] = imageLoad(light_direction, at);
+    }
+    memoryBarrierShared();
+    barrier();
+}
+
+vec4 light_tile_texel(uint which, ivec2 texel, uint layer) {
+    ivec2 t = texel - g_tile_origin;
+    if (LIGHT_TILE && layer == pc.read_layer && all(greaterThanEqual(t, ivec2(0)))
+        && all(lessThan(t, ivec2(LIGHT_TILE_SIDE)))) {
+        int k = t.y * LIGHT_TILE_SIDE + t.x;
+        return which == 0u ? tile_light_colour[k] : tile_light_direction[k];
+    }
+    ivec3 at = ivec3(texel, layer);
+    return which == 0u ? imageLoad(light_colour, at) : imageLoad(light_direction, at);
+}
+#define LOAD_LIGHT_TILE if (LIGHT_TILE) load_light_tile();
+#else
+#define LOAD_LIGHT_TILE
 #endif
 
 // The compute entry point: the invocation's pixel, the plane's work, its stores
@@ -90,6 +144,7 @@ layout(push_constant) uniform Push {
 #if SWEEP_COMPUTE
 #define COMPUTE_ENTRY \
     void main() { \
+        LOAD_LIGHT_TILE \
         ivec2 gid = ivec2(gl_GlobalInvocationID.xy); \
         if (any(greaterThanEqual(gid, pc.extent))) return; \
         g_pixel = pc.origin + gid; \

@@ -17,6 +17,9 @@
 #                                   --variant sweep=fragment,splat=compute
 #                                   --variant sweep=compute,gather=pixels
 #        --light-transport backward --variant sweep=compute --variant sweep=fragment
+#                                   --variant sweep=compute,tile=on
+#      (tile=on: the backward plane's light reads from a workgroup tile, issue 31;
+#      the same image, off by default until this has timed it on a GPU)
 #      each with --scale, --frames, --warmup, --json and wrapped in `timeout` with what is
 #      left of the time budget. Rows stop when the budget is spent; the report says which
 #      rows ran and why the others did not (time budget, timeout, failure). The budget
@@ -222,7 +225,7 @@ runs="$work/runs.tsv"
 common=(--device "$dev_index" --scale "$scale" --frames "$frames" --warmup "$warmup" --quiet)
 variants_forward=(--variant sweep=compute --variant sweep=fragment --variant sweep=fragment,splat=compute
                   --variant sweep=compute,gather=pixels)
-variants_backward=(--variant sweep=compute --variant sweep=fragment)
+variants_backward=(--variant sweep=compute --variant sweep=fragment --variant sweep=compute,tile=on)
 
 t_start=$(date +%s)
 remaining() { echo $((budget - ($(date +%s) - t_start))); }
@@ -488,6 +491,8 @@ def classify(var, pos):
     sweep, splat = lv.get("sweep"), lv.get("splat")
     if sweep == "compute" and lv.get("gather") == "pixels":
         return "compute_gather_pixels"
+    if sweep == "compute" and lv.get("tile") not in (None, "off"):
+        return "compute_tile"
     if sweep == "compute":
         return "compute"
     if sweep == "fragment" and splat == "compute":
@@ -505,7 +510,7 @@ for inv in invocations:
     for r in rep.get("rows", []):
         line = {"row": r.get("dataset"), "light_transport": transport,
                 "compute_ms": None, "fragment_ms": None, "fragment_splat_compute_ms": None,
-                "compute_gather_pixels_ms": None}
+                "compute_gather_pixels_ms": None, "compute_tile_ms": None}
         for pos, var in enumerate(r.get("variants", [])):
             c = classify(var, pos)
             if c:
@@ -521,18 +526,19 @@ def fmt_ratio(v):
     return "—" if v is None else "%.3f" % v
 
 table = [
-    "| Row | Transport | sweep=compute ms | sweep=fragment ms | compute / fragment | sweep=fragment,splat=compute ms | sweep=compute,gather=pixels ms |",
-    "|---|---|---:|---:|---:|---:|---:|",
+    "| Row | Transport | sweep=compute ms | sweep=fragment ms | compute / fragment | sweep=fragment,splat=compute ms | sweep=compute,gather=pixels ms | sweep=compute,tile=on ms |",
+    "|---|---|---:|---:|---:|---:|---:|---:|",
 ]
 for s in summary:
     fwd = s["light_transport"] == "forward"
-    table.append("| %s | %s | %s | %s | %s | %s | %s |" % (
+    table.append("| %s | %s | %s | %s | %s | %s | %s | %s |" % (
         s["row"], s["light_transport"], fmt_ms(s["compute_ms"]), fmt_ms(s["fragment_ms"]),
         fmt_ratio(s["compute_over_fragment"]),
         fmt_ms(s["fragment_splat_compute_ms"]) if fwd else "n/a",
-        fmt_ms(s["compute_gather_pixels_ms"]) if fwd else "n/a"))
+        fmt_ms(s["compute_gather_pixels_ms"]) if fwd else "n/a",
+        "n/a" if fwd else fmt_ms(s["compute_tile_ms"])))
 if not summary:
-    table.append("| (no row ran) | | | | | | |")
+    table.append("| (no row ran) | | | | | | | |")
 
 # Baselines.
 base_inv = next((v for v in invocations if v["kind"] == "thesis-baselines"), None)
@@ -600,7 +606,7 @@ report = {
         "variants": {
             "forward": ["sweep=compute", "sweep=fragment", "sweep=fragment,splat=compute",
                         "sweep=compute,gather=pixels"],
-            "backward": ["sweep=compute", "sweep=fragment"],
+            "backward": ["sweep=compute", "sweep=fragment", "sweep=compute,tile=on"],
         },
         "allow_cpu": E["GB_ALLOW_CPU"] == "1",
     },

@@ -82,6 +82,55 @@ fn compute_and_fragment_sweeps_render_the_same_glass_sphere_on_its_floor() {
     });
 }
 
+/// The `tile` lever (the compute backward plane's light reads served from a workgroup
+/// tile in shared memory) reads the very texels the fetches would and interpolates them
+/// the same way: the frame is the same bits as without it, with the default halo and
+/// with none (every read beyond the workgroup's own 8 × 8 pixels then falls back to a
+/// fetch, which the refracted light, the soft kernel's taps and the neighbours' origins
+/// all make), hard and soft light, sample distances 1 and 0.5, on an image whose sides
+/// are not multiples of the workgroup (partial workgroups load the tile too) and whose
+/// drawn region starts off the workgroup grid.
+#[test]
+fn the_light_tile_renders_the_fetches_image_bit_for_bit() {
+    with_context(|ctx| {
+        let (scene, mut renderer, cam) = sphere_on_floor_oblique(ctx);
+        for (sd, softness) in [(1.0, 1.0), (0.5, 0.0), (0.5, 2.0)] {
+            let mut opts = scene.render_options().unwrap();
+            opts.width = 44;
+            opts.height = 36;
+            opts.sample_distance = sd;
+            opts.sweep.light_transport = LightTransport::Backward;
+            opts.light_mut().softness = softness;
+            let mut frame = |tile: Option<u32>| {
+                opts.sweep.levers = Levers {
+                    tile,
+                    ..path(SweepPath::Compute)
+                };
+                renderer.render(Model::Refract, &cam, &opts).unwrap()
+            };
+            let fetched = frame(None);
+            let lit = fetched.pixels.iter().filter(|p| p[3] > 0.05).count();
+            assert!(lit > 200, "the frame shows the volume ({lit} pixels)");
+            for halo in [Levers::DEFAULT_TILE_HALO, 0] {
+                let tiled = frame(Some(halo));
+                let differ = fetched
+                    .pixels
+                    .iter()
+                    .zip(&tiled.pixels)
+                    .filter(|(a, b)| a.map(f32::to_bits) != b.map(f32::to_bits))
+                    .count();
+                assert_eq!(
+                    differ,
+                    0,
+                    "sd {sd} softness {softness} halo {halo}: {differ} pixels differ \
+                     (linear max |Δ| {:.3e})",
+                    linear_max(&fetched.pixels, &tiled.pixels)
+                );
+            }
+        }
+    });
+}
+
 /// The gather splat (the compute path's) sums the same 32.32 fixed-point deposits as the
 /// atomic compute splat (the fragment path's `splat=compute`), only without atomics: the
 /// irradiance and the light directions of every plane dumped are the same bits, and so is

@@ -519,6 +519,7 @@ mod tests {
                     } else {
                         crate::render::Deposit::Cells
                     },
+                    tile: [None, Some(Levers::DEFAULT_TILE_HALO), Some(2)][(bits % 3) as usize],
                 };
                 let n = variant_name(l);
                 assert_eq!(Levers::parse(&n).unwrap(), l, "{n}");

@@ -108,10 +108,12 @@ pub fn block_members(spirv: &[u8], block: &str) -> Result<Vec<Member>> {
                 types.insert(w[0], Type::Matrix { count: w[2] });
             }
             OP_TYPE_ARRAY if w.len() >= 3 => {
-                let length = *constants
-                    .get(&w[2])
-                    .context("array length is not a plain constant")?;
-                types.insert(w[0], Type::Array { length });
+                // An array sized by a specialization constant (a shared-memory tile) has
+                // no length until the pipeline is made; it is left out, so a block that
+                // used one would fail below as a member of unknown type.
+                if let Some(&length) = constants.get(&w[2]) {
+                    types.insert(w[0], Type::Array { length });
+                }
             }
             OP_TYPE_STRUCT if !w.is_empty() => {
                 types.insert(w[0], Type::Struct(w[1..].to_vec()));

@@ -211,6 +211,16 @@ pub struct Levers {
     /// float rounding (and, with softness, within 3e-7 of a penumbra's tail).
     #[serde(default = "on")]
     pub needed_rays: bool,
+    /// `tile=on` (or `tile=H`, a halo of H pixels, 0-8; `on` is
+    /// [`Levers::DEFAULT_TILE_HALO`]): the compute path's backward plane reads the
+    /// previous plane's light from a workgroup tile of its 8 × 8 pixels and H around
+    /// them in shared memory, and fetches only what falls outside (issue 31's compact
+    /// state, item 2; glsl/sweep_plane_io.glsl). The same image bit for bit. Off by
+    /// default: built for GPUs, not yet timed on one (`scripts/gpu-bench.sh` times it);
+    /// on lavapipe it gains nothing (docs/NOTES.md, "The light's tile"). The fragment
+    /// path and the forward transport do not read through it.
+    #[serde(default)]
+    pub tile: Option<u32>,
 }
 
 fn pairs() -> Gather {
@@ -242,6 +252,7 @@ impl Default for Levers {
             deposit: Deposit::Boxes,
             gather: Gather::Pairs,
             needed_rays: true,
+            tile: None,
         }
     }
 }
@@ -259,13 +270,24 @@ impl Levers {
         deposit: Deposit::Boxes,
         gather: Gather::Pixels,
         needed_rays: false,
+        tile: None,
     };
+
+    /// The halo `tile=on` stands for: the backward step's origin lies a plane spacing
+    /// along the light from the pixel and the soft kernel reaches `softness` reference
+    /// steps around it, about a pixel each at the thesis' sizes.
+    pub const DEFAULT_TILE_HALO: u32 = 4;
+
+    /// The largest halo `tile=H` takes (a tile of 24 × 24 texels, 18 KiB of shared
+    /// memory: more than the 16 KiB every device must offer, so the device's limit is
+    /// checked when the pipelines are made).
+    pub const MAX_TILE_HALO: u32 = 8;
 
     /// The keys of [`Levers::parse`], with their values, for help texts.
     pub const SYNTAX: &'static str =
         "region=full|rect|octagon, field=off|on, arrays=off|on, specialize=off|on, \
          splat=raster|groups|compute, sweep=auto|fragment|compute, clear=off|on, \
-         deposit=cells|boxes, gather=pairs|pixels|blocks, rays=all|needed";
+         deposit=cells|boxes, gather=pairs|pixels|blocks, rays=all|needed, tile=off|on|0-8";
 
     /// `default`, `reference`, or comma-separated `key=value` pairs applied to the
     /// default (e.g. `region=full,field=off`); a pair may also follow `reference,` to
@@ -352,6 +374,20 @@ impl Levers {
                         _ => bail!("rays={value}: expected all or needed"),
                     }
                 }
+                "tile" => {
+                    levers.tile = match value {
+                        "off" => None,
+                        "on" => Some(Self::DEFAULT_TILE_HALO),
+                        _ => match value.parse::<u32>() {
+                            Ok(h) if h <= Self::MAX_TILE_HALO => Some(h),
+                            _ => bail!(
+                                "tile={value}: expected off, on or a halo in pixels from 0 \
+                                 to {}",
+                                Self::MAX_TILE_HALO
+                            ),
+                        },
+                    }
+                }
                 "sweep" => {
                     levers.sweep = match value {
                         "auto" => SweepPath::Auto,
@@ -421,7 +457,7 @@ impl fmt::Display for Levers {
         write!(
             f,
             "region={},field={},arrays={},specialize={},splat={},sweep={},clear={},deposit={},\
-             gather={},rays={}",
+             gather={},rays={},tile={}",
             match self.region {
                 Region::Full => "full",
                 Region::Rect => "rect",
@@ -439,7 +475,12 @@ impl fmt::Display for Levers {
             on(self.clear),
             self.deposit.name(),
             self.gather.name(),
-            if self.needed_rays { "needed" } else { "all" }
+            if self.needed_rays { "needed" } else { "all" },
+            match self.tile {
+                None => "off".to_string(),
+                Some(Self::DEFAULT_TILE_HALO) => "on".to_string(),
+                Some(h) => h.to_string(),
+            }
         )
     }
 }
@@ -474,6 +515,8 @@ mod tests {
                     arrays: bits & 2 != 0,
                     specialize: bits & 4 != 0,
                     needed_rays: bits % 11 < 5,
+                    tile: [None, Some(Levers::DEFAULT_TILE_HALO), Some(0), Some(8)]
+                        [(bits % 13 % 4) as usize],
                     splat: if bits & 8 != 0 {
                         Splat::Compute
                     } else if bits % 3 == 0 {
@@ -514,6 +557,8 @@ mod tests {
             ("deposit=points", "cells or boxes"),
             ("gather=rays", "pairs, pixels or blocks"),
             ("rays=some", "all or needed"),
+            ("tile=9", "a halo in pixels from 0 to 8"),
+            ("tile=big", "a halo in pixels from 0 to 8"),
             ("field=maybe", "on or off"),
             ("speed=11", "unknown lever 'speed'"),
             ("field", "not key=value"),

@@ -618,6 +618,20 @@ impl SweepPass {
         features: Features,
     ) -> Result<()> {
         if !self.compute_planes.contains_key(&features) {
+            if let Some(halo) = features.light_tile {
+                // Two vec4 per texel (glsl/sweep_plane_io.glsl's tile).
+                let side = 8 + 2 * halo;
+                let bytes = side * side * 32;
+                let limit = ctx.info().limits.max_compute_shared_memory_size;
+                if bytes > limit {
+                    bail!(
+                        "--variant tile={halo}: the light's tile of {side} x {side} texels \
+                         needs {bytes} bytes of shared memory; {} offers {limit}. Use a \
+                         smaller halo",
+                        ctx.info().name
+                    );
+                }
+            }
             let planes = ComputePlanes::new(
                 ctx,
                 &self.compute_set,

@@ -5,8 +5,8 @@
 use super::*;
 
 /// The features a frame uses that the plane shaders can leave out, and the shader levers:
-/// specialization constants 1-11 (glsl/sweep_common.glsl, sweep_buffers.glsl,
-/// light_splat_ray.glsl). The first
+/// specialization constants 1-13 (glsl/sweep_common.glsl, sweep_buffers.glsl,
+/// light_splat_ray.glsl, sweep_plane_io.glsl). The first
 /// four are on exactly when their runtime condition can hold, so switching one off changes
 /// no image (tested) and costs nothing; `arrays` and `field` choose how the shaders read
 /// the state and the field (`Levers`). `films` is on when the η function has an interior
@@ -37,6 +37,9 @@ pub(crate) struct Features {
     /// glsl/light_splat_ray.glsl): the fluence (true) or the flux per unit plane area
     /// (`SweepOptions::plane_flux`). Not a lever: it chooses what the light is.
     pub(crate) fluence: bool,
+    /// The `tile` lever (constants 12 and 13, glsl/sweep_plane_io.glsl): the compute
+    /// backward plane's light reads from a workgroup tile with this halo in pixels.
+    pub(crate) light_tile: Option<u32>,
 }
 
 impl Features {
@@ -53,6 +56,7 @@ impl Features {
         gather: super::Gather::Pairs,
         light_volume: false,
         fluence: true,
+        light_tile: None,
     };
 
     /// `have_field`: whether the field texture exists (it may not fit in memory);
@@ -68,6 +72,7 @@ impl Features {
             gather: levers.gather,
             light_volume: sweep.light_transport == super::LightTransport::Eikonal,
             fluence: !sweep.plane_flux,
+            light_tile: levers.tile,
             ..Self::ALL
         };
         if !levers.specialize {
@@ -83,8 +88,9 @@ impl Features {
         }
     }
 
-    /// Constant 0 (the gradient volume is bound), then 1-11.
-    pub(super) fn constants(self, have_gradient: bool) -> [u32; 12] {
+    /// Constant 0 (the gradient volume is bound), then 1-13 (13: the tile's halo, 0
+    /// without a tile, so that its shared memory is the smallest).
+    pub(super) fn constants(self, have_gradient: bool) -> [u32; 14] {
         [
             have_gradient as u32,
             self.specular as u32,
@@ -98,6 +104,8 @@ impl Features {
             self.cells as u32,
             self.light_volume as u32,
             self.fluence as u32,
+            self.light_tile.is_some() as u32,
+            self.light_tile.unwrap_or(0),
         ]
     }
 }
@@ -122,7 +130,7 @@ impl PlanePipelines {
         ctx: &Context,
         passes: [&RenderPass; 4],
         set: &DescriptorSet,
-        constants: [u32; 12],
+        constants: [u32; 14],
         cells: bool,
         forward: bool,
     ) -> Result<Self> {
@@ -323,7 +331,7 @@ impl ComputePlanes {
     pub(super) fn new(
         ctx: &Context,
         set: &DescriptorSet,
-        constants: [u32; 12],
+        constants: [u32; 14],
         gather: super::Gather,
         cells: bool,
     ) -> Result<Self> {
