@@ -13,12 +13,22 @@
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
+layout(push_constant) uniform Push {
+    uint plane;
+    uint read_layer;
+    float depth;
+    float unit;
+    ivec2 origin;      // y: the first grid row this plane deposits (the `rays` lever)
+    ivec2 extent;      // y: how many
+    uint pad;
+} pc;
+
 void main() {
     slots_clear();
     barrier();
-    ivec2 ij = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 ij = DEPOSITED_RAY;
     uint n = bin_count();
-    int r = ray_exists(ij) ? ray_index(ij) : -1;
+    int r = DEPOSITS_HERE(ij) ? ray_index(ij) : -1;
     ivec4 range = ivec4(0);
     int level = r >= 0 ? footprint_bins(stored_footprint(r), range) : BIN_NONE;
     // Up to MAX_ENTRIES entries (a footprint spans at most GATHER_FINE_SPAN fine or 2

@@ -18,13 +18,16 @@ layout(push_constant) uniform Push {
     uint read_layer;   // the layer the rays were just written to
     float depth;       // this plane's depth
     float unit;
+    ivec2 origin;      // y: the first grid row this plane deposits (the `rays` lever)
+    ivec2 extent;      // y: how many
+    uint pad;
 } pc;
 
 void main() {
     slots_clear();
     barrier();
-    ivec2 ij = ivec2(gl_GlobalInvocationID.xy);
-    if (ray_exists(ij)) {
+    ivec2 ij = DEPOSITED_RAY;
+    if (DEPOSITS_HERE(ij)) {
         int r = ray_index(ij);
         RayDeposit d;
         if (!ray_deposit(r, pc.read_layer, pc.depth, d)) {

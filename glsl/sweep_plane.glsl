@@ -242,18 +242,17 @@ void light_ray_plane(ivec2 pixel, uint R) {
     }
     vec4 lc = READ_RAY(rays_flux, R, r);
     vec4 lv = READ_RAY(rays_direction, R, r);
-#if !SWEEP_COMPUTE
     // A ray whose texel row the previous plane did not move (pc.pad: those rows, [lo,
     // end) in 16 bits each; render/refract/ray_rows.rs) still holds the setup's launch
     // state, and has crossed empty space since, on a straight line: it steps from the
-    // launch plane to the previous plane in one go, then on as every ray does.
+    // launch plane to the previous plane in one go, then on as every ray does. (Both
+    // paths: the compute path's light pass takes the same rows since 2026-12-08.)
     int moved_lo = int(pc.pad & 0xFFFFu), moved_end = int(pc.pad >> 16);
     if (pixel.y < moved_lo || pixel.y >= moved_end) {
         float dz = pc.depth - P.planes.x;   // launch (plane -1) to plane i - 1
         lc.w += lv.x / lv.z * dz;
         lv.w += lv.y / lv.z * dz;
     }
-#endif
     vec3 flux = lc.rgb;
 #if SOFT_LIGHT
     flux = diffuse_flux(ray, r, lv, flux);   // softness (sect. 5.2) as diffusion

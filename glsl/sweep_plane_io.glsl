@@ -15,7 +15,7 @@
 
 #if SWEEP_COMPUTE
 layout(local_size_x = 8, local_size_y = 8) in;
-// Mirrored by render::refract::ComputePush (32 bytes, every pipeline of the compute sweep,
+// Mirrored by render::refract::ComputePush (36 bytes, every pipeline of the compute sweep,
 // so that switching between them keeps the descriptor set bound).
 layout(push_constant) uniform Push {
     uint plane;
@@ -24,6 +24,7 @@ layout(push_constant) uniform Push {
     float unit;      // the splat's fixed-point unit (light_splat_main.glsl, sweep_resolve.comp)
     ivec2 origin;    // first pixel (or ray texel) of the dispatch
     ivec2 extent;    // pixels (or ray texels) it covers
+    uint pad;        // the light rays' pass: the previous plane's moved texel rows
 } pc;
 ivec2 g_pixel;
 bool g_keep_layer = false;   // SKIP_PLANE: store nothing, the write layer stays as it is

@@ -25,4 +25,12 @@ bool ray_exists(ivec2 ij) {
 
 #define READ_RAY(name, layer, r) FETCH_LAYER(name, ray_texel(r), layer)
 
+// The compute splat's per-ray dispatches (deposits, bin lists, the scatter of blocks)
+// cover the grid rows the plane deposits, pc.extent.y of them from row pc.origin.y (the
+// `rays` lever, render/refract/ray_rows.rs: rows not needed yet hold launch states, and
+// deposit nothing); an invocation past them deposits nothing. For the includers that
+// declare the compute sweep's push block.
+#define DEPOSITED_RAY (ivec2(gl_GlobalInvocationID.xy) + ivec2(0, pc.origin.y))
+#define DEPOSITS_HERE(ij) (ray_exists(ij) && (ij).y < pc.origin.y + pc.extent.y)
+
 #endif

@@ -62,6 +62,9 @@ layout(push_constant) uniform Push {
     uint read_layer;   // the layer the rays were just written to
     float depth;       // this plane's depth
     float unit;        // the fixed-point unit (the light's brightest channel)
+    ivec2 origin;      // y: the first grid row this plane deposits (the `rays` lever)
+    ivec2 extent;      // y: how many
+    uint pad;
 } pc;
 
 const int TILE = int(SCATTER_TILE);
@@ -156,9 +159,9 @@ void main() {
     // This ray's deposit and the pixels it overlaps with positive area on the screen
     // (pixel p is the square [p, p + 1]: from floor(lo) to ceil(hi) - 1).
     ivec2 size = ivec2(P.camera.zw);
-    ivec2 ij = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 ij = DEPOSITED_RAY;
     RayDeposit d;
-    bool has = ray_exists(ij) && ray_deposit(ray_index(ij), pc.read_layer, pc.depth, d);
+    bool has = DEPOSITS_HERE(ij) && ray_deposit(ray_index(ij), pc.read_layer, pc.depth, d);
     if (!has) clear_deposit(d);
     ivec2 first = ivec2(0), last = ivec2(-1);
     if (has) {

@@ -15,11 +15,13 @@
 #      in that order, each as two `refrakt bench variants` invocations:
 #        --light-transport forward  --variant sweep=compute --variant sweep=fragment
 #                                   --variant sweep=fragment,splat=compute
-#                                   --variant sweep=compute,gather=pixels
+#                                   --variant sweep=compute,rays=all
 #        --light-transport backward --variant sweep=compute --variant sweep=fragment
 #                                   --variant sweep=compute,tile=on
 #      (tile=on: the backward plane's light reads from a workgroup tile, issue 31;
-#      the same image, off by default until this has timed it on a GPU)
+#      the same image, off by default until this has timed it on a GPU. rays=all: every
+#      light ray moved and deposited on every plane, the compute path's way until
+#      2026-12-08; the default, rays=needed, only the grid rows needed by then)
 #      each with --scale, --frames, --warmup, --json and wrapped in `timeout` with what is
 #      left of the time budget. Rows stop when the budget is spent; the report says which
 #      rows ran and why the others did not (time budget, timeout, failure). The budget
@@ -224,7 +226,7 @@ runs="$work/runs.tsv"
 
 common=(--device "$dev_index" --scale "$scale" --frames "$frames" --warmup "$warmup" --quiet)
 variants_forward=(--variant sweep=compute --variant sweep=fragment --variant sweep=fragment,splat=compute
-                  --variant sweep=compute,gather=pixels)
+                  --variant sweep=compute,rays=all)
 variants_backward=(--variant sweep=compute --variant sweep=fragment --variant sweep=compute,tile=on)
 
 t_start=$(date +%s)
@@ -489,8 +491,8 @@ def lever_map(levers):
 def classify(var, pos):
     lv = lever_map(var.get("levers"))
     sweep, splat = lv.get("sweep"), lv.get("splat")
-    if sweep == "compute" and lv.get("gather") == "pixels":
-        return "compute_gather_pixels"
+    if sweep == "compute" and lv.get("rays") == "all":
+        return "compute_all_rays"
     if sweep == "compute" and lv.get("tile") not in (None, "off"):
         return "compute_tile"
     if sweep == "compute":
@@ -510,7 +512,7 @@ for inv in invocations:
     for r in rep.get("rows", []):
         line = {"row": r.get("dataset"), "light_transport": transport,
                 "compute_ms": None, "fragment_ms": None, "fragment_splat_compute_ms": None,
-                "compute_gather_pixels_ms": None, "compute_tile_ms": None}
+                "compute_all_rays_ms": None, "compute_tile_ms": None}
         for pos, var in enumerate(r.get("variants", [])):
             c = classify(var, pos)
             if c:
@@ -526,7 +528,7 @@ def fmt_ratio(v):
     return "—" if v is None else "%.3f" % v
 
 table = [
-    "| Row | Transport | sweep=compute ms | sweep=fragment ms | compute / fragment | sweep=fragment,splat=compute ms | sweep=compute,gather=pixels ms | sweep=compute,tile=on ms |",
+    "| Row | Transport | sweep=compute ms | sweep=fragment ms | compute / fragment | sweep=fragment,splat=compute ms | sweep=compute,rays=all ms | sweep=compute,tile=on ms |",
     "|---|---|---:|---:|---:|---:|---:|---:|",
 ]
 for s in summary:
@@ -535,7 +537,7 @@ for s in summary:
         s["row"], s["light_transport"], fmt_ms(s["compute_ms"]), fmt_ms(s["fragment_ms"]),
         fmt_ratio(s["compute_over_fragment"]),
         fmt_ms(s["fragment_splat_compute_ms"]) if fwd else "n/a",
-        fmt_ms(s["compute_gather_pixels_ms"]) if fwd else "n/a",
+        fmt_ms(s["compute_all_rays_ms"]) if fwd else "n/a",
         "n/a" if fwd else fmt_ms(s["compute_tile_ms"])))
 if not summary:
     table.append("| (no row ran) | | | | | | | |")
@@ -605,7 +607,7 @@ report = {
         "rows_requested": rows_requested,
         "variants": {
             "forward": ["sweep=compute", "sweep=fragment", "sweep=fragment,splat=compute",
-                        "sweep=compute,gather=pixels"],
+                        "sweep=compute,rays=all"],
             "backward": ["sweep=compute", "sweep=fragment", "sweep=compute,tile=on"],
         },
         "allow_cpu": E["GB_ALLOW_CPU"] == "1",

@@ -344,6 +344,14 @@ fn gather_matches_atomic(
         splat: Splat::Compute,
         ..path(SweepPath::Fragment)
     };
+    // Every ray moved on every plane on both sides: the atomic splat moves them all, and
+    // the compute path's `rays=needed` (its default) steps a row that joins late from its
+    // launch state in one go, another rounding of the same rays (render/refract/ray_rows.rs;
+    // tests/needed_rays.rs holds that).
+    let all_rays = |sweep: Levers| Levers {
+        needed_rays: false,
+        ..sweep
+    };
     let [atomic, gather, again, by_pixels, by_blocks]: [_; 5] = sheared_caustic(
         ctx,
         size,
@@ -351,16 +359,16 @@ fn gather_matches_atomic(
         deposit,
         &[
             atomic_levers,
-            path(SweepPath::Compute),
-            path(SweepPath::Compute),
-            Levers {
+            all_rays(path(SweepPath::Compute)),
+            all_rays(path(SweepPath::Compute)),
+            all_rays(Levers {
                 gather: Gather::Pixels,
                 ..path(SweepPath::Compute)
-            },
-            Levers {
+            }),
+            all_rays(Levers {
                 gather: Gather::Blocks,
                 ..path(SweepPath::Compute)
-            },
+            }),
         ],
     )
     .try_into()

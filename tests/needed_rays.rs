@@ -4,12 +4,16 @@
 //! plane: each plane's irradiance (what the splat made of the rays), on the glass sphere
 //! on its floor seen obliquely (rows join plane after plane as the light sweeps down the
 //! view), hard and soft light (softness diffuses flux across rows, also towards rows not
-//! moved yet), at sample distances 1 and 0.5.
+//! moved yet), at sample distances 1 and 0.5; on the fragment path (grouped sprites) and on
+//! the compute path (whose per-ray splat dispatches deposit the needed grid rows: the pair
+//! gather's deposits and bin lists, the scatter of blocks).
 
 mod common;
 
 use common::with_context;
-use refrakt::render::{Camera, Levers, LightTransport, Model, Renderer, StateBuffer};
+use refrakt::render::{
+    Camera, Gather, Levers, LightTransport, Model, Renderer, StateBuffer, SweepPath,
+};
 use refrakt::scene::Scene;
 
 #[test]
@@ -26,11 +30,16 @@ fn needed_rays_deposit_the_light_of_every_ray() {
             target: glam::Vec3::new(0.0, -0.2, 0.0),
             ..scene.camera
         };
-        for (sd, softness, cam) in [
-            (1.0, 0.0, close),
-            (1.0, 0.0, scene.camera),
-            (1.0, 0.5, scene.camera),
-            (0.5, 0.5, scene.camera),
+        // The compute path on two of them (its gather is slow on lavapipe): close up with
+        // hard light and the pair gather; as composed, soft, at 0.5, the scatter of blocks.
+        let fragment = (SweepPath::Fragment, Gather::Pairs);
+        for (sd, softness, cam, (sweep, gather)) in [
+            (1.0, 0.0, close, fragment),
+            (1.0, 0.0, scene.camera, fragment),
+            (1.0, 0.5, scene.camera, fragment),
+            (0.5, 0.5, scene.camera, fragment),
+            (1.0, 0.0, close, (SweepPath::Compute, Gather::Pairs)),
+            (0.5, 0.5, scene.camera, (SweepPath::Compute, Gather::Blocks)),
         ] {
             let mut opts = scene.render_options().unwrap();
             opts.width = 64;
@@ -51,6 +60,8 @@ fn needed_rays_deposit_the_light_of_every_ray() {
             let mut frames = [true, false].map(|needed| {
                 opts.sweep.levers = Levers {
                     needed_rays: needed,
+                    sweep,
+                    gather,
                     ..Levers::default()
                 };
                 renderer.render(Model::Refract, &cam, &opts).unwrap()
@@ -77,8 +88,8 @@ fn needed_rays_deposit_the_light_of_every_ray() {
                 let max = off.iter().copied().fold(0.0f32, f32::max);
                 let dp = (power(&b) / power(&a) - 1.0).abs();
                 eprintln!(
-                    "{:?} sd {sd} softness {softness} plane {p}: power {dp:.2e} off, max |Δ| {max:.2e} of \
-                     the peak, {far} pixels over 1e-3",
+                    "{sweep:?} {gather:?} {:?} sd {sd} softness {softness} plane {p}: power \
+                     {dp:.2e} off, max |Δ| {max:.2e} of the peak, {far} pixels over 1e-3",
                     cam.distance
                 );
                 // Measured: as composed, power within 1.1e-5 and at most 2 pixels of 4096
@@ -93,7 +104,7 @@ fn needed_rays_deposit_the_light_of_every_ray() {
                 // by the unit test in render/refract/ray_rows.rs.)
                 assert!(
                     dp <= 4e-4 && far <= a.len() * 3 / 200 && max <= 1.5e-2,
-                    "sd {sd}, softness {softness}, plane {p}: power {dp:.2e} off (bound 4e-4), \
+                    "{sweep:?} {gather:?} sd {sd}, softness {softness}, plane {p}: power {dp:.2e} off (bound 4e-4), \
                      {far} pixels over 1e-3 of the peak (bound {}), max {max:.2e} (bound 1.5e-2)",
                     a.len() * 3 / 200
                 );

@@ -227,7 +227,7 @@ pub struct RenderArgs {
     /// each ray, normalised so that the light as launched reads its colour; what matter
     /// scatters) and light-direction its luminance-weighted
     /// direction sum (weight in alpha); light-rays / light-ray-directions are the rays
-    /// themselves (with `--variant rays=needed`, the default on the fragment path, rows a
+    /// themselves (with `--variant rays=needed`, the default on both paths, rows a
     /// plane has not moved yet still hold their launch state, on the launch plane). Files
     /// go to --dump-dir as BUFFER-PLANE.exr; each header (and the log)
     /// gives the plane's view depth and world-space plane n·p = d and the camera.

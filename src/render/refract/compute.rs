@@ -29,6 +29,12 @@
 //!                                          chunk, from their sums)
 //! ```
 //!
+//! With `rays=needed` (the default; render/refract/ray_rows.rs) the light rays' dispatch
+//! covers the texel rows of the grid rows needed by then (a row that joins steps from its
+//! launch state first), and the per-ray dispatches of the splat (deposits, bin lists, the
+//! scatter of blocks) the needed grid rows: on the demo most rays lie outside the view and
+//! have not met the box yet.
+//!
 //! The splat is a tile-binned gather (glsl/light_gather.glsl): the rays are sorted by
 //! counting into bins of 8 × 8-pixel tiles (32-pixel tiles, or one bin for all, for wide
 //! deposits); each tile's candidate rays are split into chunks of 256, one workgroup
@@ -42,6 +48,7 @@
 
 use super::pass::RECORD_LAYERS;
 use super::pipelines::{gather_tiles, ComputeSplat};
+use super::ray_rows::{light_pass_rows, PlaneRays};
 use super::*;
 use crate::render::limits::GATHER_CHUNK;
 use crate::vk::Area;
@@ -66,6 +73,9 @@ pub(crate) struct ComputeFrame<'a> {
     pub(crate) record_stride: Option<u32>,
     /// The planes to record ([`SweepOptions::batch`]).
     pub(crate) batch: std::ops::Range<u32>,
+    /// The light rays each plane moves and deposits (`rays=needed`, ray_rows.rs); None:
+    /// every ray, every plane.
+    pub(crate) plane_rays: Option<&'a [PlaneRays]>,
 }
 
 // The gather's workgroup is one tile of 8 × 8 pixels (glsl/sweep_gather.comp).
@@ -104,6 +114,7 @@ impl SweepPass {
             unit,
             origin: [area.x as i32, area.y as i32],
             extent: [area.width as i32, area.height as i32],
+            pad: 0,
         }
     }
 
@@ -190,16 +201,6 @@ impl SweepPass {
             &pipelines.light
         };
         let view = &pipelines.view;
-        // The light rays' dispatch covers the rows of the ray images that hold rays.
-        let rows = (f.grid[0] * f.grid[1])
-            .div_ceil(f.ray_image[0])
-            .clamp(1, f.ray_image[1]);
-        let ray_area = Area {
-            x: 0,
-            y: 0,
-            width: f.ray_image[0],
-            height: rows,
-        };
         let screen = Area::full(self.width, self.height);
         rec.bind_compute(light, &self.compute_set);
         // Step i records plane i - 1's viewing rays and plane i's light rays: a batch
@@ -255,20 +256,44 @@ impl SweepPass {
             if timed {
                 rec.begin_scope("sweep: light rays");
             }
+            // The light rays' dispatch covers the texel rows of the ray images that hold
+            // the rays this plane moves (all that hold rays with `rays=all`); `pad` names
+            // the previous plane's, outside which rows still hold their launch state.
+            let (moved, before) = light_pass_rows(f.plane_rays, i, f.grid, f.ray_image);
+            let ray_area = Area {
+                x: 0,
+                y: moved.0,
+                width: f.ray_image[0],
+                height: moved.1 - moved.0,
+            };
             rec.bind_compute_pipeline(light);
-            let push = self.push(i, depth, f.unit, ray_area);
+            let push = ComputePush {
+                pad: before.0 | before.1 << 16,
+                ..self.push(i, depth, f.unit, ray_area)
+            };
             rec.dispatch_bound(light, bytemuck::bytes_of(&push), groups(ray_area))?;
             if timed {
                 rec.end_scope();
                 rec.begin_scope("sweep: splat");
             }
             // The splat's dispatches read the write layer: their push names it as the
-            // read layer.
+            // read layer. The per-ray ones cover the grid rows this plane deposits (the
+            // needed ones, glsl/sweep_rays.glsl DEPOSITED_RAY; all with `rays=all`).
+            let deposited = match f.plane_rays {
+                Some(p) => p[i as usize].needed,
+                None => super::ray_rows::Rows {
+                    lo: 0,
+                    end: f.grid[1],
+                },
+            };
+            let deposit_rows = deposited.end.saturating_sub(deposited.lo);
             let push = ComputePush {
                 read_layer: i % 2,
-                ..self.push(i, depth, f.unit, ray_area)
+                origin: [0, deposited.lo as i32],
+                extent: [f.grid[0] as i32, deposit_rows as i32],
+                ..self.push(i, depth, f.unit, screen)
             };
-            let ray_groups = [f.grid[0].div_ceil(8), f.grid[1].div_ceil(8), 1];
+            let ray_groups = [f.grid[0].div_ceil(8), deposit_rows.div_ceil(8), 1];
             match &pipelines.splat {
                 ComputeSplat::Blocks { scatter, resolve } => {
                     // Stage B: the rays just written scatter their deposits into the sums

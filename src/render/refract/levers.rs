@@ -207,8 +207,9 @@ pub struct Levers {
     /// `rays=needed`: each plane moves only the light rays' grid rows needed by then
     /// (they met the box or the viewing rays' light); a row joins with one straight step
     /// from the launch plane (render/refract/ray_rows.rs). The fragment path's grouped
-    /// sprites only; elsewhere every ray moves on every plane. The same rays within
-    /// float rounding (and, with softness, within 3e-7 of a penumbra's tail).
+    /// sprites and the compute path (whose splat then deposits the needed grid rows,
+    /// since 2026-12-08); with the other sprites every ray moves on every plane. The same
+    /// rays within float rounding (and, with softness, within 3e-7 of a penumbra's tail).
     #[serde(default = "on")]
     pub needed_rays: bool,
     /// `tile=on` (or `tile=H`, a halo of H pixels, 0-8; `on` is

@@ -58,9 +58,14 @@ pub(crate) struct ComputePush {
     pub(crate) depth: f32,
     /// The compute splat's fixed-point unit (glsl/light_splat_fixed.glsl).
     pub(crate) unit: f32,
-    /// The first pixel (or ray texel) the dispatch covers, and how many.
+    /// The first pixel (or ray texel) the dispatch covers, and how many. The splat's
+    /// per-ray dispatches: the first grid row they deposit (y) and how many rows.
     pub(crate) origin: [i32; 2],
     pub(crate) extent: [i32; 2],
+    /// The light rays' pass: the texel rows of the ray images the previous plane moved,
+    /// [lo, end) in 16 bits each (the `rays` lever, ray_rows.rs): a row outside them
+    /// still holds its launch state (glsl/sweep_plane.glsl, `light_ray_plane`).
+    pub(crate) pad: u32,
 }
 
 /// Push constants of the composite (glsl/sweep_composite.comp).
@@ -231,7 +236,8 @@ mod tests {
             depth,
             unit,
             origin,
-            extent
+            extent,
+            pad
         });
         let size = std::mem::size_of::<ComputePush>();
         for spirv in [
@@ -239,6 +245,9 @@ mod tests {
             shaders::SWEEP_LIGHT_FORWARD_COMP,
             shaders::SWEEP_VIEW_FORWARD_COMP,
             shaders::SWEEP_FLOOR_COMP,
+            shaders::SWEEP_DEPOSIT_COMP,
+            shaders::SWEEP_BIN_FILL_COMP,
+            shaders::SWEEP_SCATTER_COMP,
         ] {
             check_block(spirv, "Push", &push, size, false).unwrap();
         }

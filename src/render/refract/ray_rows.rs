@@ -89,12 +89,46 @@ pub(crate) struct View<'a> {
 
 /// One plane's share of the light rays: the workgroups of `light_splat_groups.comp` that
 /// make deposits, [lo, end) (each SPLAT_GROUP_WORKGROUP groups of 2 x 2 rays, in the grid's
-/// row order), and the grid rows the light pass moves (all the rays those groups read,
-/// and more).
+/// row order), the grid rows the light pass moves (all the rays those groups read,
+/// and more), and the grid rows needed by then, which the compute path deposits (its
+/// deposits go by rows of the grid, not by groups; `moved` holds them and a neighbour
+/// row either side).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct PlaneRays {
     pub(crate) workgroups: Rows,
     pub(crate) moved: Rows,
+    pub(crate) needed: Rows,
+}
+
+/// The texel rows of the ray images (each `ray_image[0]` texels wide, the grid's rays in
+/// row order) that plane `i`'s light pass moves, [lo, end), and those the previous plane
+/// moved (a row outside them still holds its launch state: the pass steps it from the
+/// launch plane first): those of the planes' moved grid rows, or every row that holds
+/// rays when `plane_rays` is None (`rays=all`). Both paths' light passes.
+pub(crate) fn light_pass_rows(
+    plane_rays: Option<&[PlaneRays]>,
+    i: u32,
+    grid: [u32; 2],
+    ray_image: [u32; 2],
+) -> ((u32, u32), (u32, u32)) {
+    let rows = (grid[0] * grid[1])
+        .div_ceil(ray_image[0])
+        .clamp(1, ray_image[1]);
+    let texel_rows = |r: Rows| {
+        let lo = r.lo * grid[0] / ray_image[0];
+        let end = (r.end * grid[0]).div_ceil(ray_image[0]).clamp(lo, rows);
+        (lo, end)
+    };
+    match plane_rays {
+        Some(p) => (
+            texel_rows(p[i as usize].moved),
+            match i {
+                0 => (0, 0),
+                _ => texel_rows(p[i as usize - 1].moved),
+            },
+        ),
+        None => ((0, rows), (0, rows)),
+    }
 }
 
 /// Per plane, both only growing. `deposit_px` is how far a ray's deposit reaches from it
@@ -156,6 +190,7 @@ pub(crate) fn light_ray_rows(
             out.push(PlaneRays {
                 workgroups: empty,
                 moved: empty,
+                needed: empty,
             });
             continue;
         }
@@ -177,6 +212,7 @@ pub(crate) fn light_ray_rows(
         out.push(PlaneRays {
             workgroups,
             moved: read.widened(margin, rows),
+            needed,
         });
     }
     out
@@ -234,11 +270,23 @@ mod tests {
             for k in 0..planes.count as usize {
                 if k > 0 {
                     let (a, b) = (out[k - 1], out[k]);
-                    for (x, y) in [(a.moved, b.moved), (a.workgroups, b.workgroups)] {
+                    for (x, y) in [
+                        (a.moved, b.moved),
+                        (a.workgroups, b.workgroups),
+                        (a.needed, b.needed),
+                    ] {
                         if x.end > x.lo {
                             assert!(y.lo <= x.lo && y.end >= x.end, "plane {k}: shrank");
                         }
                     }
+                }
+                // The needed rows' deposits read a neighbour row either side: moved.
+                let (n, m) = (out[k].needed, out[k].moved);
+                if n.end > n.lo {
+                    assert!(
+                        m.lo <= n.lo.saturating_sub(1) && m.end >= (n.end + 1).min(dims[1]),
+                        "plane {k}: needed {n:?}, moved {m:?}"
+                    );
                 }
                 let w = out[k].workgroups;
                 if w.end > w.lo {
@@ -279,6 +327,12 @@ mod tests {
                         }
                         needed_any += 1;
                         for later in &out[k..] {
+                            // The compute path deposits the needed rows.
+                            let n = later.needed;
+                            assert!(
+                                j >= n.lo && j < n.end,
+                                "plane {k}: ray ({i}, {j}) needed, needed rows {n:?}"
+                            );
                             let m = later.moved;
                             assert!(
                                 j >= m.lo && j < m.end,

@@ -302,9 +302,11 @@ impl SweepPass {
         };
 
         // The light rays each plane moves and deposits (ray_rows.rs, the `rays` lever): on
-        // the fragment path with grouped sprites; elsewhere every ray, every plane.
+        // the fragment path with grouped sprites and on the compute path; with the other
+        // sprites every ray, every plane.
+        let rows_known = groups_on || (compute && forward_on);
         let plane_rays =
-            (groups_on && sweep.levers.needed_rays && ray_image[1] < 1 << 16).then(|| {
+            (rows_known && sweep.levers.needed_rays && ray_image[1] < 1 << 16).then(|| {
                 super::ray_rows::light_ray_rows(
                     &super::ray_rows::View {
                         view_to_tex,
@@ -349,6 +351,7 @@ impl SweepPass {
                     dumps: &dump_buffers,
                     record_stride,
                     batch: batch.clone(),
+                    plane_rays: plane_rays.as_deref(),
                 },
                 sweep,
             )?;

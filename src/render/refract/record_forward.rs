@@ -5,7 +5,7 @@
 
 use super::pass::StateImage;
 use super::pipelines::{ForwardPipelines, ForwardPlanes};
-use super::ray_rows::PlaneRays;
+use super::ray_rows::{light_pass_rows, PlaneRays};
 use super::region::REGION_VERTICES;
 use super::*;
 use crate::render::limits::SPLAT_GROUP_WORKGROUP;
@@ -88,25 +88,7 @@ impl SweepPass {
         // rows still in their launch state outside them.
         let rows = (grid_dims[0] * grid_dims[1]).div_ceil(ray_image[0]);
         let rows = rows.clamp(1, ray_image[1]);
-        let texel_rows = |r: super::ray_rows::Rows| {
-            let lo = r.lo * grid_dims[0] / ray_image[0];
-            (
-                lo,
-                (r.end * grid_dims[0])
-                    .div_ceil(ray_image[0])
-                    .clamp(lo, rows),
-            )
-        };
-        let (moved, before) = match plane_rays {
-            Some(p) => (
-                texel_rows(p[i as usize].moved),
-                match i {
-                    0 => (0, 0),
-                    _ => texel_rows(p[i as usize - 1].moved),
-                },
-            ),
-            None => ((0, rows), (0, rows)),
-        };
+        let (moved, before) = light_pass_rows(plane_rays, i, grid_dims, ray_image);
         let light_push = PlanePush {
             pad: before.0 | before.1 << 16,
             ..push
