@@ -489,7 +489,18 @@ impl SweepPass {
             soft,
             shaded_pixels: (shaded_fraction * self.width as f64 * self.height as f64).round()
                 as u64,
-            light_rays: grid_dims[0] as u64 * grid_dims[1] as u64,
+            // The rays a plane moves: every ray of the grid, or with `rays=needed` the
+            // mean over the planes of the moved rows' (the deposits are of a subset).
+            light_rays: match &plane_rays {
+                Some(p) if !p.is_empty() => {
+                    let rows: u64 = p
+                        .iter()
+                        .map(|r| r.moved.end.saturating_sub(r.moved.lo) as u64)
+                        .sum();
+                    grid_dims[0] as u64 * rows / p.len() as u64
+                }
+                _ => grid_dims[0] as u64 * grid_dims[1] as u64,
+            },
             compute_splat,
             viewport_pixels: self.width as u64 * self.height as u64,
         };

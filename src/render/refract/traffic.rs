@@ -74,7 +74,8 @@ pub(crate) struct TrafficInputs {
     pub(crate) soft: bool,
     /// Mean pixels a plane shades.
     pub(crate) shaded_pixels: u64,
-    /// Light rays a plane advances (forward).
+    /// Light rays a plane advances (forward): the grid's, or with `rays=needed` the mean
+    /// number in the rows the planes move.
     pub(crate) light_rays: u64,
     /// The `splat=compute` lever (forward), and the viewport its resolve covers.
     pub(crate) compute_splat: bool,
