@@ -100,6 +100,14 @@ pub(crate) struct PlaneRays {
     pub(crate) needed: Rows,
 }
 
+/// How many texel rows of the ray images hold the grid's rays (in row order, each texel
+/// row `ray_image[0]` rays).
+pub(crate) fn ray_texel_rows(grid: [u32; 2], ray_image: [u32; 2]) -> u32 {
+    (grid[0] * grid[1])
+        .div_ceil(ray_image[0])
+        .clamp(1, ray_image[1])
+}
+
 /// The texel rows of the ray images (each `ray_image[0]` texels wide, the grid's rays in
 /// row order) that plane `i`'s light pass moves, [lo, end), and those the previous plane
 /// moved (a row outside them still holds its launch state: the pass steps it from the
@@ -111,9 +119,7 @@ pub(crate) fn light_pass_rows(
     grid: [u32; 2],
     ray_image: [u32; 2],
 ) -> ((u32, u32), (u32, u32)) {
-    let rows = (grid[0] * grid[1])
-        .div_ceil(ray_image[0])
-        .clamp(1, ray_image[1]);
+    let rows = ray_texel_rows(grid, ray_image);
     let texel_rows = |r: Rows| {
         let lo = r.lo * grid[0] / ray_image[0];
         let end = (r.end * grid[0]).div_ceil(ray_image[0]).clamp(lo, rows);

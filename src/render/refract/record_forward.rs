@@ -5,7 +5,7 @@
 
 use super::pass::StateImage;
 use super::pipelines::{ForwardPipelines, ForwardPlanes};
-use super::ray_rows::{light_pass_rows, PlaneRays};
+use super::ray_rows::{light_pass_rows, ray_texel_rows, PlaneRays};
 use super::region::REGION_VERTICES;
 use super::*;
 use crate::render::limits::SPLAT_GROUP_WORKGROUP;
@@ -86,8 +86,7 @@ impl SweepPass {
         // the texel rows that hold rays, or those of the grid rows this
         // plane moves (ray_rows.rs); `pad` gives the previous plane's, the
         // rows still in their launch state outside them.
-        let rows = (grid_dims[0] * grid_dims[1]).div_ceil(ray_image[0]);
-        let rows = rows.clamp(1, ray_image[1]);
+        let rows = ray_texel_rows(grid_dims, ray_image);
         let (moved, before) = light_pass_rows(plane_rays, i, grid_dims, ray_image);
         let light_push = PlanePush {
             pad: before.0 | before.1 << 16,
